@@ -1,0 +1,21 @@
+"""The one exception type users see: a one-line message naming what was wrong."""
+
+
+class VtableError(Exception):
+    """Bad input or an impossible request; the message is a single line for the user."""
+
+
+class UnstableError(VtableError):
+    """A configuration whose closed loop is unstable (eigenvalues with positive real part)."""
+
+    def __init__(self, what: str, eigenvalues) -> None:
+        self.eigenvalues = list(eigenvalues)
+        roots = ", ".join(_fmt_root(z) for z in self.eigenvalues)
+        super().__init__(f"{what} is unstable: eigenvalues with positive real part {roots} (1/s)")
+
+
+def _fmt_root(z: complex) -> str:
+    z = complex(z)
+    if abs(z.imag) < 1e-12 * max(1.0, abs(z)):
+        return f"{z.real:.4g}"
+    return f"{z.real:.4g}{z.imag:+.4g}j"

@@ -1,0 +1,165 @@
+"""Typed parameter objects that read and write TOML in the report's units.
+
+Every physical field is declared with `quantity(unit, key=...)`: the object stores SI,
+the TOML key names the unit (``weight_kip``, ``area_in2``), and conversion happens only
+in `from_dict` / `to_dict`. Unknown keys, missing keys and out-of-range values are
+one-line `VtableError`s naming the key.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from pathlib import Path
+from typing import Any, Self
+
+from vtable import units
+from vtable.errors import VtableError
+
+_MISSING = dataclasses.MISSING
+
+
+def quantity(unit: str, key: str, *, default: Any = _MISSING, minimum: float | None = None,
+             exclusive: bool = True, source: str = "", doc: str = "") -> Any:
+    """Declare a physical field stored in SI and written in TOML as `key` in `unit`.
+
+    `minimum` bounds the SI value (strictly when `exclusive`); `source` names the report
+    table or equation the default comes from.
+    """
+    meta = {"unit": unit, "key": key, "minimum": minimum, "exclusive": exclusive,
+            "source": source, "doc": doc}
+    if default is _MISSING:
+        return dataclasses.field(metadata=meta)
+    return dataclasses.field(default=default, metadata=meta)
+
+
+def plain(key: str | None = None, *, default: Any = _MISSING, doc: str = "") -> Any:
+    """A non-physical field (names, knob settings, nested parameter objects)."""
+    meta = {"key": key, "doc": doc}
+    if default is _MISSING:
+        return dataclasses.field(metadata=meta)
+    if isinstance(default, list | dict | set):
+        raise TypeError("use an immutable default")
+    return dataclasses.field(default=default, metadata=meta)
+
+
+def _key(f: dataclasses.Field) -> str:
+    return f.metadata.get("key") or f.name
+
+
+class Params:
+    """Mixin for frozen dataclasses declared with `quantity` and `plain` fields."""
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):  # type: ignore[arg-type]
+            lo = f.metadata.get("minimum")
+            if lo is None:
+                continue
+            v = getattr(self, f.name)
+            if v is None:
+                continue
+            bad = not math.isfinite(v) or (v <= lo if f.metadata["exclusive"] else v < lo)
+            if bad:
+                rel = ">" if f.metadata["exclusive"] else ">="
+                shown = units.from_si(v, f.metadata["unit"]) if math.isfinite(v) else v
+                lo_shown = units.from_si(lo, f.metadata["unit"])
+                raise VtableError(f"{type(self).__name__}.{_key(f)} must be {rel} {lo_shown:g},"
+                                  f" got {shown:g}")
+
+    # -- TOML edge -------------------------------------------------------------------
+    @classmethod
+    def from_dict(cls, d: dict[str, Any], where: str = "") -> Self:
+        """Build from a TOML table in the report's units; `where` prefixes error messages."""
+        where = where or cls.__name__
+        if not isinstance(d, dict):
+            raise VtableError(f"{where}: expected a table, got {type(d).__name__}")
+        fields = {_key(f): f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+        unknown = sorted(set(d) - set(fields))
+        if unknown:
+            raise VtableError(f"{where}: unknown key {unknown[0]!r}; expected {', '.join(fields)}")
+        kwargs = {}
+        for key, f in fields.items():
+            if key not in d:
+                if f.default is _MISSING and f.default_factory is _MISSING:
+                    raise VtableError(f"{where}: missing key {key!r}")
+                continue
+            kwargs[f.name] = _convert_in(d[key], f, f"{where}.{key}")
+        try:
+            return cls(**kwargs)
+        except VtableError as e:
+            raise VtableError(f"{where}: {e}") from None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML table in the report's units (round-trips through `from_dict`)."""
+        out: dict[str, Any] = {}
+        for f in dataclasses.fields(self):  # type: ignore[arg-type]
+            v = getattr(self, f.name)
+            if v is None:
+                continue
+            if "unit" in f.metadata:
+                v = _to_plain(units.from_si(v, f.metadata["unit"]))
+            elif isinstance(v, Params):
+                v = v.to_dict()
+            elif isinstance(v, tuple):
+                v = [x.to_dict() if isinstance(x, Params) else _to_plain(x) for x in v]
+            out[_key(f)] = v
+        return out
+
+    @classmethod
+    def from_toml(cls, path: str | Path, section: str | None = None) -> Self:
+        """Read `path` (optionally one of its tables)."""
+        d = read_toml(path)
+        where = str(path)
+        if section is not None:
+            if section not in d:
+                raise VtableError(f"{path}: missing table [{section}]")
+            d, where = d[section], f"{path} [{section}]"
+        return cls.from_dict(d, where)
+
+    def replace(self, **changes: Any) -> Self:
+        """A copy with some fields changed (SI values)."""
+        return dataclasses.replace(self, **changes)  # type: ignore[type-var]
+
+    @classmethod
+    def sources(cls) -> dict[str, str]:
+        """Field name -> the report table/equation its preset value comes from."""
+        return {f.name: f.metadata.get("source", "")
+                for f in dataclasses.fields(cls) if "unit" in f.metadata}  # type: ignore[arg-type]
+
+
+def _to_plain(v: Any) -> Any:
+    if hasattr(v, "tolist"):
+        return v.tolist()
+    return v
+
+
+def _convert_in(v: Any, f: dataclasses.Field, where: str) -> Any:
+    unit = f.metadata.get("unit")
+    if unit is None:
+        return v
+    if isinstance(v, list):
+        if not all(_is_number(x) for x in v):
+            raise VtableError(f"{where}: expected a list of numbers in {unit}")
+        return tuple(units.to_si(float(x), unit) for x in v)
+    if not _is_number(v):
+        raise VtableError(f"{where}: expected a number in {unit}, got {v!r}")
+    return units.to_si(float(v), unit)
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool)
+
+
+def read_toml(path: str | Path) -> dict[str, Any]:
+    """Parse a TOML file; a missing or malformed file is a one-line error naming it."""
+    p = Path(path)
+    try:
+        with p.open("rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise VtableError(f"{p}: no such file") from None
+    except tomllib.TOMLDecodeError as e:
+        raise VtableError(f"{p}: malformed TOML: {e}") from None
+    except OSError as e:
+        raise VtableError(f"{p}: cannot read: {e.strerror}") from None

@@ -1,0 +1,117 @@
+"""Named presets from the report, read from the TOML files in ``data/``.
+
+Names are ``family`` or ``family:row`` with the report's table number, e.g.
+``table6.1:standard``, ``table7.2:k_o=25``, ``table9.1``, ``table5.1``.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from importlib import resources
+from typing import Any
+
+from vtable.errors import VtableError
+from vtable.params.base import read_toml
+from vtable.params.loops import (
+    HorizontalSpring,
+    HybridParams,
+    MechanicalParams,
+    OpenLoop,
+    RockingSpring,
+    TableSDOFParams,
+)
+from vtable.params.specimen import SDOFSpecimen, Specimen, specimen_from_dict
+from vtable.params.table import EERCTable
+
+
+@cache
+def _file(name: str) -> dict[str, Any]:
+    path = resources.files("vtable.params.data") / f"{name}.toml"
+    with resources.as_file(path) as p:
+        return read_toml(p)
+
+
+@cache
+def eerc_table() -> EERCTable:
+    """The EERC table (data/eerc.toml)."""
+    return EERCTable.from_dict(_file("eerc"), "eerc.toml")
+
+
+def specimen(name: str) -> Specimen:
+    """A specimen from data/specimens.toml: none, concrete_blocks, sdof_frame, ..."""
+    d = _file("specimens")
+    if name not in d:
+        raise VtableError(f"unknown specimen preset {name!r}; expected one of {', '.join(d)}")
+    return specimen_from_dict(d[name], f"specimens.toml [{name}]")
+
+
+def _row(family: str, name: str) -> dict[str, Any]:
+    key = family.replace(".", "_")
+    rows = _file("models").get(key)
+    if rows is None:
+        raise VtableError(f"unknown preset family {family!r}")
+    if name not in rows:
+        raise VtableError(f"unknown row {name!r} of {family}; expected one of "
+                          f"{', '.join(rows)}")
+    return rows[name]
+
+
+def rows(family: str) -> list[str]:
+    """Row names of a tabulated family (table6.1, table7.1, table7.2)."""
+    return list(_file("models")[family.replace(".", "_")])
+
+
+def _split(name: str, family: str) -> str:
+    fam, _, row = name.partition(":")
+    if fam != family or not row:
+        raise VtableError(f"expected a preset name like {family}:ROW, got {name!r}")
+    return row
+
+
+def open_loop(name: str) -> OpenLoop:
+    """A Table 6.1 row, e.g. ``table6.1:standard``."""
+    row = _split(name, "table6.1")
+    return OpenLoop.from_dict(_row("table6.1", row), f"models.toml [table6_1.{row}]")
+
+
+def table_sdof(name: str) -> TableSDOFParams:
+    """A Table 7.1 or 7.2 row, e.g. ``table7.2:k_o=25``."""
+    fam, _, row = name.partition(":")
+    if fam not in ("table7.1", "table7.2") or not row:
+        raise VtableError(f"expected table7.1:ROW or table7.2:ROW, got {name!r}")
+    d = dict(_row(fam, row))
+    return TableSDOFParams.from_dict(d, f"models.toml [{fam}.{row}]")
+
+
+def hybrid(name: str = "table9.1") -> HybridParams:
+    """Table 9.1 (ratios as printed) or Table 8.1 (physical values, converted)."""
+    if name == "table9.1":
+        return HybridParams.from_dict(_file("models")["table9_1"], "models.toml [table9_1]")
+    if name == "table8.1":
+        d = _file("models")["table8_1"]
+        t = eerc_table().geometry
+        spec = specimen("table8_1")
+        assert isinstance(spec, SDOFSpecimen)
+        return HybridParams.from_physical(
+            spec, t.mass, t.pitch_inertia,
+            OpenLoop.from_dict(d["open_loop"], "models.toml [table8_1.open_loop]"),
+            RockingSpring.from_dict(d["rocking"], "models.toml [table8_1.rocking]"),
+            title="hybrid model, Table 8.1", source="Table 8.1")
+    raise VtableError(f"unknown hybrid preset {name!r}; expected table9.1 or table8.1")
+
+
+def mechanical(name: str = "table9.3") -> MechanicalParams:
+    """Table 9.3 (ratios as printed) or Table 5.1 (physical values, converted)."""
+    if name == "table9.3":
+        return MechanicalParams.from_dict(_file("models")["table9_3"], "models.toml [table9_3]")
+    if name == "table5.1":
+        d = _file("models")["table5_1"]
+        t = eerc_table().geometry
+        spec = specimen("table5_1")
+        assert isinstance(spec, SDOFSpecimen)
+        return MechanicalParams.from_physical(
+            spec, t.mass, t.pitch_inertia,
+            HorizontalSpring.from_dict(d["horizontal"], "models.toml [table5_1.horizontal]"),
+            RockingSpring.from_dict(d["rocking"], "models.toml [table5_1.rocking]"),
+            title="mechanical model, Table 5.1", source="Table 5.1")
+    raise VtableError(f"unknown mechanical preset {name!r}; expected table9.3 or table5.1")

@@ -1,0 +1,1 @@
+"""Rendering of what other modules computed (installed as ``vtable.viz``)."""
