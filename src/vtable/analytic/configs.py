@@ -1,0 +1,180 @@
+"""Named configurations and TOML model files -> analytical models (used by the CLI).
+
+A model file::
+
+    model = "hybrid"            # servo | table_sdof | hybrid | mechanical | rc_filter
+                                # | two_directional | mdof_hybrid
+    preset = "table9.1"         # optional starting point; [parameters] overrides it
+    height_in = 219.0           # optional, gives θ outputs for hybrid/mechanical
+    [parameters]                # the model's parameter table, report units
+    open_loop = { f_o_hz = 9.6, xi_o = 0.606, k_o_per_s = 29.5 }
+
+or, for `hybrid`, physical values on the EERC table: ``[specimen]`` (run-format keys),
+``[open_loop]`` and ``[rocking]`` (k_theta_lb_in_per_rad, c_theta_lb_in_s_per_rad).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from vtable import units
+from vtable.analytic.base import LinearModel
+from vtable.analytic.mdof import MDOFHybrid
+from vtable.analytic.mechanical import MechanicalModel
+from vtable.analytic.pitch import HybridModel, TwoDirectionalTable
+from vtable.analytic.rcfilter import RCFilterServo
+from vtable.analytic.sdof import TableSDOF
+from vtable.analytic.servo import ServoLoop
+from vtable.errors import VtableError
+from vtable.params import presets
+from vtable.params.base import read_toml
+from vtable.params.loops import (
+    HybridParams,
+    MechanicalParams,
+    OpenLoop,
+    RockingSpring,
+    TableSDOFParams,
+    TwoDirectionalParams,
+)
+from vtable.params.specimen import SDOFSpecimen, ShearBuilding, specimen_from_dict
+from vtable.params.table import ServoConstants
+
+#: the built-in EERC configuration: the SDOF frame on the table, hybrid model (Table 9.1)
+DEFAULT = "eerc-sdof"
+SDOF_HEIGHT = units.to_si(219.0, "in")  # Table 8.1 structural height
+
+
+def _named() -> dict[str, Callable[[], LinearModel]]:
+    named: dict[str, Callable[[], LinearModel]] = {
+        "eerc-sdof": lambda: HybridModel(presets.hybrid("table9.1"), height=SDOF_HEIGHT,
+                                         title="EERC table + SDOF frame (hybrid, Table 9.1)"),
+        "table9.1": lambda: HybridModel(presets.hybrid("table9.1"), height=SDOF_HEIGHT),
+        "table8.1": lambda: HybridModel(presets.hybrid("table8.1"),
+                                        height=presets.specimen("table8_1").height),
+        "table9.3": lambda: MechanicalModel(presets.mechanical("table9.3"), height=SDOF_HEIGHT),
+        "table5.1": lambda: MechanicalModel(presets.mechanical("table5.1"),
+                                            height=presets.specimen("table5_1").height),
+        "table-b.5": lambda: RCFilterServo(presets.eerc_table().servo,
+                                           title="bare table with RC filter (Table B.5)"),
+        "bare-physical": lambda: ServoLoop.from_servo(presets.eerc_table().servo),
+    }
+    for row in presets.rows("table6.1"):
+        named[f"table6.1:{row}"] = (lambda r=row: ServoLoop(
+            presets.open_loop(f"table6.1:{r}"), title=f"bare table, Table 6.1 {r}"))
+    for fam in ("table7.1", "table7.2"):
+        for row in presets.rows(fam):
+            named[f"{fam}:{row}"] = (lambda f=fam, r=row: TableSDOF(
+                presets.table_sdof(f"{f}:{r}"), title=f"table + SDOF, {f.title()} {r}"))
+    return named
+
+
+def names() -> list[str]:
+    """Every named configuration."""
+    return list(_named())
+
+
+def load(name_or_path: str) -> LinearModel:
+    """A named configuration, or a model TOML file (a path ending in .toml)."""
+    if name_or_path.endswith(".toml") or Path(name_or_path).is_file():
+        return from_file(name_or_path)
+    named = _named()
+    if name_or_path not in named:
+        raise VtableError(f"unknown configuration {name_or_path!r}; expected a .toml file or "
+                          f"one of: {', '.join(named)}")
+    return named[name_or_path]()
+
+
+_KINDS: dict[str, tuple[type, Callable[[Any, float | None], LinearModel]]] = {
+    "servo": (OpenLoop, lambda p, h: ServoLoop(p)),
+    "table_sdof": (TableSDOFParams, lambda p, h: TableSDOF(p)),
+    "hybrid": (HybridParams, lambda p, h: HybridModel(p, height=h)),
+    "mechanical": (MechanicalParams, lambda p, h: MechanicalModel(p, height=h)),
+    "rc_filter": (ServoConstants, lambda p, h: RCFilterServo(p)),
+    "two_directional": (TwoDirectionalParams, lambda p, h: TwoDirectionalTable(p)),
+}
+_PRESET_PARAMS: dict[str, Callable[[str], Any]] = {
+    "servo": presets.open_loop, "table_sdof": presets.table_sdof,
+    "hybrid": presets.hybrid, "mechanical": presets.mechanical,
+    "rc_filter": lambda name: presets.eerc_table().servo if name == "table-b.5" else
+    (_ for _ in ()).throw(VtableError(f"unknown rc_filter preset {name!r}; expected table-b.5")),
+}
+_TOP = {"model", "preset", "title", "height_in", "parameters", "specimen", "open_loop",
+        "rocking", "building"}
+
+
+def from_file(path: str | Path) -> LinearModel:
+    """Build the model a TOML model file describes (see the module docstring)."""
+    d = read_toml(path)
+    where = str(path)
+    unknown = sorted(set(d) - _TOP)
+    if unknown:
+        raise VtableError(f"{where}: unknown key {unknown[0]!r}; expected {', '.join(sorted(_TOP))}")
+    kind = d.get("model")
+    kinds = [*_KINDS, "mdof_hybrid"]
+    if kind not in kinds:
+        raise VtableError(f"{where}: model must be one of {', '.join(kinds)}, got {kind!r}")
+    height = d.get("height_in")
+    if height is not None:
+        if not isinstance(height, int | float) or not height > 0:
+            raise VtableError(f"{where}: height_in must be a positive number")
+        height = units.to_si(float(height), "in")
+    title = d.get("title", "")
+    if kind == "mdof_hybrid":
+        model = _mdof_from(d, where)
+    elif kind == "hybrid" and "parameters" not in d and "preset" not in d:
+        model = _hybrid_physical(d, where)
+    else:
+        cls, make = _KINDS[kind]
+        base: dict[str, Any] = {}
+        if "preset" in d:
+            if kind not in _PRESET_PARAMS:
+                raise VtableError(f"{where}: model {kind!r} has no presets")
+            base = _PRESET_PARAMS[kind](d["preset"]).to_dict()
+        params = cls.from_dict(_merge(base, d.get("parameters", {}), where),
+                               f"{where} [parameters]")
+        model = make(params, height)
+    if title:
+        model.title = title
+    model.check_stable()
+    return model
+
+
+def _merge(base: dict[str, Any], over: Any, where: str) -> dict[str, Any]:
+    if not isinstance(over, dict):
+        raise VtableError(f"{where} [parameters]: expected a table")
+    out = dict(base)
+    for k, v in over.items():
+        out[k] = _merge(out[k], v, where) if isinstance(v, dict) and isinstance(
+            out.get(k), dict) else v
+    return out
+
+
+def _hybrid_physical(d: dict[str, Any], where: str) -> HybridModel:
+    for k in ("specimen", "open_loop", "rocking"):
+        if k not in d:
+            raise VtableError(f"{where}: a physical hybrid model needs [{k}]")
+    spec = specimen_from_dict(d["specimen"], f"{where} [specimen]")
+    if not isinstance(spec, SDOFSpecimen):
+        raise VtableError(f"{where} [specimen]: the hybrid model carries a sdof specimen; "
+                          "use model = \"mdof_hybrid\" for a shear building")
+    geo = presets.eerc_table().geometry
+    p = HybridParams.from_physical(spec, geo.mass, geo.pitch_inertia,
+                                   OpenLoop.from_dict(d["open_loop"], f"{where} [open_loop]"),
+                                   RockingSpring.from_dict(d["rocking"], f"{where} [rocking]"),
+                                   title=spec.title)
+    return HybridModel(p, height=spec.height)
+
+
+def _mdof_from(d: dict[str, Any], where: str) -> MDOFHybrid:
+    for k in ("building", "open_loop", "rocking"):
+        if k not in d:
+            raise VtableError(f"{where}: model mdof_hybrid needs [{k}]")
+    b = dict(d["building"])
+    b.setdefault("kind", "shear_building")
+    building = ShearBuilding.from_dict(b, f"{where} [building]")
+    geo = presets.eerc_table().geometry
+    return MDOFHybrid(OpenLoop.from_dict(d["open_loop"], f"{where} [open_loop]"), geo.mass,
+                      geo.pitch_inertia, RockingSpring.from_dict(d["rocking"], f"{where} [rocking]"),
+                      building)

@@ -1,0 +1,61 @@
+"""Shear-building matrices (eq 4.5): mass, stiffness, modal damping, fixed-base modes."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+
+from vtable.errors import VtableError
+from vtable.params.specimen import ShearBuilding
+
+TWO_PI = 2 * np.pi
+
+
+def stiffness_matrix(k: np.ndarray) -> np.ndarray:
+    """Tridiagonal K of a shear building from storey stiffnesses k_1 (ground) .. k_n."""
+    k = np.asarray(k, dtype=float)
+    n = len(k)
+    K = np.diag(k + np.append(k[1:], 0.0))
+    idx = np.arange(n - 1)
+    K[idx, idx + 1] = K[idx + 1, idx] = -k[1:]
+    return K
+
+
+def fixed_base_modes(M: np.ndarray, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Circular frequencies (ascending) and mass-normalised mode shapes (columns)."""
+    w2, phi = scipy.linalg.eigh(K, M)
+    return np.sqrt(w2), phi
+
+
+def storey_stiffnesses(masses: np.ndarray, frequencies_hz: np.ndarray) -> np.ndarray:
+    """Storey stiffnesses whose fixed-base frequencies are `frequencies_hz`.
+
+    The inverse eigenvalue problem is solved by least squares on log k; frequencies that
+    no shear building with these masses can have are an error.
+    """
+    m = np.asarray(masses, dtype=float)
+    target = TWO_PI * np.sort(np.asarray(frequencies_hz, dtype=float))
+    M = np.diag(m)
+    k0 = (target[0] ** 2) * m.sum() * len(m) * np.ones(len(m))
+
+    def resid(logk: np.ndarray) -> np.ndarray:
+        w, _ = fixed_base_modes(M, stiffness_matrix(np.exp(logk)))
+        return w / target - 1.0
+
+    sol = scipy.optimize.least_squares(resid, np.log(k0), xtol=1e-14, ftol=1e-14, gtol=1e-14)
+    if np.max(np.abs(sol.fun)) > 1e-8:
+        raise VtableError("ShearBuilding.frequencies_hz: no shear building with these "
+                          f"masses has these frequencies (mismatch {np.max(np.abs(sol.fun)):.1%})")
+    return np.exp(sol.x)
+
+
+def building_matrices(b: ShearBuilding) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """M, K and the modal damping matrix C = M Φ diag(2ξω) Φᵀ M (every mode at ξ)."""
+    M = np.diag(b.masses)
+    k = (np.asarray(b.stiffnesses) if b.stiffnesses is not None
+         else storey_stiffnesses(b.masses, np.asarray(b.frequencies)))
+    K = stiffness_matrix(k)
+    w, phi = fixed_base_modes(M, K)
+    C = M @ phi @ np.diag(2 * b.damping * w) @ phi.T @ M
+    return M, K, C
