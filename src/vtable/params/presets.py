@@ -14,6 +14,8 @@ from vtable.errors import VtableError
 from vtable.params.base import read_toml
 from vtable.params.loops import (
     HorizontalSpring,
+    StructureRatios,
+    TwoDirectionalParams,
     HybridParams,
     MechanicalParams,
     OpenLoop,
@@ -115,3 +117,35 @@ def mechanical(name: str = "table9.3") -> MechanicalParams:
             RockingSpring.from_dict(d["rocking"], "models.toml [table5_1.rocking]"),
             title="mechanical model, Table 5.1", source="Table 5.1")
     raise VtableError(f"unknown mechanical preset {name!r}; expected table9.3 or table5.1")
+
+
+def two_directional(f_r: float = 21.0) -> TwoDirectionalParams:
+    """Eq 8.16 consistent with Table 8.1 at the coupled frequency (§8.6.2).
+
+    The pitch loop (open-loop frequency `f_r` Hz, 13 or 21 in the report) is chosen so
+    its spring and dashpot at 2.58 Hz are the vertical actuators' k_v, c_v (eqs 8.28-8.29
+    inverted); the passive stabilizers carry k_p = k_θ - k_v and c_p = c_θ - c_v.
+    """
+    import math
+
+    from vtable import units
+    from vtable.analytic.closed_forms import pitch_loop_from_springs
+
+    d = _file("models")["section8_6_2"]
+    k_v = units.to_si(d["k_v_lb_in_per_rad"], "lb-in/rad")
+    c_v = units.to_si(d["c_v_lb_in_s_per_rad"], "lb-in-s/rad")
+    t = eerc_table().geometry
+    spec = specimen("table8_1")
+    assert isinstance(spec, SDOFSpecimen)
+    hyb = _file("models")["table8_1"]
+    rock = RockingSpring.from_dict(hyb["rocking"], "models.toml [table8_1.rocking]")
+    pitch = pitch_loop_from_springs(k_v, c_v, d["f_coupled_hz"], f_r, t.pitch_inertia)
+    k_p, c_p = rock.k_theta - k_v, rock.c_theta - c_v
+    w_p = math.sqrt(k_p / t.pitch_inertia)
+    return TwoDirectionalParams(
+        open_loop=OpenLoop.from_dict(hyb["open_loop"], "models.toml [table8_1.open_loop]"),
+        pitch_loop=pitch,
+        structure=StructureRatios.from_physical(spec, t.mass, t.pitch_inertia),
+        f_p=w_p / (2 * math.pi), xi_p=c_p / (2 * w_p * t.pitch_inertia), height=spec.height,
+        title=f"two-directional table, pitch loop f_r = {f_r:g} Hz (§8.6.2)",
+        source="§8.6.2, Table 8.1")
