@@ -1,0 +1,35 @@
+import numpy as np
+import pytest
+
+from vtable import units
+from vtable.errors import VtableError
+
+
+def test_g_in_inches_matches_run_format():
+    # run format: 1 g = 386.09 in/s²
+    assert units.from_si(units.G, "in/s2") == pytest.approx(386.09, abs=0.005)
+
+
+def test_report_units_to_si():
+    assert units.to_si(1.0, "kip") == pytest.approx(4448.2216152605)
+    assert units.to_si(1.0, "psi") == pytest.approx(6894.757293168)
+    assert units.to_si(1251.0, "kip-in-s2") == pytest.approx(1251 * 4448.2216152605 * 0.0254)
+    assert units.to_si(1.0, "in3/s/psi") == pytest.approx(0.0254**3 / 6894.757293168)
+    assert units.to_si(170.0, "gpm") == pytest.approx(170 * 231 * 0.0254**3 / 60)
+
+
+def test_table_b5_mass_is_a_third_of_100_kips():
+    # Table B.5: m_t = 86.3 lb-s²/in = 100 kips/(3g)
+    m = units.weight_to_mass(100.0, "kip") / 3
+    assert units.from_si(m, "lb-s2/in") == pytest.approx(86.3, abs=0.05)
+
+
+@pytest.mark.parametrize("unit", sorted(units.UNITS))
+def test_round_trip(unit):
+    x = np.array([0.0, 1.5, -2.25e7])
+    np.testing.assert_allclose(units.from_si(units.to_si(x, unit), unit), x, rtol=1e-15)
+
+
+def test_unknown_unit_is_a_clear_error():
+    with pytest.raises(VtableError, match="unknown unit 'furlong'"):
+        units.to_si(1.0, "furlong")
