@@ -1,0 +1,121 @@
+import numpy as np
+import pytest
+import scipy.integrate
+
+from vtable import units
+from vtable.errors import VtableError
+from vtable.signals import (
+    band_limited_random,
+    bandpass_trapezoid,
+    differentiate,
+    el_centro,
+    integrate_to_displacement,
+    process_record,
+    pulse,
+    read_at2,
+    read_at2_folder,
+    sine,
+)
+
+
+def test_random_is_reproducible_and_band_limited():
+    t, a = band_limited_random(16.0, 0.005, (0.0, 25.0), peak=0.1, seed=7)
+    _, b = band_limited_random(16.0, 0.005, (0.0, 25.0), peak=0.1, seed=7)
+    _, c = band_limited_random(16.0, 0.005, (0.0, 25.0), peak=0.1, seed=8)
+    np.testing.assert_array_equal(a, b)
+    assert not np.allclose(a, c)
+    assert np.max(np.abs(a)) == pytest.approx(0.1)
+    f = np.fft.rfftfreq(len(t), 0.005)
+    P = np.abs(np.fft.rfft(a)) ** 2
+    assert P[f > 25.5].sum() < 1e-20 * P.sum()
+    _, d = band_limited_random(11.0, 0.005, (0.0, 32.0), rms=2.0, seed=1)
+    assert np.sqrt(np.mean(d**2)) == pytest.approx(2.0)
+
+
+def test_random_rejects_band_above_nyquist():
+    with pytest.raises(VtableError, match="Nyquist 50"):
+        band_limited_random(10, 0.01, (0, 60))
+
+
+def test_sine_and_pulse():
+    t, x = sine(2.0, 0.001, 5.0, 0.5)
+    assert x[t == 0.05][0] == pytest.approx(0.5)
+    t, p = pulse(3.0, 0.001, width=1.0, amplitude=0.02, start=0.5)
+    assert p.max() == pytest.approx(0.02) and t[np.argmax(p)] == pytest.approx(1.0)
+    assert p[0] == 0 and p[-1] == 0
+
+
+def test_el_centro_record():
+    r = el_centro()
+    assert len(r.acc) == 3995 and r.dt == pytest.approx(0.01)
+    assert r.pga / units.G == pytest.approx(0.313, abs=0.001)
+    pgv = np.max(np.abs(scipy.integrate.cumulative_trapezoid(r.acc, dx=r.dt)))
+    assert pgv * 100 == pytest.approx(29.7, abs=0.2)  # cm/s, shared/data/README.md
+
+
+def test_section_9_2_processing():
+    cmd = process_record(el_centro(), length_scale=3.2801)
+    assert cmd.dt == pytest.approx(0.01 / 1.811, rel=1e-3)  # time scale √3.2801 = 1.811
+    d = cmd.displacement
+    assert np.max(np.abs(d)) == pytest.approx(units.to_si(4.0, "in"))
+    v = np.gradient(d, cmd.dt)
+    assert abs(d[0]) < 1e-12 and abs(d[-1]) < 1e-12
+    # one-sided difference at the ends: within half a step of acceleration
+    assert abs(v[0]) < 2e-3 * np.abs(v).max() and abs(v[-1]) < 2e-3 * np.abs(v).max()
+    # acceleration back by differentiation: integrating it twice returns the displacement
+    back = integrate_to_displacement(cmd.acceleration, cmd.dt)
+    assert np.max(np.abs(back - d)) < 0.01 * np.max(np.abs(d))
+    # the forward scheme (first order, its value at i centred on i+1) agrees with the
+    # central one (§9.2: "results of both schemes were very similar")
+    fwd = differentiate(d, cmd.dt, "forward")
+    assert np.corrcoef(fwd[10:-12], cmd.acceleration[11:-11])[0, 1] > 0.995
+
+
+def test_integration_of_a_known_signal():
+    dt = 0.001
+    t = np.arange(0, 2 + dt / 2, dt)
+    x = np.sin(np.pi * t) ** 2 * np.sin(6 * np.pi * t)  # zero end displacement & velocity
+    a = np.gradient(np.gradient(x, dt, edge_order=2), dt, edge_order=2)
+    np.testing.assert_allclose(integrate_to_displacement(a, dt), x, atol=5e-4)
+
+
+def test_bandpass_removes_out_of_band():
+    dt = 0.005
+    t = np.arange(0, 20, dt)
+    x = np.sin(2 * np.pi * 0.1 * t) + np.sin(2 * np.pi * 5 * t) + np.sin(2 * np.pi * 40 * t)
+    y = bandpass_trapezoid(x, dt, (0.5, 0.55, 23, 24))
+    mid = slice(1000, 3000)
+    np.testing.assert_allclose(y[mid], np.sin(2 * np.pi * 5 * t[mid]), atol=0.05)
+
+
+AT2 = """PEER NGA STRONG MOTION DATABASE RECORD
+IMPERIAL VALLEY 5/19/40, EL CENTRO ARRAY #9, 180
+ACCELERATION TIME SERIES IN UNITS OF G
+NPTS=    7, DT=   .0100 SEC
+  .0010000  .0020000 -.0030000  .0040000  .0050000
+ -.0060000  .0070000
+"""
+
+
+def test_at2_reader(tmp_path):
+    p = tmp_path / "ELC180.AT2"
+    p.write_text(AT2)
+    r = read_at2(p)
+    assert r.dt == 0.01 and len(r.acc) == 7
+    assert r.acc[2] == pytest.approx(-0.003 * units.G)
+    assert "EL CENTRO" in r.name
+    (tmp_path / "B.AT2").write_text(AT2)
+    assert len(read_at2_folder(tmp_path)) == 2
+
+
+@pytest.mark.parametrize("text, msg", [
+    (AT2.replace("NPTS=    7", "NPTS=    8"), "header says NPTS=8 but the file has 7 values"),
+    (AT2.replace("NPTS=    7, DT=   .0100 SEC", "nothing here"), "line 4 must give NPTS= and DT="),
+    (AT2.replace(".0050000", "abc"), "non-numeric acceleration value"),
+    ("short\n", "too short"),
+])
+def test_at2_errors(tmp_path, text, msg):
+    p = tmp_path / "bad.AT2"
+    p.write_text(text)
+    with pytest.raises(VtableError, match=msg):
+        read_at2(p)
