@@ -1,0 +1,111 @@
+import json
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from vtable.cli import main
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_demo_prints_coupled_modes_and_margins(capsys):
+    code, out, err = run(capsys, "demo")
+    assert code == 0 and err == ""
+    assert "2.5402" in out and "8.1876" in out  # Table 9.2: 2.5391, 8.1906 Hz
+    assert "gain margin" in out and "phase margin" in out
+    code, out, _ = run(capsys, "demo", "--json")
+    d = json.loads(out)
+    assert d["modes"][0]["f_hz"] == pytest.approx(2.5391, rel=0.003)
+    assert d["x_eff/x_c notch_hz"] == pytest.approx(2.87, abs=0.01)
+
+
+def test_vtable_entry_point_runs():
+    exe = shutil.which("vtable")
+    cmd = [exe, "demo"] if exe else [sys.executable, "-m", "vtable.cli", "demo"]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "hybrid model" in r.stdout
+
+
+def test_modes_and_margins_json(capsys):
+    code, out, _ = run(capsys, "modes", "table9.3", "--json")
+    assert code == 0
+    assert json.loads(out)["modes"][1]["f_hz"] == pytest.approx(6.71, abs=0.01)
+    code, out, _ = run(capsys, "margins", "table7.2:f_o=6", "--json")
+    d = json.loads(out)
+    assert d["gain_margin"] == pytest.approx(1.63, abs=0.02)
+    assert d["phase_margin_deg"] == pytest.approx(19.8, abs=0.5)
+
+
+def test_tf_table(capsys):
+    code, out, _ = run(capsys, "tf", "table6.1:standard", "--fmin", "12.6", "--fmax", "13",
+                       "--n", "2", "--json")
+    d = json.loads(out)
+    assert d["f_hz"][0] == 12.6 and abs(d["phase_deg"][0]) == pytest.approx(180.0, abs=1e-6)
+    code, out, _ = run(capsys, "tf", "eerc-sdof", "--out", "theta_h", "--n", "3")
+    assert code == 0 and "theta_h/x_c" in out
+
+
+def test_model_toml_file(capsys, tmp_path):
+    p = tmp_path / "frame.toml"
+    p.write_text('model = "hybrid"\nheight_in = 219.0\n[specimen]\nkind = "sdof"\n'
+                 'weight_kip = 68.0\nheight_in = 219.0\nfrequency_hz = 2.87\ndamping = 0.01\n'
+                 '[open_loop]\nf_o_hz = 9.6\nxi_o = 0.606\nk_o_per_s = 29.5\n[rocking]\n'
+                 'k_theta_lb_in_per_rad = 2.22e10\nc_theta_lb_in_s_per_rad = 3.7e8\n')
+    code, out, _ = run(capsys, "modes", str(p), "--json")
+    assert code == 0
+    assert json.loads(out)["modes"][0]["f_hz"] == pytest.approx(2.541, abs=0.002)
+    q = tmp_path / "override.toml"
+    q.write_text('model = "table_sdof"\npreset = "table7.2:standard"\n'
+                 '[parameters.open_loop]\nk_o_per_s = 25.07\n')
+    code, out, _ = run(capsys, "margins", str(q), "--json")
+    assert json.loads(out)["gain_margin"] == pytest.approx(2.99, abs=0.02)  # Table 7.2 k_o=25
+
+
+@pytest.mark.parametrize("content, msg", [
+    ("model = [oops\n", "malformed TOML"),
+    ('model = "hybrid"\n[specimen]\nkind = "sdof"\nweight_kip = -68.0\nheight_in = 219.0\n'
+     'frequency_hz = 2.87\ndamping = 0.01\n[open_loop]\nf_o_hz = 9.6\nxi_o = 0.606\n'
+     'k_o_per_s = 29.5\n[rocking]\nk_theta_lb_in_per_rad = 2.22e10\n'
+     'c_theta_lb_in_s_per_rad = 3.7e8\n', "weight_kip must be > 0, got -68"),
+    ('model = "spaceship"\n', "model must be one of servo"),
+    ('model = "servo"\n[parameters]\nf_o_hz = 9.6\nxi_o = 0.606\n', "missing key 'k_o_per_s'"),
+    ('model = "servo"\nbogus = 1\n', "unknown key 'bogus'"),
+])
+def test_bad_input_is_one_line(capsys, tmp_path, content, msg):
+    p = tmp_path / "bad.toml"
+    p.write_text(content)
+    code, out, err = run(capsys, "modes", str(p))
+    assert code == 2 and out == ""
+    assert msg in err and err.count("\n") == 1 and "Traceback" not in err
+    assert str(p) in err
+
+
+def test_unknown_preset(capsys):
+    code, _, err = run(capsys, "margins", "table6.1:gain=11")
+    assert code == 2 and "unknown configuration 'table6.1:gain=11'" in err
+    assert err.count("\n") == 1
+
+
+def test_unstable_configuration_is_reported_with_its_eigenvalues(capsys, tmp_path):
+    p = tmp_path / "hot.toml"
+    # eq 6.17b: unstable when 2ξ_oω_o < k_o (here 2·0.3·2π·10 = 37.7 < 60)
+    p.write_text('model = "servo"\n[parameters]\nf_o_hz = 10.0\nxi_o = 0.3\nk_o_per_s = 60.0\n')
+    for cmd in ("margins", "modes", "tf"):
+        code, out, err = run(capsys, cmd, str(p))
+        assert code == 3 and out == ""
+        assert "unstable: eigenvalues with positive real part" in err
+        assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_bad_arguments_are_one_line(capsys):
+    code, _, err = run(capsys, "tf", "eerc-sdof", "--fmin", "5", "--fmax", "1")
+    assert code == 2 and "--fmin < --fmax" in err
+    code, _, err = run(capsys, "frobnicate")
+    assert code == 2 and err.count("\n") == 1

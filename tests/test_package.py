@@ -1,0 +1,65 @@
+"""The design card's layout: controllers/ and viz/ are vtable.controllers / vtable.viz."""
+
+import os
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_editable_install_maps_subpackages():
+    import vtable.controllers
+    import vtable.viz
+
+    assert Path(vtable.controllers.__file__).parent.name == "controllers"
+    assert Path(vtable.viz.__file__).parent.name == "viz"
+
+
+def test_no_top_level_controllers_or_viz():
+    r = subprocess.run([sys.executable, "-c", "import controllers"], capture_output=True,
+                       cwd="/", text=True)
+    assert r.returncode != 0
+    r = subprocess.run([sys.executable, "-c", "import viz"], capture_output=True, cwd="/",
+                       text=True)
+    assert r.returncode != 0
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory):
+    out = tmp_path_factory.mktemp("wheel")
+    r = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(out),
+                        str(ROOT)], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    (whl,) = out.glob("vtable-*.whl")
+    return whl
+
+
+def test_wheel_contains_the_layout(wheel):
+    names = set(zipfile.ZipFile(wheel).namelist())
+    for need in ("vtable/controllers/__init__.py", "vtable/viz/__init__.py",
+                 "vtable/assets/records/elcentro_1940_ns.csv", "vtable/params/data/eerc.toml",
+                 "vtable/params/data/models.toml", "vtable/params/data/specimens.toml",
+                 "vtable/cli.py"):
+        assert need in names, need
+    assert not any(n.startswith(("controllers/", "viz/", "tests/")) for n in names)
+
+
+def test_normal_install_runs(wheel, tmp_path):
+    target = tmp_path / "site"
+    r = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target",
+                        str(target), str(wheel)], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    code = ("import vtable, vtable.controllers, vtable.viz;"
+            "from vtable.params import presets; from vtable.signals import el_centro;"
+            "assert vtable.__file__.startswith(%r), vtable.__file__;"
+            "assert len(el_centro().acc) == 3995; presets.eerc_table();"
+            "from vtable.cli import main; raise SystemExit(main(['modes']))") % str(target)
+    env = {**os.environ, "PYTHONPATH": str(target)}
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path,
+                       env=env, timeout=120)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "2.5402" in r.stdout
