@@ -55,9 +55,9 @@ def test_normal_install_runs(wheel, tmp_path):
     assert r.returncode == 0, r.stderr[-2000:]
     code = ("import vtable, vtable.controllers, vtable.viz;"
             "from vtable.params import presets; from vtable.signals import el_centro;"
-            "assert vtable.__file__.startswith(%r), vtable.__file__;"
+            f"assert vtable.__file__.startswith({str(target)!r}), vtable.__file__;"
             "assert len(el_centro().acc) == 3995; presets.eerc_table();"
-            "from vtable.cli import main; raise SystemExit(main(['modes']))") % str(target)
+            "from vtable.cli import main; raise SystemExit(main(['modes']))")
     env = {**os.environ, "PYTHONPATH": str(target)}
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path,
                        env=env, timeout=120)

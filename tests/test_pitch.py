@@ -107,7 +107,7 @@ def test_section_8_6_2_pitch_loop_from_springs():
                                                                                        abs=0.003)
     assert pitch_loop_from_springs(k_v, c_v, 2.58, 21.0, inertia).xi_o == pytest.approx(0.50,
                                                                                        abs=0.02)
-    with pytest.raises(VtableError, match="must exceed 12.5"):
+    with pytest.raises(VtableError, match=r"must exceed 12\.5"):
         pitch_loop_from_springs(k_v, c_v, 2.58, 12.0, inertia)
     # the inverse is exact
     ol = pitch_loop_from_springs(k_v, c_v, 2.58, 21.0, inertia)

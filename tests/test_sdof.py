@@ -35,7 +35,8 @@ def test_eq_7_9_with_corrected_a2_is_the_state_space_model():
     np.testing.assert_allclose(TableSDOF(p).characteristic_polynomial(), den / den[0], rtol=1e-9)
     # the printed a2 (ξ_s in place of ξ_o) does not reproduce it
     ol, st = p.open_loop, p.structure
-    printed_a2 = 2 * (1 + st.u) * st.omega_s**2 * st.xi_s / ol.omega_o + 2 * st.xi_s * st.omega_s + ol.k_o
+    printed_a2 = (2 * (1 + st.u) * st.omega_s**2 * st.xi_s / ol.omega_o
+                  + 2 * st.xi_s * st.omega_s + ol.k_o)
     assert abs(printed_a2 - den[3]) / den[3] > 0.05
 
 

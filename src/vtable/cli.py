@@ -128,8 +128,10 @@ def cmd_demo(a: argparse.Namespace) -> dict[str, Any]:
     near = f < 5.0
     return {"configuration": configs.DEFAULT, **_modes_dict(model),
             "margins": _margins_dict(model, "x_t", "x_c"),
-            "x_t/x_c": {"peak": float(xt[near].max()), "f_peak_hz": float(f[near][xt[near].argmax()]),
-                        "notch": float(xt[near].min()), "f_notch_hz": float(f[near][xt[near].argmin()])},
+            "x_t/x_c": {"peak": float(xt[near].max()),
+                        "f_peak_hz": float(f[near][xt[near].argmax()]),
+                        "notch": float(xt[near].min()),
+                        "f_notch_hz": float(f[near][xt[near].argmin()])},
             "x_eff/x_c notch_hz": float(f[near][xe[near].argmin()]),
             "theta_h/x_c peak_hz": float(f[near][th[near].argmax()])}
 

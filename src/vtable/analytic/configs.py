@@ -112,7 +112,8 @@ def from_file(path: str | Path) -> LinearModel:
     where = str(path)
     unknown = sorted(set(d) - _TOP)
     if unknown:
-        raise VtableError(f"{where}: unknown key {unknown[0]!r}; expected {', '.join(sorted(_TOP))}")
+        raise VtableError(f"{where}: unknown key {unknown[0]!r}; "
+                          f"expected {', '.join(sorted(_TOP))}")
     kind = d.get("model")
     kinds = [*_KINDS, "mdof_hybrid"]
     if kind not in kinds:
@@ -178,5 +179,5 @@ def _mdof_from(d: dict[str, Any], where: str) -> MDOFHybrid:
     building = ShearBuilding.from_dict(b, f"{where} [building]")
     geo = presets.eerc_table().geometry
     return MDOFHybrid(OpenLoop.from_dict(d["open_loop"], f"{where} [open_loop]"), geo.mass,
-                      geo.pitch_inertia, RockingSpring.from_dict(d["rocking"], f"{where} [rocking]"),
-                      building)
+                      geo.pitch_inertia,
+                      RockingSpring.from_dict(d["rocking"], f"{where} [rocking]"), building)

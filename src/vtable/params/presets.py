@@ -14,13 +14,13 @@ from vtable.errors import VtableError
 from vtable.params.base import read_toml
 from vtable.params.loops import (
     HorizontalSpring,
-    StructureRatios,
-    TwoDirectionalParams,
     HybridParams,
     MechanicalParams,
     OpenLoop,
     RockingSpring,
+    StructureRatios,
     TableSDOFParams,
+    TwoDirectionalParams,
 )
 from vtable.params.specimen import SDOFSpecimen, Specimen, specimen_from_dict
 from vtable.params.table import EERCTable

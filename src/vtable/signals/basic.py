@@ -11,7 +11,7 @@ def time_axis(duration: float, dt: float) -> np.ndarray:
     """0, dt, ..., up to and including `duration` (to within dt/2)."""
     if not (dt > 0 and duration > 0):
         raise VtableError(f"duration and dt must be > 0 (got {duration!r}, {dt!r})")
-    return np.arange(int(round(duration / dt)) + 1) * dt
+    return np.arange(round(duration / dt) + 1) * dt
 
 
 def band_limited_random(duration: float, dt: float, band: tuple[float, float] = (0.0, 25.0),

@@ -93,7 +93,7 @@ def process_record(rec: Record, *, length_scale: float = 3.2801,
     acc = rec.acc
     if window is not None:
         t0, t1 = window
-        i0, i1 = int(round(t0 / rec.dt)), int(round(t1 / rec.dt)) + 1
+        i0, i1 = round(t0 / rec.dt), round(t1 / rec.dt) + 1
         if not (0 <= i0 < i1 <= len(acc)):
             raise VtableError(f"window {window} s is outside the record (0-{rec.duration:g} s)")
         acc = acc[i0:i1]
