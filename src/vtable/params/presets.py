@@ -6,6 +6,7 @@ Names are ``family`` or ``family:row`` with the report's table number, e.g.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import cache
 from importlib import resources
 from typing import Any
@@ -85,20 +86,29 @@ def table_sdof(name: str) -> TableSDOFParams:
     return TableSDOFParams.from_dict(d, f"models.toml [{fam}.{row}]")
 
 
+def _physical(key: str) -> tuple[SDOFSpecimen, float, float, Callable[[str, type], Any]]:
+    """For the physical sets (Tables 8.1, 5.1): the structure (specimens.toml [key]), the
+    table mass and inertia (eerc.toml), and part(name, cls) reading models.toml [key.name]."""
+    spec = specimen(key)
+    assert isinstance(spec, SDOFSpecimen)
+    t = eerc_table().geometry
+    d = _file("models")[key]
+
+    def part(name: str, cls: type) -> Any:
+        return cls.from_dict(d[name], f"models.toml [{key}.{name}]")
+
+    return spec, t.mass, t.pitch_inertia, part
+
+
 def hybrid(name: str = "table9.1") -> HybridParams:
     """Table 9.1 (ratios as printed) or Table 8.1 (physical values, converted)."""
     if name == "table9.1":
         return HybridParams.from_dict(_file("models")["table9_1"], "models.toml [table9_1]")
     if name == "table8.1":
-        d = _file("models")["table8_1"]
-        t = eerc_table().geometry
-        spec = specimen("table8_1")
-        assert isinstance(spec, SDOFSpecimen)
-        return HybridParams.from_physical(
-            spec, t.mass, t.pitch_inertia,
-            OpenLoop.from_dict(d["open_loop"], "models.toml [table8_1.open_loop]"),
-            RockingSpring.from_dict(d["rocking"], "models.toml [table8_1.rocking]"),
-            title="hybrid model, Table 8.1", source="Table 8.1")
+        spec, m_t, inertia, part = _physical("table8_1")
+        return HybridParams.from_physical(spec, m_t, inertia, part("open_loop", OpenLoop),
+                                          part("rocking", RockingSpring),
+                                          title="hybrid model, Table 8.1", source="Table 8.1")
     raise VtableError(f"unknown hybrid preset {name!r}; expected table9.1 or table8.1")
 
 
@@ -107,15 +117,12 @@ def mechanical(name: str = "table9.3") -> MechanicalParams:
     if name == "table9.3":
         return MechanicalParams.from_dict(_file("models")["table9_3"], "models.toml [table9_3]")
     if name == "table5.1":
-        d = _file("models")["table5_1"]
-        t = eerc_table().geometry
-        spec = specimen("table5_1")
-        assert isinstance(spec, SDOFSpecimen)
-        return MechanicalParams.from_physical(
-            spec, t.mass, t.pitch_inertia,
-            HorizontalSpring.from_dict(d["horizontal"], "models.toml [table5_1.horizontal]"),
-            RockingSpring.from_dict(d["rocking"], "models.toml [table5_1.rocking]"),
-            title="mechanical model, Table 5.1", source="Table 5.1")
+        spec, m_t, inertia, part = _physical("table5_1")
+        return MechanicalParams.from_physical(spec, m_t, inertia,
+                                              part("horizontal", HorizontalSpring),
+                                              part("rocking", RockingSpring),
+                                              title="mechanical model, Table 5.1",
+                                              source="Table 5.1")
     raise VtableError(f"unknown mechanical preset {name!r}; expected table9.3 or table5.1")
 
 
@@ -134,18 +141,14 @@ def two_directional(f_r: float = 21.0) -> TwoDirectionalParams:
     d = _file("models")["section8_6_2"]
     k_v = units.to_si(d["k_v_lb_in_per_rad"], "lb-in/rad")
     c_v = units.to_si(d["c_v_lb_in_s_per_rad"], "lb-in-s/rad")
-    t = eerc_table().geometry
-    spec = specimen("table8_1")
-    assert isinstance(spec, SDOFSpecimen)
-    hyb = _file("models")["table8_1"]
-    rock = RockingSpring.from_dict(hyb["rocking"], "models.toml [table8_1.rocking]")
-    pitch = pitch_loop_from_springs(k_v, c_v, d["f_coupled_hz"], f_r, t.pitch_inertia)
+    spec, m_t, inertia, part = _physical("table8_1")
+    rock = part("rocking", RockingSpring)
+    pitch = pitch_loop_from_springs(k_v, c_v, d["f_coupled_hz"], f_r, inertia)
     k_p, c_p = rock.k_theta - k_v, rock.c_theta - c_v
-    w_p = math.sqrt(k_p / t.pitch_inertia)
+    w_p = math.sqrt(k_p / inertia)
     return TwoDirectionalParams(
-        open_loop=OpenLoop.from_dict(hyb["open_loop"], "models.toml [table8_1.open_loop]"),
-        pitch_loop=pitch,
-        structure=StructureRatios.from_physical(spec, t.mass, t.pitch_inertia),
-        f_p=w_p / (2 * math.pi), xi_p=c_p / (2 * w_p * t.pitch_inertia), height=spec.height,
+        open_loop=part("open_loop", OpenLoop), pitch_loop=pitch,
+        structure=StructureRatios.from_physical(spec, m_t, inertia),
+        f_p=w_p / (2 * math.pi), xi_p=c_p / (2 * w_p * inertia), height=spec.height,
         title=f"two-directional table, pitch loop f_r = {f_r:g} Hz (§8.6.2)",
         source="§8.6.2, Table 8.1")
