@@ -1,6 +1,21 @@
 """Servo controllers stepped with the physics (installed as ``vtable.controllers``).
 
-The multibody table and its controllers arrive with the virtual-table issue; the
-controllers will read the same parameter objects as the analytical models
-(`vtable.params.ServoConstants`, `vtable.params.ControlSettings`).
+A controller is a plain Python object (`Controller`): the simulator gives it the
+actuators' extensions and velocities and the DOF commands every control step, and it
+returns actuator forces. `standard_controllers` gives the EERC table's: the linear
+servo-hydraulic loops of every actuator with the five DOF controllers at the Table 3.2
+knob settings, and the cross-connected passive stabilizers.
 """
+
+from vtable.controllers.base import DOFS, Controller, LinearController
+from vtable.controllers.servo import ServoController, dof_matrix
+from vtable.controllers.stabilizers import PassiveStabilizers
+
+
+def standard_controllers(vt, rc_filter=("x", "twist")) -> list:
+    """The EERC table's controllers for the virtual table `vt`."""
+    return [ServoController(vt, rc_filter=rc_filter), PassiveStabilizers(vt)]
+
+
+__all__ = ["DOFS", "Controller", "LinearController", "PassiveStabilizers", "ServoController",
+           "dof_matrix", "standard_controllers"]

@@ -152,3 +152,8 @@ def two_directional(f_r: float = 21.0) -> TwoDirectionalParams:
         f_p=w_p / (2 * math.pi), xi_p=c_p / (2 * w_p * inertia), height=spec.height,
         title=f"two-directional table, pitch loop f_r = {f_r:g} Hz (§8.6.2)",
         source="§8.6.2, Table 8.1")
+
+
+def hybrid_rocking() -> RockingSpring:
+    """Table 8.1's rocking spring and dashpot k_θ, c_θ."""
+    return _physical("table8_1")[3]("rocking", RockingSpring)

@@ -16,13 +16,28 @@ def time_axis(duration: float, dt: float) -> np.ndarray:
 
 def band_limited_random(duration: float, dt: float, band: tuple[float, float] = (0.0, 25.0),
                         peak: float | None = None, rms: float | None = None,
-                        seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+                        seed: int = 0, period: float | None = None
+                        ) -> tuple[np.ndarray, np.ndarray]:
     """Random displacement with a flat amplitude spectrum in `band` (Hz) and random phases.
 
     Reproducible from `seed` (numpy's default generator). Scaled to `peak` (max |x|) or
     `rms`; with neither, unit rms. The report used 0-25 and 0-32 Hz bands (§3.2, §6.7).
+    With `period` (s, a multiple of dt) the signal repeats exactly with that period
+    ("periodic random"), so transfer functions over whole periods have no leakage.
     """
     t = time_axis(duration, dt)
+    if period is not None:
+        n_p = round(period / dt)
+        if n_p < 2 or abs(n_p * dt - period) > 1e-9 * period:
+            raise VtableError(f"period {period!r} s must be a multiple of dt = {dt!r} s")
+        _, one = band_limited_random(period - dt, dt, band, None, None, seed)
+        x = np.resize(one, len(t))
+        x /= np.sqrt(np.mean(one**2))
+        if peak is not None:
+            x *= peak / np.max(np.abs(x))
+        elif rms is not None:
+            x *= rms
+        return t, x
     lo, hi = band
     nyq = 0.5 / dt
     if not (0 <= lo < hi <= nyq):

@@ -1,0 +1,53 @@
+"""Transfer-function estimation between two channels (report §3.2, eqs 3.1-3.2).
+
+H1 = G_xy/G_xx with coherence γ² = |G_xy|²/(G_xx G_yy), averaged over Hann-windowed,
+overlapping frames (scipy.signal.csd / welch); 2048-point frames as in §3.2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.signal
+
+from vtable.errors import VtableError
+
+
+@dataclass(frozen=True)
+class TransferFunction:
+    """An estimated frequency response with its coherence and the number of averages."""
+
+    f: np.ndarray
+    H: np.ndarray
+    coherence: np.ndarray
+    averages: int
+
+    def at(self, f_hz) -> np.ndarray:
+        """Interpolated H at other frequencies (real and imaginary parts separately)."""
+        return (np.interp(f_hz, self.f, self.H.real) + 1j * np.interp(f_hz, self.f, self.H.imag))
+
+
+def transfer_function(x: np.ndarray, y: np.ndarray, fs: float, nperseg: int = 2048,
+                      overlap: float = 0.5, integrate: int = 0) -> TransferFunction:
+    """H1 estimate of y/x (eqs 3.1a-c) with coherence (eq 3.2).
+
+    `integrate` = 2 divides H by -ω² (displacement from a measured acceleration, §3.4.1).
+    """
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if x.shape != y.shape or x.ndim != 1:
+        raise VtableError("input and output must be 1-D histories of the same length")
+    if len(x) < nperseg:
+        raise VtableError(f"{len(x)} samples are shorter than one {nperseg}-point frame")
+    nover = int(round(overlap * nperseg))
+    f, Gxy = scipy.signal.csd(x, y, fs=fs, window="hann", nperseg=nperseg, noverlap=nover)
+    _, Gxx = scipy.signal.welch(x, fs=fs, window="hann", nperseg=nperseg, noverlap=nover)
+    _, Gyy = scipy.signal.welch(y, fs=fs, window="hann", nperseg=nperseg, noverlap=nover)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        H = Gxy / Gxx
+        coh = np.abs(Gxy) ** 2 / (Gxx * Gyy)
+        if integrate:
+            w = 2 * np.pi * f
+            H = H / (1j * w) ** integrate
+    step = nperseg - nover
+    return TransferFunction(f, H, np.nan_to_num(coh), 1 + (len(x) - nperseg) // step)

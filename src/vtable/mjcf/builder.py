@@ -1,0 +1,207 @@
+"""The multibody EERC table built with `mujoco.MjSpec` (no XML templates).
+
+World frame: origin at the centre of the table top at rest, x the shaking direction,
+z up. The slab body's frame is at the centre of the horizontal actuator line (29.7 in
+below the top, §4.2.1), where its joints x, z, roll, pitch and twist act (y is locked as
+on the EERC table). Every actuator and stabilizer is a spatial tendon from its foundation
+point to its slab point with a force actuator on it, so pitch changes its line of action
+and stroke; forces come from the Python controllers. The pit air pressure is a
+world-vertical force at the centre of the slab's bottom face balancing the total weight
+(§2.2). Specimens hang off the slab: a welded rigid block, a SDOF top mass on a slide
+joint with stiffness k_s and damping c_s, or a chain of storeys.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from vtable import units
+from vtable.errors import VtableError
+from vtable.mjcf import meshes
+from vtable.params.bodies import MASS_BLOCK, slab_body, slab_frame_positions, specimen_bodies
+from vtable.params.specimen import NoSpecimen, RigidBlock, SDOFSpecimen, ShearBuilding, Specimen
+from vtable.params.virtual import VirtualTable
+from vtable.units import G
+
+SLAB_JOINTS = ("x", "z", "roll", "pitch", "twist")
+_J = mujoco.mjtJoint
+_NO_COLLIDE = {"contype": 0, "conaffinity": 0}
+
+
+@dataclass
+class BuiltModel:
+    """A compiled virtual table and what the simulator needs to know about it."""
+
+    spec: mujoco.MjSpec
+    model: mujoco.MjModel
+    vt: VirtualTable
+    specimen: Specimen
+    force_actuators: tuple[str, ...]  # ctrl[0:n] order: H1-H3, V1-V4, P1-P4
+    structure_joints: tuple[str, ...]
+    structure_heights: tuple[float, ...]  # above the actuator line, m
+    structure_masses: tuple[float, ...]
+    slab_com: np.ndarray  # slab centre of mass in the slab frame (m)
+    pit_force: float  # N
+    assets: dict[str, bytes] = field(default_factory=dict)
+
+    @property
+    def total_weight(self) -> float:
+        return self.pit_force
+
+
+def build(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: float = 1e-3,
+          with_meshes: bool = True) -> BuiltModel:
+    """Build and compile the virtual table carrying `specimen` (bare table by default)."""
+    specimen = specimen or NoSpecimen()
+    check_specimen(vt, specimen)
+    s = mujoco.MjSpec()
+    s.modelname = "eerc_virtual_table" + ("" if isinstance(specimen, NoSpecimen)
+                                          else f"_{specimen.kind}")
+    s.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+    s.compiler.autolimits = True
+    s.option.timestep = timestep
+    s.option.gravity = [0.0, 0.0, -G]
+    s.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
+    s.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
+    s.visual.global_.offwidth, s.visual.global_.offheight = 960, 720
+    g, lay = vt.table.geometry, vt.layout
+    pivot = g.actuator_line_depth
+    assets: dict[str, bytes] = {}
+
+    def add_mesh(name: str, mesh) -> str:
+        fname = f"{name}.stl"
+        assets[fname] = meshes.to_stl(mesh)
+        s.add_mesh(name=name, file=fname)
+        return name
+
+    world = s.worldbody
+    world.add_site(name="world_ref")
+    world.add_light(name="sun", pos=[0, -10, 12], dir=[0, 0.6, -1])
+    world.add_camera(name="side", pos=[0.0, -16.0, 3.0], xyaxes=[1, 0, 0, 0, 0.2, 1])
+    slab = world.add_body(name="slab", pos=[0, 0, -pivot])
+    sb = slab_body(vt)
+    com = np.array(sb.com)
+    slab.explicitinertial = True
+    slab.mass, slab.ipos, slab.inertia = sb.mass, com, sb.inertia
+    for name, jtype, axis in (("x", _J.mjJNT_SLIDE, [1, 0, 0]), ("z", _J.mjJNT_SLIDE, [0, 0, 1]),
+                              ("roll", _J.mjJNT_HINGE, [1, 0, 0]),
+                              ("pitch", _J.mjJNT_HINGE, [0, 1, 0]),
+                              ("twist", _J.mjJNT_HINGE, [0, 0, 1])):
+        slab.add_joint(name=name, type=jtype, axis=axis)
+    if with_meshes:
+        mesh = add_mesh("slab", meshes.slab_with_ribs(g.plan_width, g.thickness, lay.rib_width,
+                                                      lay.rib_depth, lay.rib_offset, pivot))
+        slab.add_geom(name="slab", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh,
+                      rgba=[0.7, 0.7, 0.68, 1], **_NO_COLLIDE)
+    else:
+        slab.add_geom(name="slab", type=mujoco.mjtGeom.mjGEOM_BOX,
+                      size=[g.plan_width / 2, g.plan_width / 2, g.thickness / 2],
+                      pos=[0, 0, pivot - g.thickness / 2], **_NO_COLLIDE)
+    slab.add_site(name="pit", pos=[0, 0, pivot - g.thickness])
+    names = []
+    for a in vt.actuators:
+        sp = np.subtract(a.slab_point, [0, 0, -pivot])
+        slab.add_site(name=f"{a.name}_slab", pos=sp, size=[0.04, 0, 0])
+        world.add_site(name=f"{a.name}_base", pos=a.foundation_point, size=[0.04, 0, 0])
+        t = s.add_tendon(name=a.name)
+        t.wrap_site(f"{a.name}_base")
+        t.wrap_site(f"{a.name}_slab")
+        t.rgba = {"horizontal": [0.2, 0.4, 0.9, 1], "vertical": [0.9, 0.5, 0.1, 1],
+                  "stabilizer": [0.3, 0.7, 0.3, 1]}[a.kind]
+        t.width = 0.05 if a.kind == "horizontal" else 0.04
+        s.add_actuator(name=a.name, target=a.name, trntype=mujoco.mjtTrn.mjTRN_TENDON)
+        names.append(a.name)
+    joints, heights, masses = _add_specimen(s, slab, specimen, pivot, with_meshes, add_mesh)
+    weight = (g.mass + sum(masses) + (specimen.mass if isinstance(specimen, RigidBlock) else 0.0)
+              ) * G
+    pit = s.add_actuator(name="pit_pressure", target="pit", trntype=mujoco.mjtTrn.mjTRN_SITE,
+                         refsite="world_ref")
+    pit.gear = [0, 0, 1, 0, 0, 0]
+    for a in vt.actuators:
+        s.add_sensor(name=f"{a.name}_len", type=mujoco.mjtSensor.mjSENS_TENDONPOS, objname=a.name,
+                     objtype=mujoco.mjtObj.mjOBJ_TENDON)
+    for a in vt.actuators:
+        s.add_sensor(name=f"{a.name}_vel", type=mujoco.mjtSensor.mjSENS_TENDONVEL, objname=a.name,
+                     objtype=mujoco.mjtObj.mjOBJ_TENDON)
+    s.assets = dict(assets)
+    for j in joints:
+        b = j.replace("x_s", "storey") if j != "x_s" else "top_mass"
+        for site in ("ne", "nw"):
+            s.add_sensor(name=f"{b}_{site}_acc", type=mujoco.mjtSensor.mjSENS_FRAMELINACC,
+                         objname=f"{b}_{site}", objtype=mujoco.mjtObj.mjOBJ_SITE)
+            s.add_sensor(name=f"{b}_{site}_pos", type=mujoco.mjtSensor.mjSENS_FRAMEPOS,
+                         objname=f"{b}_{site}", objtype=mujoco.mjtObj.mjOBJ_SITE)
+    try:
+        model = s.compile()
+    except ValueError as e:
+        raise VtableError(f"MuJoCo could not compile the virtual table: {e}") from None
+    return BuiltModel(spec=s, model=model, vt=vt, specimen=specimen,
+                      force_actuators=tuple(names), structure_joints=tuple(joints),
+                      structure_heights=tuple(heights), structure_masses=tuple(masses),
+                      slab_com=com, pit_force=weight, assets=assets)
+
+
+def _add_specimen(s, slab, spec: Specimen, pivot: float, with_meshes: bool, add_mesh):
+    """Bodies from `specimen_bodies` (the same list the analytic model reads)."""
+    bodies = specimen_bodies(spec)
+    made = {"slab": slab}
+    joints, heights, masses = [], [], []
+    pos = slab_frame_positions(bodies)
+    for b in bodies:
+        body = made[b.parent].add_body(name=b.name, pos=b.pos)
+        body.explicitinertial = True
+        body.mass, body.ipos, body.inertia = b.mass, b.com, b.inertia
+        made[b.name] = body
+        if b.name == "specimen":
+            ext, n = np.array(b.size[:3]), int(b.size[3])
+            for i in range(n):
+                x = (i - (n - 1) / 2) * ext[0]
+                body.add_geom(name=f"block{i + 1}", type=mujoco.mjtGeom.mjGEOM_BOX,
+                              size=[ext[0] / 2 * 0.98, ext[2] / 2, ext[1] / 2], pos=[x, 0, 0],
+                              rgba=[0.6, 0.6, 0.6, 1], **_NO_COLLIDE)
+            continue
+        jnt = body.add_joint(name=b.joint, type=_J.mjJNT_SLIDE, axis=[1, 0, 0])
+        jnt.stiffness[0] = b.stiffness
+        jnt.damping[0] = b.damping
+        joints.append(b.joint)
+        heights.append(float(pos[b.name][2]))
+        masses.append(b.mass)
+        body.add_geom(name=f"{b.name}_mass", type=mujoco.mjtGeom.mjGEOM_BOX,
+                      size=MASS_BLOCK / 2, rgba=[0.35, 0.35, 0.4, 1], **_NO_COLLIDE)
+        half_y = units.to_si(36.0, "in")  # accelerometers at the frame corners (Fig 2.5)
+        for site, y in (("ne", -half_y), ("nw", half_y)):
+            body.add_site(name=f"{b.name}_{site}", pos=[0, y, 0])
+    if isinstance(spec, SDOFSpecimen) and with_meshes:
+        top_above = spec.height - pivot  # top mass above the table top
+        heights_ft = [4.0, 3.0, 3.0]  # §2.4: first floor 4 ft, then 3 ft storeys
+        fm = meshes.braced_frame(units.to_si(18.0, "ft"), units.to_si(6.0, "ft"),
+                                 [units.to_si(x, "ft") for x in heights_ft], top_above - 0.3)
+        mesh = add_mesh("braced_frame", fm)
+        slab.add_geom(name="braced_frame", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh,
+                      pos=[0, 0, pivot], rgba=[0.25, 0.45, 0.7, 1], **_NO_COLLIDE)
+    return joints, heights, masses
+
+
+def check_specimen(vt: VirtualTable, spec: Specimen) -> None:
+    """Table 2.2 limits: weight capacity (130 kips) and overhead clearance (40 ft)."""
+    specs = vt.table.specs
+    top_clear = specs.overhead_clearance
+    line = vt.table.geometry.actuator_line_depth
+    if isinstance(spec, NoSpecimen):
+        return
+    weight = spec.mass * G
+    if weight > specs.weight_capacity:
+        raise VtableError(f"specimen weighs {units.from_si(weight, 'kip'):.1f} kips, above the "
+                          f"table's capacity of {units.from_si(specs.weight_capacity, 'kip'):g} "
+                          "kips (Table 2.2)")
+    tops = {RigidBlock: lambda: spec.height + (spec.size[1] / 2 if spec.size else 0.0),
+            SDOFSpecimen: lambda: spec.height,
+            ShearBuilding: lambda: max(spec.heights)}
+    top = tops[type(spec)]() - line
+    if top > top_clear:
+        raise VtableError(f"specimen reaches {units.from_si(top, 'ft'):.1f} ft above the table "
+                          f"top, above the {units.from_si(top_clear, 'ft'):g} ft overhead "
+                          "clearance (Table 2.2)")

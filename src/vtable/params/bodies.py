@@ -1,0 +1,98 @@
+"""The rigid bodies of the virtual table and its specimen, described once (SI).
+
+Both the MJCF builder and the analytic linear model of the virtual table read this list:
+masses, centres of mass, principal inertias and the specimen's slide joints. Positions
+are in the slab frame, whose origin is the centre of the horizontal actuator line
+(29.7 in below the table top, §4.2.1).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from vtable.errors import VtableError
+from vtable.params.specimen import NoSpecimen, RigidBlock, SDOFSpecimen, ShearBuilding, Specimen
+from vtable.params.virtual import VirtualTable
+
+MASS_BLOCK = np.array([2.0, 1.6, 0.6])  # m: a lumped storey mass drawn (and its inertia) as a box
+
+
+@dataclass(frozen=True)
+class Body:
+    """A rigid body: `pos` of its frame relative to its parent's frame, centre of mass
+    `com` in its own frame, principal `inertia` about the centre of mass (kg m²), and an
+    optional slide joint along the slab's x with stiffness and damping."""
+
+    name: str
+    parent: str
+    pos: tuple[float, float, float]
+    mass: float
+    com: tuple[float, float, float]
+    inertia: tuple[float, float, float]
+    joint: str | None = None
+    stiffness: float = 0.0
+    damping: float = 0.0
+    size: tuple[float, ...] = ()
+
+
+def slab_body(vt: VirtualTable) -> Body:
+    """Slab + ribs: 100 kips (§2.2) shared by plate and ribs in proportion to volume;
+    pitch and roll inertias about the centre of mass are Table 8.1's 1251 kip-in-s², the
+    twist inertia the plate's m(w² + w²)/12."""
+    g, lay = vt.table.geometry, vt.layout
+    w, t = g.plan_width, g.thickness
+    v_plate = w * w * t
+    v_ribs = 2 * lay.rib_width * w * lay.rib_depth
+    z_com = (v_plate * (-t / 2) + v_ribs * (-t - lay.rib_depth / 2)) / (v_plate + v_ribs)
+    return Body("slab", "world", (0.0, 0.0, -g.actuator_line_depth), g.mass,
+                (0.0, 0.0, z_com + g.actuator_line_depth),
+                (g.pitch_inertia, g.pitch_inertia, g.mass * 2 * w * w / 12))
+
+
+def _box_inertia(m: float, dims) -> tuple[float, float, float]:
+    a, b, c = dims
+    return (m * (b * b + c * c) / 12, m * (a * a + c * c) / 12, m * (a * a + b * b) / 12)
+
+
+def specimen_bodies(spec: Specimen) -> list[Body]:
+    """Bodies of the specimen, children of the slab (or of each other)."""
+    if isinstance(spec, NoSpecimen):
+        return []
+    if isinstance(spec, RigidBlock):
+        ext = np.array(spec.size) if spec.size else np.ones(3)
+        n = max(spec.count, 1)
+        dims = (ext[0] * n, ext[2], ext[1])  # side by side along x, long side along y (§2.5)
+        return [Body("specimen", "slab", (0.0, 0.0, spec.height), spec.mass, (0.0, 0.0, 0.0),
+                     _box_inertia(spec.mass, dims), size=tuple(ext) + (n,))]
+    if isinstance(spec, SDOFSpecimen):
+        return [Body("top_mass", "slab", (0.0, 0.0, spec.height), spec.mass, (0.0, 0.0, 0.0),
+                     _box_inertia(spec.mass, MASS_BLOCK), joint="x_s",
+                     stiffness=spec.stiffness, damping=spec.damping_coefficient)]
+    if isinstance(spec, ShearBuilding):
+        from vtable.analytic.structure import stiffness_matrix, storey_stiffnesses
+
+        m = spec.masses
+        k = (np.asarray(spec.stiffnesses) if spec.stiffnesses is not None
+             else storey_stiffnesses(m, np.asarray(spec.frequencies)))
+        w1 = math.sqrt(np.linalg.eigvals(np.linalg.solve(np.diag(m), stiffness_matrix(k)))
+                       .real.min())
+        c = 2 * spec.damping / w1 * k  # stiffness-proportional: ξ in the first mode
+        out, parent, z_prev = [], "slab", 0.0
+        for j, (mj, hj, kj, cj) in enumerate(zip(m, spec.heights, k, c, strict=True), 1):
+            out.append(Body(f"storey{j}", parent, (0.0, 0.0, hj - z_prev), float(mj),
+                            (0.0, 0.0, 0.0), _box_inertia(float(mj), MASS_BLOCK),
+                            joint=f"x_s{j}", stiffness=float(kj), damping=float(cj)))
+            parent, z_prev = f"storey{j}", hj
+        return out
+    raise VtableError(f"unsupported specimen {type(spec).__name__}")
+
+
+def slab_frame_positions(bodies: list[Body]) -> dict[str, np.ndarray]:
+    """Each body's frame origin in the slab frame at rest."""
+    pos = {"slab": np.zeros(3)}
+    for b in bodies:
+        pos[b.name] = pos[b.parent] + np.asarray(b.pos)
+    return pos

@@ -1,0 +1,300 @@
+"""Stepping the MuJoCo table with the Python controllers.
+
+Each control step: `mj_step1` (positions, velocities, tendon lengths and sensors at the
+current state), the controllers compute actuator forces from the actuator extensions and
+velocities and the DOF commands, then `mj_step2` integrates. Linear controllers are
+fused into one matrix product per step (`LinearController.discrete`); any other
+controller is called through its `step` method.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from vtable import units
+from vtable.controllers import DOFS, Controller, LinearController, standard_controllers
+from vtable.errors import VtableError
+from vtable.mjcf.builder import BuiltModel
+
+
+class SimulationDiverged(VtableError):
+    """The simulation blew up; nothing was written."""
+
+
+@dataclass(frozen=True)
+class Exceedance:
+    """An actuator beyond a rated limit: first time, peak and the limit (SI)."""
+
+    actuator: str
+    quantity: str  # "stroke" | "velocity" | "force"
+    first_time: float
+    peak: float
+    limit: float
+
+    def __str__(self) -> str:
+        unit = {"stroke": "in", "velocity": "in/s", "force": "kip"}[self.quantity]
+        return (f"{self.actuator} {self.quantity} {units.from_si(self.peak, unit):.3g} {unit} "
+                f"exceeds {units.from_si(self.limit, unit):.3g} {unit} from t = "
+                f"{self.first_time:.3f} s")
+
+
+@dataclass
+class SimResult:
+    """Recorded histories at the output rate (SI) plus limit exceedances."""
+
+    built: BuiltModel
+    t: np.ndarray
+    qpos: np.ndarray
+    qvel: np.ndarray
+    qacc: np.ndarray
+    forces: np.ndarray  # (n_t, n_actuators), N
+    extension: np.ndarray  # (n_t, n_actuators), m
+    ext_velocity: np.ndarray
+    sensors: np.ndarray  # full sensordata at the output rate
+    commands: np.ndarray  # (n_t, 5) DOF commands
+    command_acc: np.ndarray  # (n_t,) x command acceleration
+    controller_states: np.ndarray
+    controller_state_names: tuple[str, ...]
+    exceedances: list[Exceedance] = field(default_factory=list)
+
+    def joint(self, name: str, what: str = "qpos") -> np.ndarray:
+        m = self.built.model
+        j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
+        if j < 0:
+            raise VtableError(f"no joint {name!r}")
+        adr = m.jnt_qposadr[j] if what == "qpos" else m.jnt_dofadr[j]
+        return getattr(self, what)[:, adr]
+
+    def sensor(self, name: str) -> np.ndarray:
+        m = self.built.model
+        i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, name)
+        if i < 0:
+            raise VtableError(f"no sensor {name!r}")
+        a, n = m.sensor_adr[i], m.sensor_dim[i]
+        return self.sensors[:, a:a + n]
+
+
+def resample_commands(t: np.ndarray, commands: Mapping[str, np.ndarray],
+                      t_new: np.ndarray) -> np.ndarray:
+    """DOF commands (name -> history on `t`) linearly interpolated on `t_new` (n, 5)."""
+    unknown = set(commands) - set(DOFS)
+    if unknown:
+        raise VtableError(f"unknown command DOF {sorted(unknown)[0]!r}; expected "
+                          f"{', '.join(DOFS)}")
+    out = np.zeros((len(t_new), len(DOFS)))
+    for k, v in commands.items():
+        v = np.asarray(v, dtype=float)
+        if v.shape != t.shape:
+            raise VtableError(f"command {k!r} has {v.size} samples for {t.size} times")
+        if not np.all(np.isfinite(v)):
+            raise VtableError(f"command {k!r} has non-finite samples")
+        out[:, DOFS.index(k)] = np.interp(t_new, t, v)
+    return out
+
+
+def check_commands(built: BuiltModel, t: np.ndarray, cmd: np.ndarray) -> None:
+    """Refuse commands beyond the table's displacement or velocity (Table 2.2)."""
+    specs = built.vt.table.specs
+    for dof, stroke, vmax in (("x", specs.stroke_h, specs.velocity_h),
+                              ("z", specs.stroke_v, specs.velocity_v)):
+        x = cmd[:, DOFS.index(dof)]
+        peak = float(np.max(np.abs(x)))
+        if peak > stroke * (1 + 1e-9):
+            i = int(np.argmax(np.abs(x) > stroke))
+            raise VtableError(f"{dof} command reaches {units.from_si(peak, 'in'):.2f} in (first "
+                              f"beyond ±{units.from_si(stroke, 'in'):g} in at t = {t[i]:.3f} s)"
+                              ", the table's stroke (Table 2.2)")
+        v = np.gradient(x, t) if len(t) > 1 else np.zeros(1)
+        vpeak = float(np.max(np.abs(v)))
+        if vpeak > vmax * (1 + 1e-9):
+            i = int(np.argmax(np.abs(v) > vmax))
+            raise VtableError(f"{dof} command velocity reaches {units.from_si(vpeak, 'in/s'):.1f}"
+                              f" in/s (first beyond ±{units.from_si(vmax, 'in/s'):g} in/s at t = "
+                              f"{t[i]:.3f} s), the table's velocity limit (Table 2.2)")
+
+
+class Simulator:
+    """The virtual table `built` driven by `controllers` at `control_dt` = the MuJoCo
+    timestep (1 kHz by default)."""
+
+    def __init__(self, built: BuiltModel, controllers: Sequence[Controller] | None = None
+                 ) -> None:
+        self.built = built
+        self.model = built.model
+        self.dt = float(self.model.opt.timestep)
+        self.controllers = list(controllers) if controllers is not None else \
+            standard_controllers(built.vt)
+        names = built.force_actuators
+        driven = [a for c in self.controllers for a in c.actuators]
+        dup = {a for a in driven if driven.count(a) > 1}
+        if dup:
+            raise VtableError(f"actuator {sorted(dup)[0]} is driven by two controllers")
+        for c in self.controllers:
+            c.bind(names)
+        self.n = len(names)
+        self.data = mujoco.MjData(self.model)
+        mujoco.mj_forward(self.model, self.data)
+        self.rest_length = self.data.ten_length[: self.n].copy()
+        self._fuse()
+
+    def _fuse(self) -> None:
+        """Block matrices of all linear controllers (see `LinearController.discrete`):
+
+            [u_k; z_k] = M [z_{k-1}; s_{k-1}; s_k] + N0 c_{k-1} + N1 c_k + N2 c_{k+1}
+        """
+        n, lin = self.n, [c for c in self.controllers if isinstance(c, LinearController)]
+        self.linear, self.other = lin, [c for c in self.controllers if c not in lin]
+        sizes = [len(c.state_names) for c in lin]
+        nz = sum(sizes)
+        ns = 2 * n
+        M = np.zeros((n + nz, nz + 2 * ns))
+        N0, N1, N2 = (np.zeros((n + nz, len(DOFS))) for _ in range(3))
+        off = 0
+        names = self.built.force_actuators
+        P, S = slice(nz, nz + ns), slice(nz + ns, nz + 2 * ns)
+        for c, k in zip(lin, sizes, strict=True):
+            d = c.discrete(self.dt)
+            idx = [names.index(a) for a in c.actuators]
+            zr = n + off + np.arange(k)
+            zc = slice(off, off + k)
+            M[zr, zc] = d["Az"]
+            M[zr, P] = d["Zp"]
+            M[zr, S] = d["Zs"]
+            N0[zr], N1[zr] = d["Zc0"], d["Zc1"]
+            Cz = d["Cz"]  # u_k = Cz z_k + ..., z_k substituted
+            M[idx, zc] += Cz @ d["Az"]
+            M[idx, P] += Cz @ d["Zp"] + d["Up"]
+            M[idx, S] += Cz @ d["Zs"] + d["Us"]
+            N0[idx] += Cz @ d["Zc0"]
+            N1[idx] += Cz @ d["Zc1"] + d["Uc1"]
+            N2[idx] += d["Uc2"]
+            off += k
+        self.M, self.N0, self.N1, self.N2, self.nz = M, N0, N1, N2, nz
+        # extension = length - rest length, in both s_{k-1} and s_k
+        rest = np.concatenate([self.rest_length, np.zeros(n)])
+        self.offset = -(M[:, P] + M[:, S]) @ rest
+        self.state_names = tuple(s for c in lin for s in c.state_names)
+
+    def run(self, t: np.ndarray, commands: Mapping[str, np.ndarray], *, output_dt: float = 0.005,
+            check: bool = True, max_extension: float | None = None) -> SimResult:
+        """Simulate the command histories (DOF name -> array on `t`, SI) from rest."""
+        t = np.asarray(t, dtype=float)
+        if t.ndim != 1 or len(t) < 2 or np.any(np.diff(t) <= 0):
+            raise VtableError("command time must be increasing with at least two samples")
+        dt = self.dt
+        n_steps = int(np.floor((t[-1] - t[0]) / dt + 1e-9)) + 1
+        tk = t[0] + np.arange(n_steps) * dt
+        cmd = resample_commands(t, commands, tk)
+        if check:
+            check_commands(self.built, tk, cmd)
+        dec = max(1, round(output_dt / dt))
+        if abs(dec * dt - output_dt) > 1e-9 * output_dt:
+            raise VtableError(f"output_dt {output_dt:g} s is not a multiple of the control step "
+                              f"{dt:g} s")
+        m, d = self.model, self.data
+        mujoco.mj_resetData(m, d)
+        for c in self.controllers:
+            c.reset()
+        n, nz = self.n, self.nz
+        d.ctrl[n] = self.built.pit_force
+        prev = np.vstack([cmd[:1], cmd[:-1]])
+        nxt = np.vstack([cmd[1:], cmd[-1:]])
+        ck = prev @ self.N0.T + cmd @ self.N1.T + nxt @ self.N2.T + self.offset
+        M = self.M
+        ns = 2 * n
+        zs = np.zeros(nz + 2 * ns)  # [z_{k-1}, s_{k-1}, s_k]
+        n_out = (n_steps - 1) // dec + 1
+        rec = {"qpos": np.empty((n_out, m.nq)), "qvel": np.empty((n_out, m.nv)),
+               "qacc": np.empty((n_out, m.nv)), "forces": np.empty((n_out, n)),
+               "sensors": np.empty((n_out, m.nsensordata)),
+               "z": np.empty((n_out, nz))}
+        ext_all = np.empty((n_steps, 2 * n))
+        forces_all = np.empty((n_steps, n))
+        limit_x = max_extension or 10 * max(a.stroke for a in self.built.vt.actuators)
+        sens = d.sensordata
+        ctrl = d.ctrl
+        other = self.other
+        names = self.built.force_actuators
+        other_idx = [[names.index(a) for a in c.actuators] for c in other]
+        rest = self.rest_length
+        step1, step2 = mujoco.mj_step1, mujoco.mj_step2
+        s_now = zs[nz + ns:]
+        for k in range(n_steps):
+            step1(m, d)
+            s_now[:] = sens[:ns]
+            if k == 0:
+                zs[nz:nz + ns] = s_now
+            out = M @ zs
+            out += ck[k]
+            ctrl[:n] = out[:n]
+            if other:
+                s = s_now.copy()
+                s[:n] -= rest
+                for c, idx in zip(other, other_idx, strict=True):
+                    ctrl[idx] = c.step(dt, s, cmd[k])
+            zs[:nz] = out[n:]
+            zs[nz:nz + ns] = s_now
+            ext_all[k] = s_now
+            forces_all[k] = ctrl[:n]
+            if k % dec == 0:
+                i = k // dec
+                rec["qpos"][i] = d.qpos
+                rec["qvel"][i] = d.qvel
+                rec["z"][i] = zs[:nz]
+            step2(m, d)
+            if k % dec == 0:
+                rec["qacc"][i] = d.qacc
+                rec["sensors"][i] = sens
+                rec["forces"][i] = ctrl[:n]
+            if k % 250 == 0:
+                self._check_finite(tk[k], limit_x)
+        self._check_finite(tk[-1], limit_x)
+        ext_all[:, :n] -= rest
+        out_idx = np.arange(0, n_steps, dec)
+        res = SimResult(built=self.built, t=tk[out_idx], qpos=rec["qpos"], qvel=rec["qvel"],
+                        qacc=rec["qacc"], forces=rec["forces"],
+                        extension=ext_all[out_idx, :n], ext_velocity=ext_all[out_idx, n:],
+                        sensors=rec["sensors"], commands=cmd[out_idx],
+                        command_acc=np.gradient(np.gradient(cmd[:, 0], dt), dt)[out_idx],
+                        controller_states=rec["z"], controller_state_names=self.state_names)
+        res.exceedances = exceedances(self.built, tk, ext_all, forces_all)
+        return res
+
+    def _check_finite(self, t: float, limit_x: float) -> None:
+        d, m = self.data, self.model
+        bad = d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0
+        if bad or not np.all(np.isfinite(d.qpos)) or not np.all(np.isfinite(d.qvel)):
+            raise SimulationDiverged(f"simulation diverged at t = {t:.3f} s: non-finite "
+                                     "state (unstable control settings?); nothing written")
+        ext = d.ten_length[: self.n] - self.rest_length
+        i = int(np.argmax(np.abs(ext)))
+        if abs(ext[i]) > limit_x:
+            name = self.built.force_actuators[i]
+            raise SimulationDiverged(
+                f"simulation diverged at t = {t:.3f} s: actuator {name} at "
+                f"{units.from_si(ext[i], 'in'):.3g} in, far beyond its stroke (unstable "
+                "control settings?); nothing written")
+        del m
+
+
+def exceedances(built: BuiltModel, t: np.ndarray, ext_all: np.ndarray,
+                forces: np.ndarray) -> list[Exceedance]:
+    """Stroke (±stroke/2), velocity (rated flow / area) and force (capacity) exceedances
+    per actuator, from the full-rate histories; nothing is clipped."""
+    out = []
+    n = forces.shape[1]
+    for i, name in enumerate(built.force_actuators):
+        a = built.vt.actuator(name)
+        checks = [("stroke", ext_all[:, i], a.stroke / 2), ("force", forces[:, i], a.capacity)]
+        if a.flow:
+            checks.append(("velocity", ext_all[:, n + i], a.flow / a.area))
+        for what, x, lim in checks:
+            over = np.abs(x) > lim
+            if np.any(over):
+                out.append(Exceedance(name, what, float(t[np.argmax(over)]),
+                                      float(np.max(np.abs(x))), lim))
+    return out
