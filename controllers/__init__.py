@@ -8,6 +8,7 @@ knob settings, and the cross-connected passive stabilizers.
 """
 
 from vtable.controllers.base import DOFS, Controller, LinearController
+from vtable.controllers.nonlinear import NonlinearValveServo, ValveParams
 from vtable.controllers.servo import ServoController, dof_matrix
 from vtable.controllers.stabilizers import PassiveStabilizers
 
@@ -17,5 +18,12 @@ def standard_controllers(vt, rc_filter=("x", "twist")) -> list:
     return [ServoController(vt, rc_filter=rc_filter), PassiveStabilizers(vt)]
 
 
-__all__ = ["DOFS", "Controller", "LinearController", "PassiveStabilizers", "ServoController",
-           "dof_matrix", "standard_controllers"]
+def nonlinear_controllers(vt, valve: ValveParams | None = None) -> list:
+    """Appendix C valves on H1-H3, linear loops on V1-V4, passive stabilizers."""
+    return [NonlinearValveServo(vt, valve), ServoController(vt, groups=("vertical",)),
+            PassiveStabilizers(vt)]
+
+
+__all__ = ["DOFS", "Controller", "LinearController", "NonlinearValveServo", "PassiveStabilizers",
+           "ServoController", "ValveParams", "dof_matrix", "nonlinear_controllers",
+           "standard_controllers"]

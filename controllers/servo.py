@@ -24,6 +24,7 @@ from vtable.params.table import ServoConstants
 from vtable.params.virtual import VirtualTable
 
 GROUPS = {"horizontal": ("x", "twist"), "vertical": ("z", "pitch", "roll")}
+DIRECTION_GROUP = {d: kind for kind, dofs in GROUPS.items() for d in dofs}
 DIRECTION_OF = {"x": "horizontal", "twist": "twist", "z": "vertical", "pitch": "pitch",
                 "roll": "roll"}
 
@@ -51,18 +52,21 @@ class ServoController(LinearController):
     (Table B.5: RC = 0.01 s); by default the horizontal ones, as on the EERC table.
     """
 
-    def __init__(self, vt: VirtualTable, rc_filter: tuple[str, ...] = ("x", "twist")) -> None:
+    def __init__(self, vt: VirtualTable, rc_filter: tuple[str, ...] = ("x", "twist"),
+                 groups: tuple[str, ...] = ("horizontal", "vertical")) -> None:
         self.vt = vt
-        self.rc_filter = tuple(rc_filter)
+        self.rc_filter = tuple(d for d in rc_filter if DIRECTION_GROUP[d] in groups)
         self.groups = {}
         acts: list[str] = []
         for kind, servo in (("horizontal", vt.horizontal_servo),
                             ("vertical", vt.vertical_servo)):
+            if kind not in groups:
+                continue
             names, T = dof_matrix(vt, kind)
             self.groups[kind] = (names, T, servo)
             acts += names
         self.actuators = tuple(acts)
-        filt = [d for kind in GROUPS for d in GROUPS[kind] if d in self.rc_filter]
+        filt = [d for kind in self.groups for d in GROUPS[kind] if d in self.rc_filter]
         self.state_names = tuple([f"P_{a}" for a in self.actuators] + [f"Pf_{d}" for d in filt])
 
     def dof_gains(self, dof: str, servo: ServoConstants) -> tuple[float, float, float]:
@@ -73,7 +77,7 @@ class ServoController(LinearController):
     def bind(self, actuator_names: tuple[str, ...]) -> None:
         n = len(actuator_names)
         na = len(self.actuators)
-        filt = [d for kind in GROUPS for d in GROUPS[kind] if d in self.rc_filter]
+        filt = [d for kind in self.groups for d in GROUPS[kind] if d in self.rc_filter]
         nz = na + len(filt)
         A = np.zeros((nz, nz))
         Bs = np.zeros((nz, 2 * n))

@@ -33,8 +33,36 @@ def _parser() -> argparse.ArgumentParser:
         c.add_argument("--json", action="store_true", help="machine-readable output")
         return c
 
-    d = sub.add_parser("demo", help="the built-in EERC configuration: coupled modes, margins")
+    d = sub.add_parser("demo", help="the built-in EERC configuration: coupled modes, margins, "
+                       "and the SDOF frame on the virtual table under El Centro")
     d.add_argument("--json", action="store_true")
+    d.add_argument("--out", default="vtable-demo", help="folder for the run and the .rrd "
+                   "[vtable-demo]")
+    d.add_argument("--no-sim", action="store_true", help="analytical part only")
+    sim = sub.add_parser("simulate", help="run a command on the multibody virtual table")
+    sim.add_argument("--specimen", default="sdof_frame",
+                     help="none, concrete_blocks, sdof_frame, table5_1, table8_1 or a TOML "
+                          "file with a [specimen] table [sdof_frame]")
+    sim.add_argument("--command", default="random", dest="kind",
+                     choices=["random", "sine", "pulse", "earthquake"])
+    sim.add_argument("--record", default=None, help="a PEER .AT2 file (earthquake) "
+                     "[El Centro 1940]")
+    sim.add_argument("--duration", type=float, default=11.0, help="s [11]")
+    sim.add_argument("--band", type=float, nargs=2, default=[0.0, 25.0], help="Hz [0 25]")
+    sim.add_argument("--peak", type=float, default=None, help="peak command, in")
+    sim.add_argument("--freq", type=float, default=2.0, help="sine frequency, Hz [2]")
+    sim.add_argument("--seed", type=int, default=0)
+    sim.add_argument("--valve", choices=["linear", "nonlinear"], default="linear",
+                     help="linear servovalves (eqs 6.1-6.5) or appendix C valves on H1-H3")
+    sim.add_argument("--out", default=None, help="run file stem (writes STEM.csv, STEM.toml)")
+    sim.add_argument("--rerun", default=None, help="write a Rerun recording (.rrd)")
+    sim.add_argument("--exaggerate", type=float, default=50.0,
+                     help="pitch/roll exaggeration in the 3D view [50]")
+    sim.add_argument("--json", action="store_true")
+    ex = sub.add_parser("export-mjcf", help="write the virtual table as MJCF + meshes")
+    ex.add_argument("--specimen", default="none")
+    ex.add_argument("--out", required=True, help="folder")
+    ex.add_argument("--json", action="store_true")
     config_cmd("modes", "eigen-modes: frequency, damping and real roots (eqs 9.1-9.4)")
     m = config_cmd("margins", "gain and phase margins of L = H/(1-H), H = x_t/x_c")
     m.add_argument("--out", default="x_t", help="tracked output [x_t]")
@@ -118,6 +146,46 @@ def _print_tf(d: dict[str, Any]) -> None:
 
 
 def cmd_demo(a: argparse.Namespace) -> dict[str, Any]:
+    out = _demo_analytic()
+    if not a.no_sim:
+        out["simulation"] = _demo_simulation(a.out)
+    return out
+
+
+def cmd_simulate(a: argparse.Namespace) -> dict[str, Any]:
+    from vtable.sim.experiment import load_specimen, make_command, run_experiment
+
+    spec = load_specimen(a.specimen)
+    cmd = make_command(a.kind, duration=a.duration, band=tuple(a.band), peak_in=a.peak,
+                       frequency=a.freq, seed=a.seed, record=a.record)
+    exp = run_experiment(spec, cmd, valve=a.valve, out=a.out, rerun=a.rerun,
+                         exaggeration=a.exaggerate)
+    summary = _sim_summary(exp)
+    summary.update({"command": cmd.name, "specimen": spec.title,
+                    "duration_s": float(exp.result.t[-1] - exp.result.t[0])})
+    return summary
+
+
+def _print_simulate(s: dict[str, Any]) -> None:
+    print(f"{s['specimen']}: {s['command']}, {s['duration_s']:.2f} s")
+    print(f"  {'channel':<12} {'peak':>10}")
+    for k, v in s["peaks"].items():
+        print(f"  {k:<12} {v['peak']:10.4g} {v['unit']}")
+    for e in s["exceedances"]:
+        print(f"  limit: {e}")
+    if s["files"]:
+        print("  wrote " + ", ".join(s["files"]))
+
+
+def cmd_export(a: argparse.Namespace) -> dict[str, Any]:
+    from vtable.mjcf.export import export_mjcf
+    from vtable.sim.experiment import load_specimen
+
+    files = export_mjcf(load_specimen(a.specimen), a.out)
+    return {"files": [str(f) for f in files]}
+
+
+def _demo_analytic() -> dict[str, Any]:
     from vtable.analytic import configs
 
     model = configs.load(configs.DEFAULT)
@@ -136,6 +204,46 @@ def cmd_demo(a: argparse.Namespace) -> dict[str, Any]:
             "theta_h/x_c peak_hz": float(f[near][th[near].argmax()])}
 
 
+def _sim_summary(exp) -> dict[str, Any]:
+    """Peak table of a virtual-table experiment (report units)."""
+    ch = exp.channels
+    keys = [("h_span", "in"), ("avg_hdisp", "in"), ("pitch_disp", "rad"), ("pitch_acc", "rad/s2"),
+            ("acc_n_ne", "g"), ("pot_n_sw", "in"), ("h1_force", "kip"), ("v1_force", "kip"),
+            ("p1_stab", "kip")]
+    peaks = {k: {"peak": float(np.max(np.abs(ch[k]))), "unit": u} for k, u in keys if k in ch}
+    return {"peaks": peaks, "exceedances": [str(e) for e in exp.result.exceedances],
+            "files": [str(f) for f in exp.files]}
+
+
+def _demo_simulation(out: str) -> dict[str, Any]:
+    from vtable.sim.experiment import load_specimen, make_command, run_experiment
+    from vtable.studies import response_spectrum
+    from vtable.units import to_si
+
+    spec = load_specimen("sdof_frame")
+    cmd = make_command("earthquake")
+    exp = run_experiment(spec, cmd, out=f"{out}/sdof_elcentro", rerun=f"{out}/sdof_elcentro.rrd")
+    res = exp.result
+    h = exp.result.built.structure_heights[-1]
+    x_t, th = res.joint("x"), res.joint("pitch")
+    x_s = res.joint("x_s")
+    dt = res.t[1] - res.t[0]
+    a_eff = res.joint("x", "qacc") + h * res.joint("pitch", "qacc")
+    a_cmd = res.command_acc
+    T_s = 1 / spec.frequency
+    periods = np.array([T_s])
+    ratio = float(response_spectrum(a_eff, dt, periods, 0.05).psa[0]
+                  / response_spectrum(a_cmd, dt, periods, 0.05).psa[0])
+    summary = _sim_summary(exp)
+    summary.update({
+        "command": cmd.name, "duration_s": float(res.t[-1] - res.t[0]),
+        "peak_x_t_in": float(np.max(np.abs(x_t)) / to_si(1, "in")),
+        "peak_theta_h_in": float(np.max(np.abs(th * h)) / to_si(1, "in")),
+        "peak_x_s_in": float(np.max(np.abs(x_s)) / to_si(1, "in")),
+        "effective_spectrum_ratio": ratio, "spectrum_period_s": T_s})
+    return summary
+
+
 def _print_demo(d: dict[str, Any]) -> None:
     print("vtable demo: the SDOF braced frame (68 kips, 219 in) on the EERC table")
     print("hybrid model, report Table 9.1 (horizontal servo loop + rocking spring/dashpot)\n")
@@ -147,6 +255,24 @@ def _print_demo(d: dict[str, Any]) -> None:
           f"notch {p['notch']:.2f} at {p['f_notch_hz']:.2f} Hz")
     print(f"effective motion (x_t + θh)/x_c: notch at {d['x_eff/x_c notch_hz']:.2f} Hz "
           f"(fixed-base 2.87 Hz); pitch θh/x_c peaks at {d['theta_h/x_c peak_hz']:.2f} Hz")
+    if "simulation" in d:
+        _print_simulation(d["simulation"])
+
+
+def _print_simulation(s: dict[str, Any]) -> None:
+    print(f"\nvirtual table (MuJoCo + servo controllers): {s['command']}, "
+          f"{s['duration_s']:.1f} s, §9.2 processing (length 3.2801, time 1.811, 4 in)")
+    print(f"  {'channel':<12} {'peak':>10}")
+    for k, v in s["peaks"].items():
+        print(f"  {k:<12} {v['peak']:10.4g} {v['unit']}")
+    print(f"  table x_t {s['peak_x_t_in']:.3f} in, pitch θh {s['peak_theta_h_in']:.3f} in, "
+          f"structure x_s {s['peak_x_s_in']:.3f} in")
+    print(f"  effective-motion spectrum ratio PSA(x_t + hθ)/PSA(command) at the fixed-base "
+          f"period {s['spectrum_period_s']:.3f} s, 5 %: {s['effective_spectrum_ratio']:.3f}")
+    for e in s["exceedances"]:
+        print(f"  limit: {e}")
+    if s["files"]:
+        print("  wrote " + ", ".join(s["files"]))
 
 
 def cmd_presets(a: argparse.Namespace) -> dict[str, Any]:
@@ -161,6 +287,8 @@ _COMMANDS = {
     "margins": (cmd_margins, _print_margins),
     "tf": (cmd_tf, _print_tf),
     "presets": (cmd_presets, lambda d: print("\n".join(d["configurations"]))),
+    "simulate": (cmd_simulate, _print_simulate),
+    "export-mjcf": (cmd_export, lambda d: print("wrote " + ", ".join(d["files"]))),
 }
 
 

@@ -39,7 +39,7 @@ def transfer_function(x: np.ndarray, y: np.ndarray, fs: float, nperseg: int = 20
         raise VtableError("input and output must be 1-D histories of the same length")
     if len(x) < nperseg:
         raise VtableError(f"{len(x)} samples are shorter than one {nperseg}-point frame")
-    nover = int(round(overlap * nperseg))
+    nover = round(overlap * nperseg)
     f, Gxy = scipy.signal.csd(x, y, fs=fs, window="hann", nperseg=nperseg, noverlap=nover)
     _, Gxx = scipy.signal.welch(x, fs=fs, window="hann", nperseg=nperseg, noverlap=nover)
     _, Gyy = scipy.signal.welch(y, fs=fs, window="hann", nperseg=nperseg, noverlap=nover)

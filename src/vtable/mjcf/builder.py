@@ -127,12 +127,13 @@ def build(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: float
         s.add_sensor(name=f"{a.name}_vel", type=mujoco.mjtSensor.mjSENS_TENDONVEL, objname=a.name,
                      objtype=mujoco.mjtObj.mjOBJ_TENDON)
     s.assets = dict(assets)
-    for j in joints:
-        b = j.replace("x_s", "storey") if j != "x_s" else "top_mass"
-        for site in ("ne", "nw"):
-            s.add_sensor(name=f"{b}_{site}_acc", type=mujoco.mjtSensor.mjSENS_FRAMELINACC,
+    if joints:  # accelerometers and potentiometers on the top mass (Table 2.3)
+        b = "top_mass" if joints[-1] == "x_s" else joints[-1].replace("x_s", "storey")
+        for site in ("ne", "nw", "sw"):
+            s.add_sensor(name=f"top_{site}_acc", type=mujoco.mjtSensor.mjSENS_FRAMELINACC,
                          objname=f"{b}_{site}", objtype=mujoco.mjtObj.mjOBJ_SITE)
-            s.add_sensor(name=f"{b}_{site}_pos", type=mujoco.mjtSensor.mjSENS_FRAMEPOS,
+        for site in ("sw", "se"):
+            s.add_sensor(name=f"top_{site}_pos", type=mujoco.mjtSensor.mjSENS_FRAMEPOS,
                          objname=f"{b}_{site}", objtype=mujoco.mjtObj.mjOBJ_SITE)
     try:
         model = s.compile()
@@ -171,9 +172,10 @@ def _add_specimen(s, slab, spec: Specimen, pivot: float, with_meshes: bool, add_
         masses.append(b.mass)
         body.add_geom(name=f"{b.name}_mass", type=mujoco.mjtGeom.mjGEOM_BOX,
                       size=MASS_BLOCK / 2, rgba=[0.35, 0.35, 0.4, 1], **_NO_COLLIDE)
-        half_y = units.to_si(36.0, "in")  # accelerometers at the frame corners (Fig 2.5)
-        for site, y in (("ne", -half_y), ("nw", half_y)):
-            body.add_site(name=f"{b.name}_{site}", pos=[0, y, 0])
+        # instruments at the top beams' corners (Fig 2.5); y = z × x points west
+        cx, cy = MASS_BLOCK[0] / 2, MASS_BLOCK[1] / 2
+        for site, x, y in (("ne", cx, -cy), ("nw", cx, cy), ("sw", -cx, cy), ("se", -cx, -cy)):
+            body.add_site(name=f"{b.name}_{site}", pos=[x, y, 0])
     if isinstance(spec, SDOFSpecimen) and with_meshes:
         top_above = spec.height - pivot  # top mass above the table top
         heights_ft = [4.0, 3.0, 3.0]  # §2.4: first floor 4 ft, then 3 ft storeys

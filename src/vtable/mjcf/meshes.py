@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import trimesh
 
@@ -36,7 +38,7 @@ def braced_frame(length: float, spacing: float, storey_heights: list[float], top
     for z in levels[1:]:
         for y in ys:
             parts.append(_box((length, column, beam), (0, y, z)))
-    for z0, z1 in zip(levels[:-1], levels[1:], strict=True):
+    for z0, z1 in itertools.pairwise(levels):
         for y in ys:
             for s in (-1, 1):
                 a, b = np.array([-s * length / 2, y, z0]), np.array([s * length / 2, y, z1])

@@ -66,7 +66,7 @@ def specimen_bodies(spec: Specimen) -> list[Body]:
         n = max(spec.count, 1)
         dims = (ext[0] * n, ext[2], ext[1])  # side by side along x, long side along y (§2.5)
         return [Body("specimen", "slab", (0.0, 0.0, spec.height), spec.mass, (0.0, 0.0, 0.0),
-                     _box_inertia(spec.mass, dims), size=tuple(ext) + (n,))]
+                     _box_inertia(spec.mass, dims), size=(*tuple(ext), n))]
     if isinstance(spec, SDOFSpecimen):
         return [Body("top_mass", "slab", (0.0, 0.0, spec.height), spec.mass, (0.0, 0.0, 0.0),
                      _box_inertia(spec.mass, MASS_BLOCK), joint="x_s",

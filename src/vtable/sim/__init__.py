@@ -3,9 +3,9 @@
 from vtable.sim.simulator import (
     Exceedance,
     SimResult,
-    SimulationDiverged,
+    SimulationDivergedError,
     Simulator,
     check_commands,
 )
 
-__all__ = ["Exceedance", "SimResult", "SimulationDiverged", "Simulator", "check_commands"]
+__all__ = ["Exceedance", "SimResult", "SimulationDivergedError", "Simulator", "check_commands"]

@@ -21,7 +21,7 @@ from vtable.errors import VtableError
 from vtable.mjcf.builder import BuiltModel
 
 
-class SimulationDiverged(VtableError):
+class SimulationDivergedError(VtableError):
     """The simulation blew up; nothing was written."""
 
 
@@ -268,13 +268,13 @@ class Simulator:
         d, m = self.data, self.model
         bad = d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0
         if bad or not np.all(np.isfinite(d.qpos)) or not np.all(np.isfinite(d.qvel)):
-            raise SimulationDiverged(f"simulation diverged at t = {t:.3f} s: non-finite "
+            raise SimulationDivergedError(f"simulation diverged at t = {t:.3f} s: non-finite "
                                      "state (unstable control settings?); nothing written")
         ext = d.ten_length[: self.n] - self.rest_length
         i = int(np.argmax(np.abs(ext)))
         if abs(ext[i]) > limit_x:
             name = self.built.force_actuators[i]
-            raise SimulationDiverged(
+            raise SimulationDivergedError(
                 f"simulation diverged at t = {t:.3f} s: actuator {name} at "
                 f"{units.from_si(ext[i], 'in'):.3g} in, far beyond its stroke (unstable "
                 "control settings?); nothing written")

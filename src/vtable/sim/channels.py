@@ -1,0 +1,70 @@
+"""Simulated histories -> the run format's channels (names, units and signs of
+shared/spec/measurement-format.md, report Table 2.3), plus the full state."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vtable import units
+from vtable.sim.simulator import SimResult
+
+#: the run format's channels and their units
+CHANNEL_UNITS: dict[str, str] = {
+    "h_span": "in", "avg_hdisp": "in", "avg_vdisp": "in", "avg_hacc": "g", "avg_vacc": "g",
+    "pitch_acc": "rad/s2", "roll_acc": "rad/s2", "twist_acc": "rad/s2", "pitch_disp": "rad",
+    **{f"v{i}_disp": "in" for i in range(1, 5)}, **{f"h{i}_disp": "in" for i in range(1, 4)},
+    **{f"h{i}_force": "kip" for i in range(1, 4)}, **{f"v{i}_force": "kip" for i in range(1, 5)},
+    **{f"p{i}_stab": "kip" for i in range(1, 5)}, "h_vel": "in/s",
+    "acc_n_ne": "g", "acc_n_nw": "g", "acc_w_nw": "g", "acc_w_sw": "g",
+    "pot_n_sw": "in", "pot_n_se": "in", "acc_cmd": "g",
+}
+
+
+def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndarray],
+                                                              dict[str, str]]:
+    """Channel histories in their units, and the units of the extra (state) channels."""
+    b = res.built
+    names = b.force_actuators
+    ext = {a: res.extension[:, i] for i, a in enumerate(names)}
+    force = {a: res.forces[:, i] for i, a in enumerate(names)}
+    si: dict[str, np.ndarray] = {
+        "h_span": res.commands[:, 0],
+        "avg_hdisp": np.mean([ext[f"H{i}"] for i in (1, 2, 3)], axis=0),
+        "avg_vdisp": np.mean([ext[f"V{i}"] for i in (1, 2, 3, 4)], axis=0),
+        "avg_hacc": res.joint("x", "qacc"), "avg_vacc": res.joint("z", "qacc"),
+        "pitch_acc": res.joint("pitch", "qacc"), "roll_acc": res.joint("roll", "qacc"),
+        "twist_acc": res.joint("twist", "qacc"), "pitch_disp": res.joint("pitch"),
+        "h_vel": res.joint("x", "qvel"), "acc_cmd": res.command_acc,
+    }
+    for i in (1, 2, 3, 4):
+        si[f"v{i}_disp"] = ext[f"V{i}"]
+        si[f"v{i}_force"] = force[f"V{i}"]
+        si[f"p{i}_stab"] = force[f"P{i}"]
+    for i in (1, 2, 3):
+        si[f"h{i}_disp"] = ext[f"H{i}"]
+        si[f"h{i}_force"] = force[f"H{i}"]
+    if b.structure_joints:
+        si["acc_n_ne"] = res.sensor("top_ne_acc")[:, 0]
+        si["acc_n_nw"] = res.sensor("top_nw_acc")[:, 0]
+        si["acc_w_nw"] = res.sensor("top_nw_acc")[:, 1]
+        si["acc_w_sw"] = res.sensor("top_sw_acc")[:, 1]
+        for site in ("sw", "se"):
+            x = res.sensor(f"top_{site}_pos")[:, 0]
+            si[f"pot_n_{site}"] = x - x[0] if len(x) else x
+    out = {k: units.from_si(v, CHANNEL_UNITS[k]) for k, v in si.items()}
+    extra_units: dict[str, str] = {}
+    if full_state:
+        m = b.model
+        import mujoco
+
+        for j in range(m.njnt):
+            jn = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j)
+            slide = m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
+            out[f"state_q_{jn}"] = res.qpos[:, m.jnt_qposadr[j]]
+            out[f"state_v_{jn}"] = res.qvel[:, m.jnt_dofadr[j]]
+            extra_units[f"state_q_{jn}"] = "m" if slide else "rad"
+            extra_units[f"state_v_{jn}"] = "m/s" if slide else "rad/s"
+        for i, s in enumerate(res.controller_state_names):
+            out[f"state_{s}"] = res.controller_states[:, i]
+            extra_units[f"state_{s}"] = "Pa"
+    return out, extra_units

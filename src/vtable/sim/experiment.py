@@ -1,0 +1,128 @@
+"""One virtual-table test, end to end: a command, the simulation, the run files in the
+interchange format and (optionally) the Rerun recording."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vtable import units
+from vtable.controllers import nonlinear_controllers, standard_controllers
+from vtable.errors import VtableError
+from vtable.mjcf import build
+from vtable.params import presets
+from vtable.params.base import read_toml
+from vtable.params.specimen import NoSpecimen, Specimen, specimen_from_dict
+from vtable.params.virtual import VirtualTable, virtual_table
+from vtable.runs import specimen_table, write_run
+from vtable.signals import (
+    band_limited_random,
+    el_centro,
+    process_record,
+    pulse,
+    read_at2,
+    sine,
+)
+from vtable.sim.channels import CHANNEL_UNITS, channels
+from vtable.sim.simulator import SimResult, Simulator
+
+COMMAND_DT = 0.001
+
+
+@dataclass(frozen=True)
+class Command:
+    """A horizontal displacement command (SI) and its run-format [command] table."""
+
+    name: str
+    t: np.ndarray
+    x: np.ndarray
+    table: dict[str, Any]
+
+
+def make_command(kind: str = "random", *, duration: float = 11.0,
+                 band: tuple[float, float] = (0.0, 25.0), peak_in: float | None = None,
+                 frequency: float = 2.0, seed: int = 0, record: str | None = None,
+                 length_scale: float = 3.2801) -> Command:
+    """random (band-limited, §3.2), sine, pulse or earthquake (§9.2 processing of the
+    bundled El Centro record or a PEER .AT2 file); `peak_in` is the peak displacement."""
+    if kind == "random":
+        peak = units.to_si(peak_in if peak_in is not None else 0.25, "in")
+        t, x = band_limited_random(duration, COMMAND_DT, band, peak=peak, seed=seed)
+        return Command(f"random {band[0]:g}-{band[1]:g} Hz", t, x,
+                       {"kind": "random", "band_hz": list(band), "peak_in": units.from_si(
+                           peak, "in"), "seed": seed})
+    if kind == "sine":
+        amp = units.to_si(peak_in if peak_in is not None else 0.1, "in")
+        t, x = sine(duration, COMMAND_DT, frequency, amp, ramp=min(1.0, duration / 4))
+        return Command(f"sine {frequency:g} Hz", t, x,
+                       {"kind": "sine", "frequency_hz": frequency,
+                        "peak_in": units.from_si(amp, "in")})
+    if kind == "pulse":
+        amp = units.to_si(peak_in if peak_in is not None else 1.0, "in")
+        t, x = pulse(duration, COMMAND_DT, width=1.0, amplitude=amp, start=0.5)
+        return Command("pulse", t, x, {"kind": "pulse", "peak_in": units.from_si(amp, "in")})
+    if kind == "earthquake":
+        rec = el_centro() if record in (None, "elcentro") else read_at2(record)
+        peak = units.to_si(peak_in if peak_in is not None else 4.0, "in")
+        cmd = process_record(rec, length_scale=length_scale, peak_displacement=peak)
+        t_new = np.arange(0.0, cmd.time[-1] + 1e-12, COMMAND_DT)
+        x = np.interp(t_new, cmd.time, cmd.displacement)
+        return Command(f"{rec.name}", t_new, x,
+                       {"kind": "earthquake", "record": rec.name,
+                        "length_scale": length_scale, "time_scale": float(np.sqrt(length_scale)),
+                        "peak_in": units.from_si(peak, "in")})
+    raise VtableError(f"unknown command kind {kind!r}; expected random, sine, pulse or "
+                      "earthquake")
+
+
+def load_specimen(name_or_path: str | None) -> Specimen:
+    """A specimen preset name (none, concrete_blocks, sdof_frame, table5_1, table8_1) or a
+    TOML file with a run-format [specimen] table."""
+    if name_or_path in (None, "", "none"):
+        return NoSpecimen()
+    p = Path(name_or_path)
+    if name_or_path.endswith(".toml") or p.is_file():
+        d = read_toml(p)
+        return specimen_from_dict(d.get("specimen", d), f"{p} [specimen]")
+    return presets.specimen(name_or_path)
+
+
+@dataclass
+class Experiment:
+    """A simulated test and where its outputs went."""
+
+    result: SimResult
+    channels: dict[str, np.ndarray]
+    extra_units: dict[str, str]
+    command: Command
+    files: list[Path] = field(default_factory=list)
+
+
+def run_experiment(specimen: Specimen, command: Command, *, vt: VirtualTable | None = None,
+                   valve: str = "linear", out: str | Path | None = None,
+                   rerun: str | Path | None = None, exaggeration: float = 50.0,
+                   output_dt: float = 0.005, title: str = "") -> Experiment:
+    """Simulate `command` on the table carrying `specimen`; write the run and the .rrd."""
+    vt = vt or virtual_table()
+    if valve not in ("linear", "nonlinear"):
+        raise VtableError(f"valve must be linear or nonlinear, got {valve!r}")
+    built = build(vt, specimen)
+    ctl = standard_controllers(vt) if valve == "linear" else nonlinear_controllers(vt)
+    res = Simulator(built, ctl).run(command.t, {"x": command.x}, output_dt=output_dt)
+    ch, extra = channels(res)
+    exp = Experiment(res, ch, extra, command)
+    if out is not None:
+        meta = {"title": title or f"{command.name}, {specimen.title} (vtable virtual table)",
+                "table": {"preset": "eerc"},
+                "control": {k: v.to_dict() for k, v in vt.settings.items()},
+                "specimen": specimen_table(specimen), "command": command.table}
+        exp.files += list(write_run(out, res.t, ch, meta, extra))
+    if rerun is not None:
+        from vtable.viz.rerun_scene import log_simulation
+
+        named = {k: v for k, v in ch.items() if k in CHANNEL_UNITS}
+        exp.files.append(log_simulation(res, rerun, named, exaggeration=exaggeration))
+    return exp
