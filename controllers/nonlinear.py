@@ -31,11 +31,15 @@ ATM = units.to_si(14.7, "psi")
 
 @dataclass(frozen=True)
 class ValveParams:
-    """Appendix C constants (SI). Defaults: supply 3000 psi (§2.2), rated flow at full
-    spool with 1000 psi valve drop (§C.1), no air, no friction, leakage = Table B.5 k_ct."""
+    """Appendix C constants (SI). Defaults: supply 3000 psi (§2.2); the rated flow passes
+    at full spool with `rated_drop` across the valve. §C.1 quotes ratings at 1000 psi;
+    the default rates the full spool at the supply pressure instead, so that the
+    unloaded actuator's top speed is the rated flow over the piston area, the table's
+    25 in/s (§2.2, Table 2.2). No air, no friction; leakage = Table B.5 k_ct."""
 
     supply_pressure: float
-    rated_flow: float  # m³/s at full spool, 1000 psi drop
+    rated_flow: float  # m³/s at full spool and `rated_drop`
+    rated_drop: float | None = None  # Pa; None = the supply pressure
     air_ratio: float = 0.0  # r of eq C.10
     friction: float = 0.0  # F_r of eq C.12, N
     friction_velocity: float = 1e-3  # m/s, smoothing of sign(ẋ)
@@ -62,8 +66,9 @@ class NonlinearValveServo:
         self.kp = np.array([servo.k_p * p for _, p, _ in gains])
         self.kv = np.array([servo.k_v * r for _, _, r in gains])
         Ps = self.valve.supply_pressure
-        # C.14 at full spool and 1000 psi drop gives Cv·x_vm; work with spool fraction u
-        self.cv = math.sqrt(2) * self.valve.rated_flow / math.sqrt(units.to_si(1000, "psi"))
+        # C.14 at full spool and the rated drop gives Cv·x_vm; work with spool fraction u
+        drop = self.valve.rated_drop or Ps
+        self.cv = math.sqrt(2) * self.valve.rated_flow / math.sqrt(drop)
         k_q0 = self.cv / math.sqrt(2) * math.sqrt(Ps)  # C.17 at P_L = 0, per unit spool
         self.k_a = servo.k_t / k_q0  # spool fraction per metre of drive
         self.c_ip = servo.k_ct  # internal leakage = B.5 flow-pressure coefficient

@@ -14,23 +14,63 @@ def run(capsys, *argv):
     return code, out, err
 
 
-def test_demo_prints_coupled_modes_and_margins(capsys):
-    code, out, err = run(capsys, "demo")
+def test_demo_prints_coupled_modes_and_margins(capsys, tmp_path):
+    code, out, err = run(capsys, "demo", "--out", str(tmp_path))
     assert code == 0 and err == ""
     assert "2.5402" in out and "8.1876" in out  # Table 9.2: 2.5391, 8.1906 Hz
     assert "gain margin" in out and "phase margin" in out
-    code, out, _ = run(capsys, "demo", "--json")
+    assert "virtual table (MuJoCo + servo controllers): El Centro" in out
+    assert "effective-motion spectrum ratio" in out
+    for f in ("sdof_elcentro.csv", "sdof_elcentro.toml", "sdof_elcentro.rrd"):
+        assert (tmp_path / f).is_file()
+    code, out, _ = run(capsys, "demo", "--json", "--no-sim")
     d = json.loads(out)
     assert d["modes"][0]["f_hz"] == pytest.approx(2.5391, rel=0.003)
     assert d["x_eff/x_c notch_hz"] == pytest.approx(2.87, abs=0.01)
 
 
-def test_vtable_entry_point_runs():
+def test_vtable_entry_point_runs(tmp_path):
     exe = shutil.which("vtable")
     cmd = [exe, "demo"] if exe else [sys.executable, "-m", "vtable.cli", "demo"]
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert r.returncode == 0, r.stderr
-    assert "hybrid model" in r.stdout
+    assert "hybrid model" in r.stdout and "peak" in r.stdout
+    assert (tmp_path / "vtable-demo" / "sdof_elcentro.rrd").is_file()
+
+
+def test_simulate_command(capsys, tmp_path):
+    code, out, err = run(capsys, "simulate", "--specimen", "concrete_blocks", "--command", "sine",
+                         "--freq", "3", "--peak", "0.2", "--duration", "2",
+                         "--out", str(tmp_path / "blk"), "--rerun", str(tmp_path / "blk.rrd"),
+                         "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["peaks"]["h_span"]["peak"] == pytest.approx(0.2, rel=1e-3)
+    assert (tmp_path / "blk.csv").is_file() and (tmp_path / "blk.rrd").is_file()
+
+
+@pytest.mark.parametrize("args, msg", [
+    (["--command", "sine", "--freq", "5", "--peak", "2"], "velocity reaches 62.8 in/s"),
+    (["--command", "sine", "--freq", "1", "--peak", "7"], "x command reaches 7.00 in"),
+    (["--specimen", "nope"], "unknown specimen preset 'nope'"),
+])
+def test_simulate_bad_input(capsys, args, msg):
+    code, out, err = run(capsys, "simulate", *args)
+    assert code == 2 and msg in err and err.count("\n") == 1
+
+
+def test_simulate_tall_specimen(capsys, tmp_path):
+    p = tmp_path / "tower.toml"
+    p.write_text('[specimen]\nkind = "sdof"\nweight_kip = 50.0\nheight_in = 600.0\n'
+                 'frequency_hz = 1.0\ndamping = 0.02\n')
+    code, _, err = run(capsys, "simulate", "--specimen", str(p))
+    assert code == 2 and "overhead clearance (Table 2.2)" in err
+
+
+def test_export_mjcf(capsys, tmp_path):
+    code, out, _ = run(capsys, "export-mjcf", "--specimen", "sdof_frame", "--out", str(tmp_path))
+    assert code == 0 and (tmp_path / "model.xml").is_file()
+    assert (tmp_path / "braced_frame.stl").is_file()
 
 
 def test_modes_and_margins_json(capsys):

@@ -45,12 +45,14 @@ class VirtualTableModel(LinearModel):
     controller matrices as the multibody simulation.
 
     `gravity=False` drops the geometric stiffness; `com_offset=False` puts the slab's
-    centre of mass on the actuator line (for comparisons with the report's models).
+    centre of mass on the actuator line; `body_inertia=False` drops the specimen bodies'
+    own rotational inertia (the report's models treat them as point masses).
     """
 
     def __init__(self, vt: VirtualTable, specimen: Specimen | None = None,
                  controllers: Sequence[LinearController] | None = None, *,
-                 gravity: bool = True, com_offset: bool = True, title: str = "") -> None:
+                 gravity: bool = True, com_offset: bool = True, body_inertia: bool = True,
+                 title: str = "") -> None:
         specimen = specimen or NoSpecimen()
         self.vt, self.specimen = vt, specimen
         ctrls = list(controllers) if controllers is not None else standard_controllers(vt)
@@ -95,7 +97,8 @@ class VirtualTableModel(LinearModel):
                 K[5 + i, 5 + i] += b.stiffness
                 Cd[5 + i, 5 + i] += b.damping
                 # inter-storey spring/dashpot: relative slide coordinate is the joint itself
-            add_body(b.mass, r, b.inertia, chain if b.joint else [])
+            add_body(b.mass, r, b.inertia if body_inertia else (0.0, 0.0, 0.0),
+                     chain if b.joint else [])
         if gravity:  # the pit-pressure force, world vertical at the bottom-face centre
             z_p = vt.pivot_depth - vt.table.geometry.thickness
             weight = (sb.mass + sum(b.mass for b in bodies)) * G

@@ -29,10 +29,13 @@ class TransferFunction:
 
 
 def transfer_function(x: np.ndarray, y: np.ndarray, fs: float, nperseg: int = 2048,
-                      overlap: float = 0.5, integrate: int = 0) -> TransferFunction:
+                      overlap: float = 0.5, integrate: int = 0,
+                      window: str = "hann") -> TransferFunction:
     """H1 estimate of y/x (eqs 3.1a-c) with coherence (eq 3.2).
 
     `integrate` = 2 divides H by -ω² (displacement from a measured acceleration, §3.4.1).
+    `window` = "boxcar" with `overlap` = 0 suits periodic excitation analysed over whole
+    periods (no leakage).
     """
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     if x.shape != y.shape or x.ndim != 1:
@@ -40,9 +43,10 @@ def transfer_function(x: np.ndarray, y: np.ndarray, fs: float, nperseg: int = 20
     if len(x) < nperseg:
         raise VtableError(f"{len(x)} samples are shorter than one {nperseg}-point frame")
     nover = round(overlap * nperseg)
-    f, Gxy = scipy.signal.csd(x, y, fs=fs, window="hann", nperseg=nperseg, noverlap=nover)
-    _, Gxx = scipy.signal.welch(x, fs=fs, window="hann", nperseg=nperseg, noverlap=nover)
-    _, Gyy = scipy.signal.welch(y, fs=fs, window="hann", nperseg=nperseg, noverlap=nover)
+    kw = {"fs": fs, "window": window, "nperseg": nperseg, "noverlap": nover}
+    f, Gxy = scipy.signal.csd(x, y, **kw)
+    _, Gxx = scipy.signal.welch(x, **kw)
+    _, Gyy = scipy.signal.welch(y, **kw)
     with np.errstate(divide="ignore", invalid="ignore"):
         H = Gxy / Gxx
         coh = np.abs(Gxy) ** 2 / (Gxx * Gyy)

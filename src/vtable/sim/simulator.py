@@ -201,19 +201,23 @@ class Simulator:
             c.reset()
         n, nz = self.n, self.nz
         d.ctrl[n] = self.built.pit_force
+        ns = 2 * n
+        # full-rate history rows [s_k, z_k, u_k]; the flat slice from row k-1 to the s of
+        # row k is [s_{k-1}, z_{k-1}, u_{k-1}, s_k], the input of one matrix product
+        W = ns + nz + n
+        M2 = np.zeros((nz + n, W + ns))
+        M2[:, :ns] = np.vstack([self.M[n:, nz:nz + ns], self.M[:n, nz:nz + ns]])
+        M2[:, ns:ns + nz] = np.vstack([self.M[n:, :nz], self.M[:n, :nz]])
+        M2[:, W:] = np.vstack([self.M[n:, nz + ns:], self.M[:n, nz + ns:]])
         prev = np.vstack([cmd[:1], cmd[:-1]])
         nxt = np.vstack([cmd[1:], cmd[-1:]])
         ck = prev @ self.N0.T + cmd @ self.N1.T + nxt @ self.N2.T + self.offset
-        M = self.M
-        ns = 2 * n
-        zs = np.zeros(nz + 2 * ns)  # [z_{k-1}, s_{k-1}, s_k]
+        ck = np.ascontiguousarray(np.hstack([ck[:, n:], ck[:, :n]]))
+        hist = np.zeros((n_steps + 1, W))  # row 0: the state before the first step
+        flat = hist.reshape(-1)
         n_out = (n_steps - 1) // dec + 1
         rec = {"qpos": np.empty((n_out, m.nq)), "qvel": np.empty((n_out, m.nv)),
-               "qacc": np.empty((n_out, m.nv)), "forces": np.empty((n_out, n)),
-               "sensors": np.empty((n_out, m.nsensordata)),
-               "z": np.empty((n_out, nz))}
-        ext_all = np.empty((n_steps, 2 * n))
-        forces_all = np.empty((n_steps, n))
+               "qacc": np.empty((n_out, m.nv)), "sensors": np.empty((n_out, m.nsensordata))}
         limit_x = max_extension or 10 * max(a.stroke for a in self.built.vt.actuators)
         sens = d.sensordata
         ctrl = d.ctrl
@@ -221,46 +225,47 @@ class Simulator:
         names = self.built.force_actuators
         other_idx = [[names.index(a) for a in c.actuators] for c in other]
         rest = self.rest_length
-        step1, step2 = mujoco.mj_step1, mujoco.mj_step2
-        s_now = zs[nz + ns:]
+        step1, step2, dot = mujoco.mj_step1, mujoco.mj_step2, np.dot
+        U = slice(ns + nz, W)
         for k in range(n_steps):
+            row = hist[k + 1]
             step1(m, d)
-            s_now[:] = sens[:ns]
+            row[:ns] = sens[:ns]
             if k == 0:
-                zs[nz:nz + ns] = s_now
-            out = M @ zs
+                hist[0, :ns] = row[:ns]
+            out = row[ns:]
+            dot(M2, flat[k * W:(k + 1) * W + ns], out=out)
             out += ck[k]
-            ctrl[:n] = out[:n]
+            ctrl[:n] = row[U]
             if other:
-                s = s_now.copy()
-                s[:n] -= rest
+                s_k = row[:ns].copy()
+                s_k[:n] -= rest
                 for c, idx in zip(other, other_idx, strict=True):
-                    ctrl[idx] = c.step(dt, s, cmd[k])
-            zs[:nz] = out[n:]
-            zs[nz:nz + ns] = s_now
-            ext_all[k] = s_now
-            forces_all[k] = ctrl[:n]
+                    ctrl[idx] = c.step(dt, s_k, cmd[k])
+                row[U] = ctrl[:n]
             if k % dec == 0:
                 i = k // dec
                 rec["qpos"][i] = d.qpos
                 rec["qvel"][i] = d.qvel
-                rec["z"][i] = zs[:nz]
             step2(m, d)
             if k % dec == 0:
                 rec["qacc"][i] = d.qacc
                 rec["sensors"][i] = sens
-                rec["forces"][i] = ctrl[:n]
             if k % 250 == 0:
                 self._check_finite(tk[k], limit_x)
         self._check_finite(tk[-1], limit_x)
+        full = hist[1:]
+        ext_all = full[:, :ns].copy()
         ext_all[:, :n] -= rest
+        forces_all = full[:, U]
         out_idx = np.arange(0, n_steps, dec)
         res = SimResult(built=self.built, t=tk[out_idx], qpos=rec["qpos"], qvel=rec["qvel"],
-                        qacc=rec["qacc"], forces=rec["forces"],
+                        qacc=rec["qacc"], forces=forces_all[out_idx].copy(),
                         extension=ext_all[out_idx, :n], ext_velocity=ext_all[out_idx, n:],
                         sensors=rec["sensors"], commands=cmd[out_idx],
                         command_acc=np.gradient(np.gradient(cmd[:, 0], dt), dt)[out_idx],
-                        controller_states=rec["z"], controller_state_names=self.state_names)
+                        controller_states=full[out_idx, ns:ns + nz].copy(),
+                        controller_state_names=self.state_names)
         res.exceedances = exceedances(self.built, tk, ext_all, forces_all)
         return res
 
