@@ -33,7 +33,7 @@ def main() -> None:
     keep = cmd.t <= 20.0
     t, x = cmd.t[keep], cmd.x[keep]
     sim = Simulator(built)
-    n_steps = int(round((t[-1] - t[0]) / 1e-3)) + 1
+    n_steps = round((t[-1] - t[0]) / 1e-3) + 1
     wall = best_of(lambda: sim.run(t, {"x": x}, output_dt=0.005))
     m = built.model
     d = mujoco.MjData(m)

@@ -18,8 +18,8 @@ per actuator M_d/ΣT_id² (the 100 kips/3g of Table B.5 for x).
 from __future__ import annotations
 
 import numpy as np
-from vtable.controllers.base import DOFS, LinearController
 
+from vtable.controllers.base import DOFS, LinearController
 from vtable.params.table import ServoConstants
 from vtable.params.virtual import VirtualTable
 

@@ -9,8 +9,8 @@ pistons together (heave) meets no resistance; pitch meets k_p = (F/Δx) d_p² (e
 from __future__ import annotations
 
 import numpy as np
-from vtable.controllers.base import LinearController
 
+from vtable.controllers.base import LinearController
 from vtable.params.virtual import VirtualTable
 
 

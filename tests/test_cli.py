@@ -55,7 +55,7 @@ def test_simulate_command(capsys, tmp_path):
     (["--specimen", "nope"], "unknown specimen preset 'nope'"),
 ])
 def test_simulate_bad_input(capsys, args, msg):
-    code, out, err = run(capsys, "simulate", *args)
+    code, _out, err = run(capsys, "simulate", *args)
     assert code == 2 and msg in err and err.count("\n") == 1
 
 
@@ -68,7 +68,7 @@ def test_simulate_tall_specimen(capsys, tmp_path):
 
 
 def test_export_mjcf(capsys, tmp_path):
-    code, out, _ = run(capsys, "export-mjcf", "--specimen", "sdof_frame", "--out", str(tmp_path))
+    code, _out, _ = run(capsys, "export-mjcf", "--specimen", "sdof_frame", "--out", str(tmp_path))
     assert code == 0 and (tmp_path / "model.xml").is_file()
     assert (tmp_path / "braced_frame.stl").is_file()
 
