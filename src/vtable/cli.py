@@ -67,13 +67,20 @@ def _parser() -> argparse.ArgumentParser:
     m = config_cmd("margins", "gain and phase margins of L = H/(1-H), H = x_t/x_c")
     m.add_argument("--out", default="x_t", help="tracked output [x_t]")
     m.add_argument("--in", dest="inp", default="x_c", help="command input [x_c]")
-    t = config_cmd("tf", "frequency response of one output over one input")
+    t = config_cmd("tf", "frequency response of one output over one input: a model "
+                         "configuration, or a measured run (RUN.toml) by H1 with coherence")
     t.add_argument("--out", default="x_t", help="output [x_t]")
     t.add_argument("--in", dest="inp", default="x_c", help="input [x_c]")
     t.add_argument("--fmin", type=float, default=0.5, help="lowest frequency, Hz [0.5]")
     t.add_argument("--fmax", type=float, default=20.0, help="highest frequency, Hz [20]")
     t.add_argument("--n", type=int, default=40, help="number of frequencies [40]")
     t.add_argument("--log", action="store_true", help="log-spaced frequencies")
+    t.add_argument("--nperseg", type=int, default=2048, help="run: frame length [2048]")
+    t.add_argument("--png", default=None, help="run: also plot amplitude, phase, coherence")
+    ident = sub.add_parser("identify", help="identify the report's parameters from runs")
+    ident.add_argument("runs", nargs="+", help="RUN.toml (or .h5) files of one configuration")
+    ident.add_argument("--json", nargs="?", const="-", default=None,
+                       help="write JSON (to a file, or stdout with no value)")
     pr = sub.add_parser("presets", help="list the named configurations")
     pr.add_argument("--json", action="store_true")
     return p
@@ -123,8 +130,45 @@ def cmd_margins(a: argparse.Namespace) -> dict[str, Any]:
     return _margins_dict(configs.load(a.config), a.out, a.inp)
 
 
+def _is_run(path: str) -> bool:
+    from pathlib import Path
+
+    from vtable.params.base import read_toml
+
+    p = Path(path)
+    if p.suffix in (".h5", ".hdf5"):
+        return True
+    return p.suffix == ".toml" and p.is_file() and \
+        read_toml(p).get("format", "").startswith("vtable-run/")
+
+
+def cmd_tf_run(a: argparse.Namespace) -> dict[str, Any]:
+    from vtable.ident import transfer_function
+    from vtable.runs import read_any
+
+    run = read_any(a.config)
+    out = "avg_hdisp" if a.out == "x_t" else a.out
+    inp = "h_span" if a.inp == "x_c" else a.inp
+    tf = transfer_function(run.channel(inp), run.channel(out), run.fs, a.nperseg)
+    sel = (tf.f >= a.fmin) & (tf.f <= a.fmax)
+    d = {"model": run.name, "output": out, "input": inp, "f_hz": tf.f[sel].tolist(),
+         "magnitude": np.abs(tf.H[sel]).tolist(),
+         "phase_deg": np.degrees(np.angle(tf.H[sel])).tolist(),
+         "coherence": tf.coherence[sel].tolist(), "averages": tf.averages}
+    if a.png:
+        from vtable.viz.figures import transfer_function_png
+
+        transfer_function_png(a.png, tf.f[sel], tf.H[sel], tf.coherence[sel],
+                              f"{run.name}: {out}/{inp}")
+        d["png"] = a.png
+    return d
+
+
 def cmd_tf(a: argparse.Namespace) -> dict[str, Any]:
     from vtable.analytic import configs
+
+    if _is_run(a.config):
+        return cmd_tf_run(a)
 
     if not (0 < a.fmin < a.fmax):
         raise VtableError(f"need 0 < --fmin < --fmax, got {a.fmin:g}, {a.fmax:g}")
@@ -139,10 +183,29 @@ def cmd_tf(a: argparse.Namespace) -> dict[str, Any]:
 
 
 def _print_tf(d: dict[str, Any]) -> None:
-    print(f"{d['model']}: {d['output']}/{d['input']}")
-    print(f"  {'f (Hz)':>9}  {'|H|':>10}  {'phase (deg)':>11}")
-    for f, m, p in zip(d["f_hz"], d["magnitude"], d["phase_deg"], strict=True):
-        print(f"  {f:9.3f}  {m:10.4g}  {p:11.2f}")
+    print(f"{d['model']}: {d['output']}/{d['input']}"
+          + (f" (H1, {d['averages']} averages)" if "coherence" in d else ""))
+    coh = d.get("coherence")
+    print(f"  {'f (Hz)':>9}  {'|H|':>10}  {'phase (deg)':>11}" + ("  coherence" if coh else ""))
+    for i, (f, m, p) in enumerate(zip(d["f_hz"], d["magnitude"], d["phase_deg"], strict=True)):
+        print(f"  {f:9.3f}  {m:10.4g}  {p:11.2f}" + (f"  {coh[i]:9.3f}" if coh else ""))
+    if d.get("png"):
+        print(f"  wrote {d['png']}")
+
+
+def cmd_identify(a: argparse.Namespace) -> dict[str, Any]:
+    from vtable.ident.report import identify_run
+    from vtable.runs import campaign
+
+    runs = campaign(a.runs)
+    return {"format": "vtable-identification/1", "runs": [identify_run(r) for r in runs]}
+
+
+def _print_identify(d: dict[str, Any]) -> None:
+    from vtable.ident.report import print_identification
+
+    for r in d["runs"]:
+        print_identification(r)
 
 
 def cmd_demo(a: argparse.Namespace) -> dict[str, Any]:
@@ -289,6 +352,7 @@ _COMMANDS = {
     "presets": (cmd_presets, lambda d: print("\n".join(d["configurations"]))),
     "simulate": (cmd_simulate, _print_simulate),
     "export-mjcf": (cmd_export, lambda d: print("wrote " + ", ".join(d["files"]))),
+    "identify": (cmd_identify, _print_identify),
 }
 
 
@@ -309,7 +373,13 @@ def main(argv: list[str] | None = None) -> int:
         a = _parser().parse_args(argv)
         run, show = _COMMANDS[a.command]
         result = run(a)
-        if a.json:
+        if a.command == "identify" and a.json not in (None, "-"):
+            from pathlib import Path
+
+            Path(a.json).write_text(json.dumps(_jsonable(result), indent=2))
+            show(result)
+            print(f"wrote {a.json}")
+        elif a.json:
             print(json.dumps(_jsonable(result), indent=2))
         else:
             show(result)

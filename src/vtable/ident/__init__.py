@@ -1,5 +1,5 @@
 """Identification from measured channels."""
 
-from vtable.ident.tf import TransferFunction, transfer_function
+from vtable.ident.tf import TransferFunction, transfer_function, transfer_function_via
 
-__all__ = ["TransferFunction", "transfer_function"]
+__all__ = ["TransferFunction", "transfer_function", "transfer_function_via"]

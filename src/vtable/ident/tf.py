@@ -55,3 +55,16 @@ def transfer_function(x: np.ndarray, y: np.ndarray, fs: float, nperseg: int = 20
             H = H / (1j * w) ** integrate
     step = nperseg - nover
     return TransferFunction(f, H, np.nan_to_num(coh), 1 + (len(x) - nperseg) // step)
+
+
+def transfer_function_via(ref: np.ndarray, x: np.ndarray, y: np.ndarray, fs: float,
+                          nperseg: int = 2048, overlap: float = 0.5,
+                          window: str = "hann") -> TransferFunction:
+    """y/x as (y/ref)/(x/ref) = G_ry/G_rx: with a noise-free reference (the command) the
+    sensor noise on x and y averages out instead of biasing the estimate, as it biases
+    H1 where x is weak (an instrumental-variable estimate). Coherence: the product of
+    the two coherences."""
+    a = transfer_function(ref, x, fs, nperseg, overlap, window=window)
+    b = transfer_function(ref, y, fs, nperseg, overlap, window=window)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return TransferFunction(a.f, b.H / a.H, a.coherence * b.coherence, a.averages)

@@ -104,13 +104,17 @@ class Experiment:
 def run_experiment(specimen: Specimen, command: Command, *, vt: VirtualTable | None = None,
                    valve: str = "linear", out: str | Path | None = None,
                    rerun: str | Path | None = None, exaggeration: float = 50.0,
-                   output_dt: float = 0.005, title: str = "") -> Experiment:
+                   output_dt: float = 0.005, title: str = "",
+                   rc_filter: bool = True) -> Experiment:
     """Simulate `command` on the table carrying `specimen`; write the run and the .rrd."""
     vt = vt or virtual_table()
     if valve not in ("linear", "nonlinear"):
         raise VtableError(f"valve must be linear or nonlinear, got {valve!r}")
     built = build(vt, specimen)
-    ctl = standard_controllers(vt) if valve == "linear" else nonlinear_controllers(vt)
+    if valve == "linear":
+        ctl = standard_controllers(vt, rc_filter=("x", "twist") if rc_filter else ())
+    else:
+        ctl = nonlinear_controllers(vt)
     res = Simulator(built, ctl).run(command.t, {"x": command.x}, output_dt=output_dt)
     ch, extra = channels(res)
     exp = Experiment(res, ch, extra, command)
