@@ -44,3 +44,25 @@ def vt():
 
 def relative_errors(H, Ha):
     return np.abs(np.abs(H) / np.abs(Ha) - 1), np.abs(np.degrees(np.angle(H / Ha)))
+
+
+@functools.cache
+def identification_runs(tmpdir: str):
+    """The identification campaign, made once: a bare-table run (0-32 Hz, RC filter off
+    so eq 6.16 applies) and a long SDOF-frame run (0-25 Hz), written as run files."""
+    from vtable.runs import read_run
+    from vtable.sim.experiment import load_specimen, make_command, run_experiment
+
+    out = {}
+    bare = make_command("random", duration=120.0, band=(0.0, 32.0), peak_in=0.05, seed=7)
+    run_experiment(load_specimen("none"), bare, out=f"{tmpdir}/bare", rc_filter=False)
+    out["bare"] = read_run(f"{tmpdir}/bare.toml")
+    sdof = make_command("random", duration=420.0, band=(0.0, 25.0), peak_in=0.2, seed=5)
+    run_experiment(load_specimen("sdof_frame"), sdof, out=f"{tmpdir}/sdof")
+    out["sdof"] = read_run(f"{tmpdir}/sdof.toml")
+    return out
+
+
+@pytest.fixture(scope="session")
+def ident_runs(tmp_path_factory):
+    return identification_runs(str(tmp_path_factory.mktemp("ident")))

@@ -149,3 +149,27 @@ def test_bad_arguments_are_one_line(capsys):
     assert code == 2 and "--fmin < --fmax" in err
     code, _, err = run(capsys, "frobnicate")
     assert code == 2 and err.count("\n") == 1
+
+
+def test_identify_and_tf_on_runs(capsys, tmp_path, ident_runs):
+    sdof = ident_runs["sdof"]
+    code, out, err = run(capsys, "identify", str(sdof.source), "--json", str(tmp_path / "id.json"))
+    assert code == 0, err
+    assert "fixed base" in out and "rocking impedance" in out
+    d = json.loads((tmp_path / "id.json").read_text())
+    rows = {r["case"]: r for r in d["runs"][0]["table_3_1"]}
+    assert rows["fixed base"]["f_hz"] == pytest.approx(2.87, rel=0.01)
+    assert d["runs"][0]["rocking_impedance"]["total"]["k_r_lb_in_per_rad"] == pytest.approx(
+        2.22e10, rel=0.05)
+    code, out, err = run(capsys, "tf", str(sdof.source), "--in", "h_span", "--out", "avg_hdisp",
+                         "--fmin", "1", "--fmax", "20", "--png", str(tmp_path / "tf.png"))
+    assert code == 0, err
+    assert "coherence" in out and (tmp_path / "tf.png").stat().st_size > 10_000
+    bare = ident_runs["bare"]
+    code, out, err = run(capsys, "identify", str(bare.source), str(sdof.source))
+    assert code == 2 and "[specimen] differs" in err
+
+
+def test_tf_on_a_run_with_a_missing_channel(capsys, tmp_path, ident_runs):
+    code, _, err = run(capsys, "tf", str(ident_runs["bare"].source), "--out", "acc_n_ne")
+    assert code == 2 and "no channel 'acc_n_ne'" in err

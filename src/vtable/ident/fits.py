@@ -309,8 +309,7 @@ def circle_fit(f, H, band) -> Fit:
     return Fit({"f_n": float(np.sqrt(wn2) / TWO_PI), "xi_n": float(np.mean(eta) / 2)},
                {"f_n": float(np.diff(f).mean() / 2),
                 "xi_n": float(np.std(eta) / 2 / np.sqrt(len(eta)))},
-               1 - float(np.mean(resid**2)) / float(np.var(np.abs(Y)) or 1), nrmse, len(f),
-               "circle fit", {"radius": R})
+               r2, nrmse, len(f), "circle fit", {"radius": R})
 
 
 def half_power(f, A) -> Fit:

@@ -206,7 +206,7 @@ def hysteresis(x: np.ndarray, force: np.ndarray, dt: float, f_hz: float) -> Hyst
     x, force = np.asarray(x, dtype=float), np.asarray(force, dtype=float)
     v = np.gradient(x, dt)
     A = np.column_stack([x, v, np.ones_like(x)])
-    (k, c, _), *_ = np.linalg.lstsq(A, force, rcond=None)
+    (k, _c, _), *_ = np.linalg.lstsq(A, force, rcond=None)
     cycles = (len(x) - 1) * dt * f_hz
     area = float(np.sum(0.5 * (force[1:] + force[:-1]) * np.diff(x)))
     wd = abs(area) / max(cycles, 1e-12)

@@ -21,14 +21,15 @@ _MISSING = dataclasses.MISSING
 
 
 def quantity(unit: str, key: str, *, default: Any = _MISSING, minimum: float | None = None,
-             exclusive: bool = True, source: str = "", doc: str = "") -> Any:
+             exclusive: bool = True, source: str = "", doc: str = "",
+             vector: bool = False) -> Any:
     """Declare a physical field stored in SI and written in TOML as `key` in `unit`.
 
     `minimum` bounds the SI value (strictly when `exclusive`); `source` names the report
-    table or equation the default comes from.
+    table or equation the default comes from; `vector` fields take a list of numbers.
     """
     meta = {"unit": unit, "key": key, "minimum": minimum, "exclusive": exclusive,
-            "source": source, "doc": doc}
+            "source": source, "doc": doc, "vector": vector}
     if default is _MISSING:
         return dataclasses.field(metadata=meta)
     return dataclasses.field(default=default, metadata=meta)
@@ -138,9 +139,9 @@ def _convert_in(v: Any, f: dataclasses.Field, where: str) -> Any:
     unit = f.metadata.get("unit")
     if unit is None:
         return v
-    if isinstance(v, list):
-        if not all(_is_number(x) for x in v):
-            raise VtableError(f"{where}: expected a list of numbers in {unit}")
+    if f.metadata.get("vector"):
+        if not isinstance(v, list) or not v or not all(_is_number(x) for x in v):
+            raise VtableError(f"{where}: expected a non-empty list of numbers in {unit}")
         return tuple(units.to_si(float(x), unit) for x in v)
     if not _is_number(v):
         raise VtableError(f"{where}: expected a number in {unit}, got {v!r}")

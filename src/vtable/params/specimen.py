@@ -39,7 +39,7 @@ class RigidBlock(Params):
     weight: float = quantity("kip", "weight_kip", minimum=0)
     height: float = quantity("in", "height_in", minimum=0, exclusive=False,
                              doc="centre of gravity above the actuator line")
-    size: tuple[float, ...] | None = quantity("in", "size_in", default=None,
+    size: tuple[float, ...] | None = quantity("in", "size_in", default=None, vector=True,
                                               doc="W x H x L of one block")
     count: int = plain(default=1)
     kind: str = plain(default="rigid")
@@ -100,13 +100,14 @@ class ShearBuilding(Params):
     """An n-storey shear building (eq 4.5): storey weights and heights, and either
     storey stiffnesses or fixed-base frequencies; modal damping ξ in every mode."""
 
-    weights: tuple[float, ...] = quantity("kip", "weights_kip")
-    heights: tuple[float, ...] = quantity("in", "heights_in",
+    weights: tuple[float, ...] = quantity("kip", "weights_kip", vector=True)
+    heights: tuple[float, ...] = quantity("in", "heights_in", vector=True,
                                           doc="floor heights above the actuator line")
     damping: float = quantity("1", "damping", minimum=0, exclusive=False)
     stiffnesses: tuple[float, ...] | None = quantity("kip/in", "stiffnesses_kip_per_in",
-                                                     default=None)
-    frequencies: tuple[float, ...] | None = quantity("Hz", "frequencies_hz", default=None)
+                                                     default=None, vector=True)
+    frequencies: tuple[float, ...] | None = quantity("Hz", "frequencies_hz", default=None,
+                                                     vector=True)
     kind: str = plain(default="shear_building")
     title: str = plain(default="shear building")
     source: str = plain(default="")
@@ -156,7 +157,7 @@ def specimen_from_dict(d: dict[str, Any], where: str = "specimen") -> Specimen:
     if not isinstance(d, dict):
         raise VtableError(f"{where}: expected a table")
     kind = d.get("kind")
-    if kind not in _BY_KIND:
+    if not isinstance(kind, str) or kind not in _BY_KIND:
         raise VtableError(f"{where}.kind: expected one of {', '.join(KINDS)}, got {kind!r}")
     d = dict(d)
     if kind == "sdof" and "stiffness_kip_per_in" in d:

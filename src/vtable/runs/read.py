@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from vtable import units as U
+from vtable import units as un
 from vtable.errors import VtableError
 from vtable.runs.format import FORMAT, dumps_toml
 from vtable.runs.model import FORMAT_UNITS, TOP_KEYS, Run
@@ -57,7 +57,7 @@ def read_meta(toml_path: Path) -> tuple[dict[str, Any], list[str]]:
             raise VtableError(f"{toml_path}: [{k}] must be a table")
     units = meta.get("units", {})
     for ch, u in units.items():
-        if not isinstance(u, str) or u not in U.UNITS:
+        if not isinstance(u, str) or u not in un.UNITS:
             raise VtableError(f"{toml_path}: [units] {ch} = {u!r} is not a known unit "
                               f"(e.g. in, mm, m, g, m/s2, kip, N, rad)")
     if "specimen" in meta:
@@ -134,7 +134,7 @@ def read_run(path: str | Path) -> Run:
         if h not in FORMAT_UNITS:
             extra.append(h)
         units[h] = unit or "1"
-        channels[h] = U.to_si(data[:, j], units[h]) if unit else data[:, j].copy()
+        channels[h] = un.to_si(data[:, j], units[h]) if unit else data[:, j].copy()
     if extra:
         no_unit = [h for h in extra if h not in overrides]
         reports.append(f"{csv_path}: {len(extra)} column(s) not in the format, kept: "
@@ -157,8 +157,8 @@ def write_run(run: Run, path: str | Path) -> tuple[Path, Path]:
     toml_path, csv_path = _paths(path)
     toml_path.parent.mkdir(parents=True, exist_ok=True)
     names = list(run.channels)
-    cols = [run.time] + [U.from_si(run.channels[h], run.units.get(h, "1"))
-                         if run.units.get(h, "1") in U.UNITS else run.channels[h]
+    cols = [run.time] + [un.from_si(run.channels[h], run.units.get(h, "1"))
+                         if run.units.get(h, "1") in un.UNITS else run.channels[h]
                          for h in names]
     data = np.column_stack(cols)
     with csv_path.open("w", encoding="utf-8", newline="\n") as fh:
@@ -193,7 +193,7 @@ def write_hdf5(run: Run, path: str | Path) -> Path:
         g = f.create_group("channels")
         for h, v in run.channels.items():
             unit = run.units.get(h, "1")
-            g.create_dataset(h, data=U.from_si(v, unit) if unit in U.UNITS else v,
+            g.create_dataset(h, data=un.from_si(v, unit) if unit in un.UNITS else v,
                              compression="gzip")
         f.attrs["order"] = list(run.channels)
     return p
@@ -222,7 +222,7 @@ def read_hdf5(path: str | Path) -> Run:
         raise VtableError(f"{p}: attribute 'toml' must declare format {FORMAT!r}")
     check_time(t, p)
     units = meta.pop("units", {})
-    channels = {h: U.to_si(v, units.get(h, "1")) for h, v in raw.items()}
+    channels = {h: un.to_si(v, units.get(h, "1")) for h, v in raw.items()}
     missing = {h: int(np.isnan(v).sum()) for h, v in channels.items() if np.isnan(v).any()}
     extra = [h for h in channels if h not in FORMAT_UNITS]
     override = {h: u for h, u in units.items() if FORMAT_UNITS.get(h) != u and u != "1"}
