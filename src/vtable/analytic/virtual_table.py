@@ -40,6 +40,61 @@ def _height_hessian(a: float, b: float, c: float) -> np.ndarray:
     return np.array([[-c, 0.0, a], [0.0, -c, b], [a, b, 0.0]])
 
 
+def mechanics(vt: VirtualTable, specimen: Specimen, *, gravity: bool = True,
+              com_offset: bool = True, body_inertia: bool = True):
+    """Small-motion mass, stiffness and damping matrices of the slab (x, z, φ, θ, ψ) and
+    the specimen's slides, and the actuators' extension Jacobian; also used by the reduced
+    model of the diagnosis. Returns (M, K, C, Ja, coordinate names, slide bodies)."""
+    bodies = specimen_bodies(specimen)
+    sb = slab_body(vt)
+    pos = slab_frame_positions(bodies)
+    slides = [b for b in bodies if b.joint]
+    nq = 5 + len(slides)
+    M = np.zeros((nq, nq))
+    K = np.zeros((nq, nq))
+    Cd = np.zeros((nq, nq))
+    rot = slice(2, 5)
+
+    def add_body(mass, r, inertia, chain):
+        J = np.zeros((3, nq))
+        J[:, :5] = _rot_jacobian(r)
+        for i in chain:
+            J[0, 5 + i] = 1.0
+        M[:, :] += mass * J.T @ J
+        M[rot, rot] += np.diag(inertia)
+        if gravity:
+            H = _height_hessian(*r)
+            K[rot, rot] += mass * G * H
+            for i in chain:  # z ≈ ... - x_s θ: ∂²z/∂x_s∂θ = -1
+                K[5 + i, 3] += -mass * G
+                K[3, 5 + i] += -mass * G
+
+    com = np.array(sb.com) if com_offset else np.zeros(3)
+    add_body(sb.mass, com, sb.inertia, [])
+    chain: list[int] = []
+    for b in bodies:
+        r = pos[b.name] + np.asarray(b.com)
+        if b.joint:
+            i = slides.index(b)
+            chain = [*chain, i]
+            K[5 + i, 5 + i] += b.stiffness
+            Cd[5 + i, 5 + i] += b.damping
+        add_body(b.mass, r, b.inertia if body_inertia else (0.0, 0.0, 0.0),
+                 chain if b.joint else [])
+    if gravity:  # the pit-pressure force, world vertical at the bottom-face centre
+        z_p = vt.pivot_depth - vt.table.geometry.thickness
+        weight = (sb.mass + sum(b.mass for b in bodies)) * G
+        K[rot, rot] -= weight * _height_hessian(0.0, 0.0, z_p)
+    acts = vt.actuators
+    Ja = np.zeros((len(acts), nq))
+    pivot = np.array([0.0, 0.0, -vt.pivot_depth])
+    for i, a in enumerate(acts):
+        r = np.asarray(a.slab_point) - pivot
+        Ja[i, :5] = a.axis @ _rot_jacobian(r)
+    names = [*SLAB_DOFS, *(b.joint for b in slides)]
+    return M, K, Cd, Ja, names, slides, pos
+
+
 class VirtualTableModel(LinearModel):
     """Linearized virtual table about rest, built from the same parameter objects and
     controller matrices as the multibody simulation.
@@ -61,54 +116,10 @@ class VirtualTableModel(LinearModel):
         n = len(names)
         for c in ctrls:
             c.bind(names)
-        bodies = specimen_bodies(specimen)
-        sb = slab_body(vt)
-        pos = slab_frame_positions(bodies)
-        slides = [b for b in bodies if b.joint]
-        nq = 5 + len(slides)
-        M = np.zeros((nq, nq))
-        K = np.zeros((nq, nq))
-        Cd = np.zeros((nq, nq))
-        rot = slice(2, 5)
-
-        def add_body(mass, r, inertia, chain):
-            # velocity of the centre: J q̇ with slides (along slab x) in `chain`
-            J = np.zeros((3, nq))
-            J[:, :5] = _rot_jacobian(r)
-            for i in chain:
-                J[0, 5 + i] = 1.0
-            M[:, :] += mass * J.T @ J
-            M[rot, rot] += np.diag(inertia)
-            if gravity:
-                H = _height_hessian(*r)
-                K[rot, rot] += mass * G * H
-                for i in chain:  # z ≈ ... - x_s θ (+ x_s φ ψ): ∂²z/∂x_s∂θ = -1
-                    K[5 + i, 3] += -mass * G
-                    K[3, 5 + i] += -mass * G
-
-        com = np.array(sb.com) if com_offset else np.zeros(3)
-        add_body(sb.mass, com, sb.inertia, [])
-        chain: list[int] = []
-        for b in bodies:
-            r = pos[b.name] + np.asarray(b.com)
-            if b.joint:
-                i = slides.index(b)
-                chain = [*chain, i]
-                K[5 + i, 5 + i] += b.stiffness
-                Cd[5 + i, 5 + i] += b.damping
-                # inter-storey spring/dashpot: relative slide coordinate is the joint itself
-            add_body(b.mass, r, b.inertia if body_inertia else (0.0, 0.0, 0.0),
-                     chain if b.joint else [])
-        if gravity:  # the pit-pressure force, world vertical at the bottom-face centre
-            z_p = vt.pivot_depth - vt.table.geometry.thickness
-            weight = (sb.mass + sum(b.mass for b in bodies)) * G
-            K[rot, rot] -= weight * _height_hessian(0.0, 0.0, z_p)
-        # actuator extensions e = Ja q (axis · ∂p/∂q)
-        Ja = np.zeros((n, nq))
-        pivot = np.array([0.0, 0.0, -vt.pivot_depth])
-        for i, a in enumerate(acts):
-            r = np.asarray(a.slab_point) - pivot
-            Ja[i, :5] = a.axis @ _rot_jacobian(r)
+        M, K, Cd, Ja, _, slides, pos = mechanics(vt, specimen, gravity=gravity,
+                                                  com_offset=com_offset,
+                                                  body_inertia=body_inertia)
+        nq = M.shape[0]
         # controllers: ż = A z + Bs [Ja q; Ja q̇] + Bc c ; F = C z + Ds [...] + Dc c
         zs = [len(c.state_names) for c in ctrls]
         nz = sum(zs)

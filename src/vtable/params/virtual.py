@@ -190,6 +190,33 @@ def vertical_servo_for_pitch_loop(ol: OpenLoop, inertia: float, lever: float, n:
                           source="derived: pitch DOF loop = §8.6.2 loop (params/virtual.py)")
 
 
+def split_rocking(k_theta: float, c_theta: float, vt: VirtualTable) -> tuple[float, float]:
+    """Per-piston stabilizer stiffness and damping so that, with the pitch loop of the
+    vertical actuators, the table's rocking spring and dashpot at the §8.6.3 coupled
+    frequency (2.58 Hz) are k_θ and c_θ (eqs 8.32-8.33, 8.4)."""
+    from vtable.analytic.closed_forms import feedback_spring
+    from vtable.params import presets
+
+    f_c = presets._file("models")["section8_6_2"]["f_coupled_hz"]
+    g = vt.table.geometry
+    k_v, c_v = feedback_spring(g.pitch_inertia, vt.pitch_loop, f_c)
+    d_p = g.stabilizer_square
+    k, c = (k_theta - float(k_v)) / d_p**2, (c_theta - float(c_v)) / d_p**2
+    if k <= 0 or c < 0:
+        raise VtableError(f"rocking spring {k_theta:.3g} N m/rad is weaker than the vertical "
+                          f"actuators' pitch loop alone ({float(k_v):.3g})")
+    return k, c
+
+
+def with_rocking(vt: VirtualTable, k_theta: float, c_theta: float) -> VirtualTable:
+    """The table with its stabilizers retuned to a rocking spring/dashpot (k_θ, c_θ)."""
+    k, c = split_rocking(k_theta, c_theta, vt)
+    a_p = vt.table.actuator("P1").area
+    s = vt.stabilizers
+    return replace(vt, stabilizers=replace(s, stiffness=k, damping=c,
+                                           volume=2 * s.beta * a_p**2 / k))
+
+
 def virtual_table(table: EERCTable | None = None,
                   layout: MultibodyLayout | None = None) -> VirtualTable:
     """The EERC virtual table from the presets."""
