@@ -15,7 +15,6 @@ from vtable import units
 from vtable.analytic.servo import open_loop_from_servo, servo_from_open_loop
 from vtable.effects.catalog import CATALOG, effect
 from vtable.effects.kernel import (
-    A,
     AIR,
     BETA,
     FR,
@@ -29,8 +28,9 @@ from vtable.effects.kernel import (
     QMAX,
     RC,
     TAU,
-    V,
     VEPS,
+    A,
+    V,
 )
 from vtable.params.loops import OpenLoop
 from vtable.params.specimen import NoSpecimen, SDOFSpecimen, Specimen

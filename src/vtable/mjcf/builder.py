@@ -53,8 +53,20 @@ class BuiltModel:
 
 
 def build(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: float = 1e-3,
-          with_meshes: bool = True) -> BuiltModel:
-    """Build and compile the virtual table carrying `specimen` (bare table by default)."""
+          with_meshes: bool = True, locked: tuple[str, ...] = (),
+          foundation: tuple[float, float, float] | None = None,
+          structure_actuators: bool = False) -> BuiltModel:
+    """Build and compile the virtual table carrying `specimen` (bare table by default).
+
+    `locked` slab joints are left out (e.g. ("pitch",): a table that cannot pitch);
+    `foundation` = (mass, stiffness, damping) puts the horizontal actuators' bases on a
+    reaction block sliding in x; `structure_actuators` adds a force actuator on each
+    storey slide (for controllers acting inside the specimen), after P4.
+    """
+    bad = set(locked) - set(SLAB_JOINTS)
+    if bad:
+        raise VtableError(f"cannot lock {sorted(bad)[0]!r}; slab joints are "
+                          f"{', '.join(SLAB_JOINTS)}")
     specimen = specimen or NoSpecimen()
     check_specimen(vt, specimen)
     s = mujoco.MjSpec()
@@ -90,7 +102,16 @@ def build(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: float
                               ("roll", _J.mjJNT_HINGE, [1, 0, 0]),
                               ("pitch", _J.mjJNT_HINGE, [0, 1, 0]),
                               ("twist", _J.mjJNT_HINGE, [0, 0, 1])):
-        slab.add_joint(name=name, type=jtype, axis=axis)
+        if name not in locked:
+            slab.add_joint(name=name, type=jtype, axis=axis)
+    base_body = world
+    if foundation is not None:
+        m_f, k_f, c_f = foundation
+        base_body = world.add_body(name="foundation")
+        base_body.explicitinertial = True
+        base_body.mass, base_body.inertia = m_f, [m_f, m_f, m_f]
+        fj = base_body.add_joint(name="foundation_x", type=_J.mjJNT_SLIDE, axis=[1, 0, 0])
+        fj.stiffness[0], fj.damping[0] = k_f, c_f
     if with_meshes:
         mesh = add_mesh("slab", meshes.slab_with_ribs(g.plan_width, g.thickness, lay.rib_width,
                                                       lay.rib_depth, lay.rib_offset, pivot))
@@ -105,7 +126,8 @@ def build(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: float
     for a in vt.actuators:
         sp = np.subtract(a.slab_point, [0, 0, -pivot])
         slab.add_site(name=f"{a.name}_slab", pos=sp, size=[0.04, 0, 0])
-        world.add_site(name=f"{a.name}_base", pos=a.foundation_point, size=[0.04, 0, 0])
+        (base_body if a.kind == "horizontal" else world).add_site(
+            name=f"{a.name}_base", pos=a.foundation_point, size=[0.04, 0, 0])
         t = s.add_tendon(name=a.name)
         t.wrap_site(f"{a.name}_base")
         t.wrap_site(f"{a.name}_slab")
@@ -117,14 +139,20 @@ def build(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: float
     joints, heights, masses = _add_specimen(s, slab, specimen, pivot, with_meshes, add_mesh)
     weight = (g.mass + sum(masses) + (specimen.mass if isinstance(specimen, RigidBlock) else 0.0)
               ) * G
+    if structure_actuators:
+        for j, jn in enumerate(joints, 1):
+            t = s.add_tendon(name=f"S{j}")
+            t.wrap_joint(jn, 1.0)  # fixed tendon: its length is the storey drift
+            s.add_actuator(name=f"S{j}", target=f"S{j}", trntype=mujoco.mjtTrn.mjTRN_TENDON)
+            names.append(f"S{j}")
     pit = s.add_actuator(name="pit_pressure", target="pit", trntype=mujoco.mjtTrn.mjTRN_SITE,
                          refsite="world_ref")
     pit.gear = [0, 0, 1, 0, 0, 0]
-    for a in vt.actuators:
-        s.add_sensor(name=f"{a.name}_len", type=mujoco.mjtSensor.mjSENS_TENDONPOS, objname=a.name,
+    for a in names:
+        s.add_sensor(name=f"{a}_len", type=mujoco.mjtSensor.mjSENS_TENDONPOS, objname=a,
                      objtype=mujoco.mjtObj.mjOBJ_TENDON)
-    for a in vt.actuators:
-        s.add_sensor(name=f"{a.name}_vel", type=mujoco.mjtSensor.mjSENS_TENDONVEL, objname=a.name,
+    for a in names:
+        s.add_sensor(name=f"{a}_vel", type=mujoco.mjtSensor.mjSENS_TENDONVEL, objname=a,
                      objtype=mujoco.mjtObj.mjOBJ_TENDON)
     s.assets = dict(assets)
     if joints:  # accelerometers and potentiometers on the top mass (Table 2.3)

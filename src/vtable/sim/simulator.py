@@ -62,9 +62,14 @@ class SimResult:
     exceedances: list[Exceedance] = field(default_factory=list)
 
     def joint(self, name: str, what: str = "qpos") -> np.ndarray:
+        """A joint's history; a locked slab joint (left out of the model) is zero."""
         m = self.built.model
         j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
         if j < 0:
+            from vtable.mjcf.builder import SLAB_JOINTS
+
+            if name in SLAB_JOINTS:
+                return np.zeros(len(self.t))
             raise VtableError(f"no joint {name!r}")
         adr = m.jnt_qposadr[j] if what == "qpos" else m.jnt_dofadr[j]
         return getattr(self, what)[:, adr]
@@ -249,11 +254,13 @@ class Simulator:
                 rec["qvel"][i] = d.qvel
             step2(m, d)
             if k % dec == 0:
+                rec["qvel"][i] += d.qvel  # v(t_k) = mean of the step averages around t_k
                 rec["qacc"][i] = d.qacc
                 rec["sensors"][i] = sens
             if k % 250 == 0:
                 self._check_finite(tk[k], limit_x)
         self._check_finite(tk[-1], limit_x)
+        rec["qvel"] *= 0.5
         full = hist[1:]
         ext_all = full[:, :ns].copy()
         ext_all[:, :n] -= rest
@@ -292,7 +299,10 @@ def exceedances(built: BuiltModel, t: np.ndarray, ext_all: np.ndarray,
     per actuator, from the full-rate histories; nothing is clipped."""
     out = []
     n = forces.shape[1]
+    known = {a.name for a in built.vt.actuators}
     for i, name in enumerate(built.force_actuators):
+        if name not in known:  # internal actuators (structure dampers) have no ratings
+            continue
         a = built.vt.actuator(name)
         checks = [("stroke", ext_all[:, i], a.stroke / 2), ("force", forces[:, i], a.capacity)]
         if a.flow:
