@@ -66,3 +66,51 @@ def identification_runs(tmpdir: str):
 @pytest.fixture(scope="session")
 def ident_runs(tmp_path_factory):
     return identification_runs(str(tmp_path_factory.mktemp("ident")))
+
+
+#: a visible dose of each catalog effect for the hidden-effect campaigns
+HIDDEN = {
+    "pitch_flexibility": {},
+    "force_feedback_filter": {"rc": 0.01},
+    "valve_flow_nonlinearity": {"supply_pressure": 3000.0},
+    "actuator_friction": {"friction": 3.0},
+    "flow_saturation": {"v_max": 10.0},
+    "valve_dynamics": {"tau": 0.005},
+    "oil_column_air": {"air_ratio": 0.04},
+    "amplitude_dependent_damping": {"gamma": 0.03},
+    "foundation_compliance": {"f_f": 8.0, "xi_f": 0.1},
+    "sensor_filter": {"cutoff_hz": 100.0},
+}
+
+
+@functools.cache
+def campaign_commands():
+    from vtable.sim.experiment import make_command
+
+    return (make_command("random", duration=11.0, band=(0.0, 25.0), peak_in=0.05, seed=1),
+            make_command("random", duration=11.0, band=(0.0, 25.0), peak_in=0.15, seed=2),
+            make_command("earthquake", peak_in=4.0))
+
+
+@functools.cache
+def effect_campaign(effects: tuple[str, ...]):
+    """Three runs of the SDOF frame on the virtual table with `effects` present (doses of
+    HIDDEN): random 0-25 Hz at two spans and §9.2 El Centro, 1 % RMS noise, 200 Hz."""
+    from vtable.effects.physics import Physics, nominal_open_loop
+    from vtable.effects.virtual import virtual_run
+    from vtable.params import presets
+
+    truth = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
+                    {e: HIDDEN[e] for e in effects})
+    runs = [virtual_run(truth, c, noise=0.01, seed=10 + i, name=f"run{i}")
+            for i, c in enumerate(campaign_commands())]
+    return truth, runs
+
+
+@functools.cache
+def effect_diagnosis(effects: tuple[str, ...]):
+    from vtable.diagnose.engine import Diagnoser
+
+    truth, runs = effect_campaign(effects)
+    d = Diagnoser(runs)
+    return truth, d, d.diagnose()

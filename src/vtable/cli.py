@@ -77,6 +77,18 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--log", action="store_true", help="log-spaced frequencies")
     t.add_argument("--nperseg", type=int, default=2048, help="run: frame length [2048]")
     t.add_argument("--png", default=None, help="run: also plot amplitude, phase, coherence")
+    dg = sub.add_parser("diagnose", help="find the physics a model of the runs is missing")
+    dg.add_argument("runs", nargs="+", help="RUN.toml (or .h5) files of one configuration")
+    dg.add_argument("--with", dest="with_", default="",
+                    help="effects already in the starting model, comma separated")
+    dg.add_argument("--effects", default="", help="catalog subset to try [all]")
+    dg.add_argument("--json", default=None, help="write the diagnosis JSON here")
+    dg.add_argument("--rerun", default=None, help="write a Rerun recording (.rrd)")
+    dg.add_argument("--report", default=None, help="write an HTML report")
+    cp = sub.add_parser("compare", help="how a model with given effects fits the runs")
+    cp.add_argument("runs", nargs="+")
+    cp.add_argument("--with", dest="with_", default="")
+    cp.add_argument("--json", action="store_true")
     ident = sub.add_parser("identify", help="identify the report's parameters from runs")
     ident.add_argument("runs", nargs="+", help="RUN.toml (or .h5) files of one configuration")
     ident.add_argument("--json", nargs="?", const="-", default=None,
@@ -191,6 +203,110 @@ def _print_tf(d: dict[str, Any]) -> None:
         print(f"  {f:9.3f}  {m:10.4g}  {p:11.2f}" + (f"  {coh[i]:9.3f}" if coh else ""))
     if d.get("png"):
         print(f"  wrote {d['png']}")
+
+
+def _effects_list(text: str) -> list[str]:
+    from vtable.effects.catalog import effect
+
+    names = [e.strip() for e in text.split(",") if e.strip()]
+    for e in names:
+        effect(e)
+    return names
+
+
+class _Progress:
+    """A live progress bar on stderr (plain lines when it is not a terminal)."""
+
+    def __init__(self) -> None:
+        self.tty = sys.stderr.isatty()
+        self.last = ""
+
+    def __call__(self, i: int, n: int, label: str) -> None:
+        width = 28
+        done = int(width * i / max(n, 1))
+        line = f"[{'#' * done}{'-' * (width - done)}] {i}/{n} {label}"
+        if self.tty:
+            print("\r" + line.ljust(80), end="", file=sys.stderr, flush=True)
+            if i >= n:
+                print(file=sys.stderr)
+        elif label != self.last:
+            print(line, file=sys.stderr, flush=True)
+        self.last = label
+
+
+def cmd_diagnose(a: argparse.Namespace) -> dict[str, Any]:
+    from vtable.diagnose.engine import Diagnoser, localise
+    from vtable.runs import campaign
+
+    runs = campaign(a.runs)
+    diag = Diagnoser(runs, _effects_list(a.with_), catalog=_effects_list(a.effects) or None,
+                     progress=_Progress())
+    d = diag.diagnose()
+    out = d.to_json()
+    out["localisation"] = localise(d)
+    if a.json:
+        from pathlib import Path
+
+        Path(a.json).write_text(json.dumps(_jsonable(out), indent=2))
+        out["_wrote"] = [a.json]
+    if a.rerun:
+        from vtable.viz.diagnosis_rerun import log_diagnosis
+
+        log_diagnosis(d, diag, a.rerun)
+        out.setdefault("_wrote", []).append(a.rerun)
+    if a.report:
+        from vtable.diagnose.report import write_report
+
+        write_report(d, diag, a.report)
+        out.setdefault("_wrote", []).append(a.report)
+    return out
+
+
+def _print_diagnose(d: dict[str, Any]) -> None:
+    print("starting model: servo loop + specimen"
+          + (f" + {', '.join(d['start_effects'])}" if d["start_effects"] else ""))
+    print(f"  held-out error {d['start_error']:.2%} (noise floor {d['noise_floor']:.2%})")
+    print(f"  where: {d['localisation']}")
+    for i, r in enumerate(d["rounds"], 1):
+        print(f"\nround {i}: " + (f"added {r['added']}" if r["added"] else "nothing added"))
+        print(f"  {'rank':>4}  {'effect':<28} {'held-out':>9}  evidence")
+        for k, c in enumerate(r["ranking"], 1):
+            print(f"  {k:>4}  {c['effect']:<28} {c['error_after']:9.2%}  "
+                  + (c["evidence"] if k <= 3 else ""))
+    print("\nerror history: " + " -> ".join(
+        [f"{d['start_error']:.2%}"] + [f"{r['error']:.2%} (+{r['added']})"
+                                        for r in d["rounds"] if r["added"]]))
+    print(f"verdict: {d['verdict']}")
+    for f in d.get("_wrote", []):
+        print(f"wrote {f}")
+
+
+def cmd_compare(a: argparse.Namespace) -> dict[str, Any]:
+    from vtable.diagnose.compare import localisation_text
+    from vtable.diagnose.model import TableModel
+    from vtable.runs import campaign
+
+    runs = campaign(a.runs)
+    m = TableModel(_effects_list(a.with_)).fit(runs)
+    c = m.comparison()
+    ol = m.physics_.open_loop
+    return {"effects": list(m.effects), "params": m.physics_.effects,
+            "base": {"f_o_hz": ol.f_o, "xi_o": ol.xi_o, "k_o_per_s": ol.k_o},
+            "error": c.error, "noise_floor": c.noise_floor, "per_run": c.per_run,
+            "bands": c.bands, "localisation": localisation_text(c)}
+
+
+def _print_compare(d: dict[str, Any]) -> None:
+    print("model: servo loop + specimen" + (f" + {', '.join(d['effects'])}" if d["effects"]
+                                           else ""))
+    b = d["base"]
+    print(f"  base loop: f_o {b['f_o_hz']:.2f} Hz, ξ_o {b['xi_o']:.3f}, k_o {b['k_o_per_s']:.2f}")
+    for e, p in d["params"].items():
+        print(f"  {e}: " + ", ".join(f"{k} = {v:.4g}" for k, v in p.items()))
+    print(f"  held-out error {d['error']:.2%}, noise floor {d['noise_floor']:.2%}")
+    for run, errs in d["per_run"].items():
+        print(f"  {run}: " + ", ".join(f"{g} {e:.1%}" for g, e in errs.items()))
+    print(f"  where: {d['localisation']}")
 
 
 def cmd_identify(a: argparse.Namespace) -> dict[str, Any]:
@@ -353,6 +469,8 @@ _COMMANDS = {
     "simulate": (cmd_simulate, _print_simulate),
     "export-mjcf": (cmd_export, lambda d: print("wrote " + ", ".join(d["files"]))),
     "identify": (cmd_identify, _print_identify),
+    "diagnose": (cmd_diagnose, _print_diagnose),
+    "compare": (cmd_compare, _print_compare),
 }
 
 
@@ -373,7 +491,9 @@ def main(argv: list[str] | None = None) -> int:
         a = _parser().parse_args(argv)
         run, show = _COMMANDS[a.command]
         result = run(a)
-        if a.command == "identify" and a.json not in (None, "-"):
+        if a.command == "diagnose":
+            show(result)
+        elif a.command == "identify" and a.json not in (None, "-"):
             from pathlib import Path
 
             Path(a.json).write_text(json.dumps(_jsonable(result), indent=2))

@@ -79,7 +79,7 @@ CATALOG: dict[str, Effect] = {e.name: e for e in (
     Effect("flow_saturation", "the servovalve's rated flow caps actuator velocity",
            "§2.2, app. C", "clipping when the command velocity exceeds the cap; large "
                            "spans and earthquakes only",
-           (P("v_max", "in/s", 25.0, 1.0, 60.0, False, "§2.2: 25 in/s horizontal"),)),
+           (P("v_max", "in/s", 25.0, 1.0, 60.0, True, "§2.2: 25 in/s horizontal"),)),
     Effect("valve_dynamics", "the servovalve does not respond instantly: a first-order "
                              "spool (flow) lag τ", "§6.2, app. C",
            "extra phase lag growing with frequency; lower bandwidth",

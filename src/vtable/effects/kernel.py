@@ -138,7 +138,7 @@ def _reduced_rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, 
     return force[0]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw):
     """RK4 at step dt; returns q, q̇, q̈ (n_t x nq) and the actuator force (n_t).
 

@@ -20,7 +20,7 @@ from vtable.errors import VtableError
 from vtable.params.virtual import VirtualTable, split_rocking, virtual_table
 from vtable.runs.model import Run
 
-SIM_DT = 0.001
+SIM_DT = 0.0025
 
 #: the channels the reduced model predicts (format names)
 PREDICTED = ("avg_hdisp", "h1_disp", "h2_disp", "h3_disp", "h_vel", "avg_hacc", "h1_force",

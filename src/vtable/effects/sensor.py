@@ -1,7 +1,8 @@
 """The measurement chain's anti-aliasing filter (report §2.3: 100 Hz analog low-pass
 before sampling), applied the same way to the virtual table's and the reduced model's
-channels: a 4-pole Butterworth (assumed order) discretized by the bilinear transform at
-the simulation rate, before decimation to the sampling rate."""
+response channels: the analog 4-pole Butterworth (order assumed) applied exactly in the
+frequency domain (zero-padded FFT) at the simulation rate, before decimation. Being the
+analog response, the result does not depend on the simulation rate."""
 
 from __future__ import annotations
 
@@ -12,5 +13,10 @@ ORDER = 4
 
 
 def sensor_filter(x: np.ndarray, fs: float, cutoff_hz: float) -> np.ndarray:
-    sos = scipy.signal.butter(ORDER, cutoff_hz, fs=fs, output="sos")
-    return scipy.signal.sosfilt(sos, np.asarray(x, dtype=float))
+    x = np.asarray(x, dtype=float)
+    n = len(x)
+    nfft = 1 << int(np.ceil(np.log2(2 * n)))
+    b, a = scipy.signal.butter(ORDER, 2 * np.pi * cutoff_hz, analog=True)
+    w = 2 * np.pi * np.fft.rfftfreq(nfft, 1.0 / fs)
+    _, H = scipy.signal.freqs(b, a, worN=w)
+    return np.fft.irfft(np.fft.rfft(x, nfft) * H, nfft)[:n]

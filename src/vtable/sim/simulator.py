@@ -223,7 +223,7 @@ class Simulator:
         n_out = (n_steps - 1) // dec + 1
         rec = {"qpos": np.empty((n_out, m.nq)), "qvel": np.empty((n_out, m.nv)),
                "qacc": np.empty((n_out, m.nv)), "sensors": np.empty((n_out, m.nsensordata))}
-        limit_x = max_extension or 10 * max(a.stroke for a in self.built.vt.actuators)
+        limit_x = max_extension or 2 * max(a.stroke for a in self.built.vt.actuators)
         sens = d.sensordata
         ctrl = d.ctrl
         other = self.other

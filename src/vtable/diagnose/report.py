@@ -1,0 +1,127 @@
+"""The HTML report of a diagnosis: verdict, ranking tables with evidence, the error
+waterfall and transfer-function overlays (matplotlib, embedded PNGs)."""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+from pathlib import Path
+
+import numpy as np
+
+from vtable.diagnose.compare import GROUPS, group_prediction, group_signal
+from vtable.diagnose.engine import Diagnoser, Diagnosis
+from vtable.ident.tf import transfer_function
+
+
+def _png(fig) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    return base64.b64encode(buf.getvalue()).decode()
+
+
+def waterfall(d: Diagnosis):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    hist = d.history()
+    fig, ax = plt.subplots(figsize=(6.5, 3.2))
+    labels = [h[0] for h in hist]
+    vals = [100 * h[1] for h in hist]
+    prev = vals[0]
+    ax.bar(0, vals[0], color="0.5")
+    for i, v in enumerate(vals[1:], 1):
+        ax.bar(i, v - prev, bottom=prev, color="tab:green")
+        prev = v
+    ax.bar(len(vals), vals[-1], color="tab:blue")
+    ax.axhline(100 * d.noise_floor, color="tab:red", ls="--", label="noise floor")
+    ax.set_xticks(range(len(vals) + 1), [*labels, "final"], rotation=20, ha="right")
+    ax.set_ylabel("held-out error (%)")
+    ax.set_title("error waterfall")
+    ax.legend()
+    fig.tight_layout()
+    return fig
+
+
+def tf_overlay(d: Diagnosis, diag: Diagnoser, group: str):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    run = max(diag.runs, key=lambda r: len(r.time))
+    x = run.channel("h_span")
+    y = group_signal(run, group)
+    if y is None:
+        return None
+    n = min(1024, 2 ** int(np.log2(len(x) / 2)))
+    fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(6.5, 4.5))
+    tm = transfer_function(x, y, run.fs, n)
+    sel = (tm.f > 0.2) & (tm.f <= 30)
+    a1.plot(tm.f[sel], np.abs(tm.H[sel]), "k-", lw=1.5, label="measured")
+    a2.plot(tm.f[sel], np.degrees(np.angle(tm.H[sel])), "k-", lw=1.5)
+    for label, ph, style in (("start model", diag.start_fitted, "tab:red"),
+                             ("final model", d.final, "tab:blue")):
+        yhat = group_prediction(diag.predict(ph)[run.name], run, group)
+        tp = transfer_function(x, yhat, run.fs, n)
+        a1.plot(tp.f[sel], np.abs(tp.H[sel]), color=style, ls="--", label=label)
+        a2.plot(tp.f[sel], np.degrees(np.angle(tp.H[sel])), color=style, ls="--")
+    a1.set_ylabel("amplitude")
+    a2.set_ylabel("phase (deg)")
+    a2.set_xlabel("frequency (Hz)")
+    a1.set_title(f"{group} / command, {run.name.split('/')[-1]}")
+    a1.legend()
+    fig.tight_layout()
+    return fig
+
+
+def _plus(effects) -> str:
+    return (" + " + ", ".join(effects)) if effects else ""
+
+
+def write_report(d: Diagnosis, diag: Diagnoser, path: str | Path) -> Path:
+    e = html.escape
+    parts = ["<html><head><meta charset='utf-8'><title>vtable diagnosis</title>"
+             "<style>body{font-family:sans-serif;max-width:60em;margin:auto}"
+             "td,th{padding:2px 8px;border-bottom:1px solid #ddd}</style></head><body>",
+             "<h1>vtable diagnosis</h1>", f"<p><b>Verdict:</b> {e(d.verdict)}</p>",
+             f"<p>Runs: {e(', '.join(r.name for r in diag.runs))}. Starting model: "
+             f"linear servo loop + specimen{_plus(d.start_effects)}."
+             f" Held-out error {d.start_error:.2%} → {d.final_error:.2%}; noise floor "
+             f"{d.noise_floor:.2%}.</p>",
+             "<h2>Error waterfall</h2>",
+             f"<img src='data:image/png;base64,{_png(waterfall(d))}'>"]
+    for i, r in enumerate(d.rounds, 1):
+        parts.append(f"<h2>Round {i}: {'added ' + e(r.added) if r.added else 'nothing added'}"
+                     "</h2><table><tr><th>rank</th><th>effect</th><th>held-out error</th>"
+                     "<th>evidence</th></tr>")
+        for k, c in enumerate(r.ranking, 1):
+            parts.append(f"<tr><td>{k}</td><td>{e(c.effect)}</td><td>{c.error_after:.2%}</td>"
+                         f"<td>{e(c.evidence)}</td></tr>")
+        parts.append("</table>")
+    parts.append("<h2>Transfer functions: measured, start and final models</h2>")
+    for g in ("table displacement", "pitch", "structure acceleration"):
+        fig = tf_overlay(d, diag, g)
+        if fig is not None:
+            parts.append(f"<img src='data:image/png;base64,{_png(fig)}'>")
+    parts.append("<h2>Error per channel group (held out)</h2><table><tr><th>run</th>"
+                 "<th>group</th><th>start</th><th>final</th></tr>")
+    for run, errs in d.comparison_start.per_run.items():
+        for g, v in errs.items():
+            f = d.comparison_final.per_run[run].get(g, float("nan"))
+            parts.append(f"<tr><td>{e(run.split('/')[-1])}</td><td>{e(g)}</td>"
+                         f"<td>{v:.2%}</td><td>{f:.2%}</td></tr>")
+    parts.append("</table></body></html>")
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    p.write_text("\n".join(parts), encoding="utf-8")
+    return p
+
+
+GROUP_NAMES = tuple(GROUPS)
