@@ -10,7 +10,7 @@ import pytest
 from conftest import HIDDEN, effect_campaign, effect_diagnosis
 
 from vtable.errors import VtableError
-from vtable.runs import write_run_object
+from vtable.runs import write_run
 
 
 @pytest.mark.parametrize("hidden", list(HIDDEN))
@@ -67,7 +67,7 @@ def test_cli_diagnose_writes_json_rrd_and_report(tmp_path, capsys):
     _, runs = effect_campaign(("pitch_flexibility",))
     paths = []
     for i, r in enumerate(runs):
-        write_run_object(r, tmp_path / f"run{i}")
+        write_run(r, tmp_path / f"run{i}")
         paths.append(str(tmp_path / f"run{i}.toml"))
     code = main(["diagnose", *paths, "--json", str(tmp_path / "d.json"), "--rerun",
                  str(tmp_path / "d.rrd"), "--report", str(tmp_path / "d.html")])
@@ -95,7 +95,7 @@ def test_cli_compare(tmp_path, capsys):
     _, runs = effect_campaign(("pitch_flexibility",))
     paths = []
     for i, r in enumerate(runs):
-        write_run_object(r, tmp_path / f"c{i}")
+        write_run(r, tmp_path / f"c{i}")
         paths.append(str(tmp_path / f"c{i}.toml"))
     code = main(["compare", *paths, "--with", "pitch_flexibility", "--json"])
     out, err = capsys.readouterr()

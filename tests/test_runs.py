@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from vtable import units
 from vtable.errors import VtableError
-from vtable.runs import campaign, read_hdf5, read_run, write_hdf5, write_run_object
+from vtable.runs import campaign, read_hdf5, read_run, write_hdf5, write_run
 from vtable.runs.model import FORMAT_UNITS, Run
 
 TOML = '''format = "vtable-run/1"
@@ -57,7 +57,7 @@ def test_read_converts_units_and_reports(tmp_path):
 
 def test_round_trips_are_identical(tmp_path):
     r = _sample(tmp_path)
-    write_run_object(r, tmp_path / "copy")
+    write_run(r, tmp_path / "copy")
     back = read_run(tmp_path / "copy.toml")
     assert back.meta == r.meta and back.units == r.units
     np.testing.assert_array_equal(back.time, r.time)

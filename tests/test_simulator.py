@@ -14,9 +14,9 @@ from vtable.errors import VtableError
 from vtable.ident import transfer_function
 from vtable.mjcf import build
 from vtable.params import RigidBlock, SDOFSpecimen, presets
+from vtable.runs import FORMAT_UNITS as CHANNEL_UNITS
 from vtable.signals import band_limited_random, sine
 from vtable.sim import SimulationDivergedError, Simulator
-from vtable.sim.channels import CHANNEL_UNITS
 from vtable.sim.experiment import make_command, run_experiment
 from vtable.viz.rerun_scene import read_rrd
 
@@ -112,7 +112,7 @@ def test_rerun_recording_reads_back(vt, tmp_path):
         assert ent in d, ent
     rb = d["/channels/avg_hdisp"][0]
     values = np.array([v[0] for v in rb.column("Scalars:scalars").to_pylist()])
-    np.testing.assert_allclose(values, exp.channels["avg_hdisp"], rtol=1e-12)
+    np.testing.assert_allclose(values, exp.channel("avg_hdisp"), rtol=1e-12)
     # the slab's quaternion carries the exaggerated pitch
     tr = d["/world/table/slab"][0]
     quats = np.array(tr.column("Transform3D:quaternion").to_pylist())[:, 0, :]

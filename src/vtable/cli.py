@@ -385,7 +385,7 @@ def _demo_analytic() -> dict[str, Any]:
 
 def _sim_summary(exp) -> dict[str, Any]:
     """Peak table of a virtual-table experiment (report units)."""
-    ch = exp.channels
+    ch = {k: exp.channel(k) for k in exp.run.channels}
     keys = [("h_span", "in"), ("avg_hdisp", "in"), ("pitch_disp", "rad"), ("pitch_acc", "rad/s2"),
             ("acc_n_ne", "g"), ("pot_n_sw", "in"), ("h1_force", "kip"), ("v1_force", "kip"),
             ("p1_stab", "kip")]

@@ -4,7 +4,6 @@ the same parameters the reduced model reads."""
 
 from __future__ import annotations
 
-from vtable import units
 from vtable.controllers import PassiveStabilizers, ServoController
 from vtable.controllers.effect_servo import KernelServo, QuadraticDamper
 from vtable.effects import physics as phys
@@ -13,8 +12,8 @@ from vtable.effects.sensor import sensor_filter
 from vtable.mjcf import build
 from vtable.params.virtual import VirtualTable, virtual_table, with_rocking
 from vtable.runs import specimen_table
-from vtable.runs.model import FORMAT_UNITS, Run, with_noise
-from vtable.sim.channels import channels
+from vtable.runs.model import Run, with_noise
+from vtable.sim.channels import result_run
 from vtable.sim.experiment import Command
 from vtable.sim.simulator import Simulator
 
@@ -50,16 +49,15 @@ def virtual_run(ph: phys.Physics, command: Command, *, noise: float = 0.0, seed:
     the sensor filter when present, plus `noise` x RMS white sensor noise."""
     built, ctl = virtual_setup(ph, vt)
     res = Simulator(built, ctl).run(command.t, {"x": command.x}, output_dt=0.001)
-    ch, _ = channels(res, full_state=False)
-    if ph.has("sensor_filter"):
-        fc = ph.effects["sensor_filter"]["cutoff_hz"]
-        ch = {k: (v if k in ("h_span", "acc_cmd") else sensor_filter(v, 1000.0, fc))
-              for k, v in ch.items()}
-    step = round(OUTPUT_DT / 0.001)
-    si = {k: units.to_si(v[::step], FORMAT_UNITS[k]) for k, v in ch.items()}
     meta = {"title": name or f"{command.name} ({ph.label})", "table": {"preset": "eerc"},
             "specimen": specimen_table(ph.specimen), "command": command.table}
-    run = Run(name=name or command.name, time=res.t[::step] - res.t[0], channels=si,
-              units={k: FORMAT_UNITS[k] for k in si}, meta=meta,
-              reports=[f"virtual table: {ph.label}"])
+    run = result_run(res, meta, name or command.name, full_state=False)
+    if ph.has("sensor_filter"):
+        fc = ph.effects["sensor_filter"]["cutoff_hz"]
+        run.channels = {k: (v if k in ("h_span", "acc_cmd") else sensor_filter(v, 1000.0, fc))
+                        for k, v in run.channels.items()}
+    step = round(OUTPUT_DT / 0.001)
+    run.time = run.time[::step]
+    run.channels = {k: v[::step] for k, v in run.channels.items()}
+    run.reports.append(f"virtual table: {ph.label}")
     return with_noise(run, noise, seed) if noise else run

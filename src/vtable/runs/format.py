@@ -4,12 +4,9 @@ RUN.csv (time + channels) and RUN.toml (what was tested)."""
 from __future__ import annotations
 
 import json
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from vtable.errors import VtableError
 
 FORMAT = "vtable-run/1"
 SPECIMEN_KEYS = {"none": (), "rigid": ("weight_kip", "height_in"),
@@ -56,25 +53,3 @@ def dumps_toml(d: dict[str, Any]) -> str:
             lines.append(f"\n[{k}]")
             lines += [f"{kk} = {_toml_value(vv)}" for kk, vv in v.items()]
     return "\n".join(lines) + "\n"
-
-
-def write_run(stem: str | Path, t: np.ndarray, channels: dict[str, np.ndarray],
-              meta: dict[str, Any], units: dict[str, str] | None = None) -> tuple[Path, Path]:
-    """Write RUN.csv and RUN.toml; `meta` holds title, table, control, specimen, command."""
-    stem = Path(stem)
-    stem.parent.mkdir(parents=True, exist_ok=True)
-    names = list(channels)
-    data = np.column_stack([np.asarray(t, dtype=float)] + [np.asarray(channels[k], dtype=float)
-                                                           for k in names])
-    if data.ndim != 2 or any(len(channels[k]) != len(t) for k in names):
-        raise VtableError("every channel needs one sample per time")
-    csv = stem.with_suffix(".csv")
-    with csv.open("w", encoding="utf-8", newline="\n") as fh:
-        fh.write(",".join(["time", *names]) + "\n")
-        np.savetxt(fh, data, delimiter=",", fmt="%.10g")
-    doc = {"format": FORMAT, **meta}
-    if units:
-        doc["units"] = dict(units)
-    toml = stem.with_suffix(".toml")
-    toml.write_text(dumps_toml(doc), encoding="utf-8")
-    return csv, toml

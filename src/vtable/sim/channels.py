@@ -5,24 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from vtable import units
+from vtable.runs.model import FORMAT_UNITS, Run
 from vtable.sim.simulator import SimResult
-
-#: the run format's channels and their units
-CHANNEL_UNITS: dict[str, str] = {
-    "h_span": "in", "avg_hdisp": "in", "avg_vdisp": "in", "avg_hacc": "g", "avg_vacc": "g",
-    "pitch_acc": "rad/s2", "roll_acc": "rad/s2", "twist_acc": "rad/s2", "pitch_disp": "rad",
-    **{f"v{i}_disp": "in" for i in range(1, 5)}, **{f"h{i}_disp": "in" for i in range(1, 4)},
-    **{f"h{i}_force": "kip" for i in range(1, 4)}, **{f"v{i}_force": "kip" for i in range(1, 5)},
-    **{f"p{i}_stab": "kip" for i in range(1, 5)}, "h_vel": "in/s",
-    "acc_n_ne": "g", "acc_n_nw": "g", "acc_w_nw": "g", "acc_w_sw": "g",
-    "pot_n_sw": "in", "pot_n_se": "in", "acc_cmd": "g",
-}
 
 
 def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndarray],
                                                               dict[str, str]]:
-    """Channel histories in their units, and the units of the extra (state) channels."""
+    """Channel histories in SI, and every channel's unit in a run file (the format's for
+    its channels; SI for the extra state channels)."""
     b = res.built
     names = b.force_actuators
     ext = {a: res.extension[:, i] for i, a in enumerate(names)}
@@ -51,8 +41,8 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
         for site in ("sw", "se"):
             x = res.sensor(f"top_{site}_pos")[:, 0]
             si[f"pot_n_{site}"] = x - x[0] if len(x) else x
-    out = {k: units.from_si(v, CHANNEL_UNITS[k]) for k, v in si.items()}
-    extra_units: dict[str, str] = {}
+    out = dict(si)
+    extra_units: dict[str, str] = {k: FORMAT_UNITS[k] for k in si}
     if full_state:
         m = b.model
         import mujoco
@@ -68,3 +58,12 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
             out[f"state_{s}"] = res.controller_states[:, i]
             extra_units[f"state_{s}"] = "Pa"
     return out, extra_units
+
+
+def result_run(res: SimResult, meta: dict, name: str, full_state: bool = True,
+               step: int = 1) -> Run:
+    """A `Run` (SI inside) from a simulation, every `step`-th recorded sample."""
+    ch, unit = channels(res, full_state)
+    t = res.t[::step] - res.t[0]
+    return Run(name=name, time=t, channels={k: v[::step] for k, v in ch.items()}, units=unit,
+               meta=meta, extra=[k for k in ch if k not in FORMAT_UNITS])

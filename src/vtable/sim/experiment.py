@@ -17,7 +17,7 @@ from vtable.params import presets
 from vtable.params.base import read_toml
 from vtable.params.specimen import NoSpecimen, Specimen, specimen_from_dict
 from vtable.params.virtual import VirtualTable, virtual_table
-from vtable.runs import specimen_table, write_run
+from vtable.runs import FORMAT_UNITS, Run, specimen_table, write_run
 from vtable.signals import (
     band_limited_random,
     el_centro,
@@ -26,7 +26,7 @@ from vtable.signals import (
     read_at2,
     sine,
 )
-from vtable.sim.channels import CHANNEL_UNITS, channels
+from vtable.sim.channels import result_run
 from vtable.sim.simulator import SimResult, Simulator
 
 COMMAND_DT = 0.001
@@ -92,13 +92,17 @@ def load_specimen(name_or_path: str | None) -> Specimen:
 
 @dataclass
 class Experiment:
-    """A simulated test and where its outputs went."""
+    """A simulated test (`run`: the channels in SI, as a run file holds them) and where
+    its outputs went."""
 
     result: SimResult
-    channels: dict[str, np.ndarray]
-    extra_units: dict[str, str]
+    run: Run
     command: Command
     files: list[Path] = field(default_factory=list)
+
+    def channel(self, name: str) -> np.ndarray:
+        """A channel in its run-file unit (the report's units)."""
+        return units.from_si(self.run.channels[name], self.run.units[name])
 
 
 def run_experiment(specimen: Specimen, command: Command, *, vt: VirtualTable | None = None,
@@ -116,17 +120,16 @@ def run_experiment(specimen: Specimen, command: Command, *, vt: VirtualTable | N
     else:
         ctl = nonlinear_controllers(vt)
     res = Simulator(built, ctl).run(command.t, {"x": command.x}, output_dt=output_dt)
-    ch, extra = channels(res)
-    exp = Experiment(res, ch, extra, command)
+    meta = {"title": title or f"{command.name}, {specimen.title} (vtable virtual table)",
+            "table": {"preset": "eerc"},
+            "control": {k: v.to_dict() for k, v in vt.settings.items()},
+            "specimen": specimen_table(specimen), "command": command.table}
+    exp = Experiment(res, result_run(res, meta, str(out or command.name)), command)
     if out is not None:
-        meta = {"title": title or f"{command.name}, {specimen.title} (vtable virtual table)",
-                "table": {"preset": "eerc"},
-                "control": {k: v.to_dict() for k, v in vt.settings.items()},
-                "specimen": specimen_table(specimen), "command": command.table}
-        exp.files += list(write_run(out, res.t, ch, meta, extra))
+        exp.files += list(write_run(exp.run, out))
     if rerun is not None:
         from vtable.viz.rerun_scene import log_simulation
 
-        named = {k: v for k, v in ch.items() if k in CHANNEL_UNITS}
+        named = {k: exp.channel(k) for k in exp.run.channels if k in FORMAT_UNITS}
         exp.files.append(log_simulation(res, rerun, named, exaggeration=exaggeration))
     return exp
