@@ -96,3 +96,29 @@ def response_spectrum(acc: np.ndarray, dt: float, periods, damping: float = 0.05
     acc = np.ascontiguousarray(acc, dtype=float)
     Phi, G0, G1 = nigam_jennings(periods, damping, dt)
     return Spectrum(periods, damping, _peaks(acc, Phi, G0, G1))
+
+
+def _check_acceleration(run, name: str) -> np.ndarray:
+    from vtable.runs.model import FORMAT_UNITS
+
+    unit = run.units.get(name, FORMAT_UNITS.get(name, ""))
+    if unit not in ("g", "m/s2", "rad/s2"):
+        raise VtableError(f"{run.name}: channel {name!r} is not an acceleration (unit "
+                          f"{unit or 'unknown'}); a response spectrum needs one")
+    return run.channel(name)
+
+
+def channel_spectrum(run, channel: str, periods, damping: float = 0.05) -> Spectrum:
+    """Spectrum of one acceleration channel of a run (SI, e.g. ``avg_hacc``)."""
+    return response_spectrum(_check_acceleration(run, channel), run.dt, periods, damping)
+
+
+def effective_motion(run, height: float) -> np.ndarray:
+    """ẍ_t + h θ̈ (m/s²): the base acceleration a specimen whose mass sits `height` (m)
+    above the actuator line feels on a pitching table (§8.6.4, x_eff = x_t + θh)."""
+    return _check_acceleration(run, "avg_hacc") + height * _check_acceleration(run, "pitch_acc")
+
+
+def effective_spectrum(run, height: float, periods, damping: float = 0.05) -> Spectrum:
+    """Spectrum of the effective base motion x_t + hθ of a run."""
+    return response_spectrum(effective_motion(run, height), run.dt, periods, damping)
