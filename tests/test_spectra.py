@@ -33,7 +33,7 @@ def test_agrees_with_eqsig_above_six_steps(elcentro):
     eqsig = pytest.importorskip("eqsig.sdof")
     rec = elcentro
     s = response_spectrum(rec.acc, rec.dt, PERIODS, 0.05)
-    u, v, a = eqsig.pseudo_response_spectra(rec.acc, rec.dt, PERIODS, 0.05)
+    u, _, a = eqsig.pseudo_response_spectra(rec.acc, rec.dt, PERIODS, 0.05)
     ok = PERIODS >= 6 * rec.dt
     assert ok.sum() > 150
     np.testing.assert_allclose(s.sd[ok], u[ok], rtol=1e-6)
@@ -72,7 +72,7 @@ def test_channel_and_effective_motion_spectra(elcentro):
     # x_t + hθ with θ̈ = ẍ_t/4 and h = 2 m is 1.5 ẍ_t: the spectrum scales by 1.5
     np.testing.assert_allclose(effective_spectrum(run, 2.0, p).sd,
                                1.5 * response_spectrum(acc, 0.01, p).sd, rtol=1e-12)
-    with pytest.raises(VtableError, match="avg_hdisp.*not an acceleration"):
+    with pytest.raises(VtableError, match=r"avg_hdisp.*not an acceleration"):
         channel_spectrum(run, "avg_hdisp", p)
 
 

@@ -38,3 +38,65 @@ def transfer_function_png(path: str | Path, f, H, coherence=None, title: str = "
     fig.savefig(p, dpi=110)
     plt.close(fig)
     return p
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig, path: str | Path) -> Path:
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fig.tight_layout()
+    fig.savefig(p, dpi=110)
+    fig.clf()
+    return p
+
+
+def psv_spectra_png(path: str | Path, periods, psv: dict, title: str = "") -> Path:
+    """Pseudo-velocity spectra of one record through several models (Figs 9.13-9.32)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for name, v in psv.items():
+        ax.loglog(periods, np.asarray(v) / 0.0254, lw=1.2, label=name)
+    ax.set_xlabel("fixed-base period (s)")
+    ax.set_ylabel("PSV (in/s)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend()
+    ax.set_title(title)
+    p = _save(fig, path)
+    plt.close(fig)
+    return p
+
+
+def coupled_sweep_png(path: str | Path, x, x_label: str, curves: dict, reference=None,
+                      title: str = "") -> Path:
+    """Coupled frequency ratio f_c/f_s and coupled damping ξ_c against a swept parameter
+    (Figs 9.4-9.12). `curves`: label -> array (len(x), 2) of (f_c, ξ_c); `reference`: the
+    fixed-base (f_s, ξ_s) at each x, for the ratio and the ξ_s line."""
+    plt = _plt()
+    fig, ax = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
+    x = np.asarray(x)
+    ref = np.asarray(reference) if reference is not None else None
+    for name, fc in curves.items():
+        fc = np.asarray(fc)
+        ax[0].plot(x, fc[:, 0] / ref[:, 0] if ref is not None else fc[:, 0], lw=1.2,
+                   label=name)
+        ax[1].plot(x, 100 * fc[:, 1], lw=1.2, label=name)
+    if ref is not None:
+        ax[1].plot(x, 100 * ref[:, 1], "k--", lw=1, label="fixed base")
+    ax[0].set_ylabel("f_c / f_s" if ref is not None else "f_c (Hz)")
+    ax[1].set_ylabel("coupled damping ξ_c (%)")
+    ax[1].set_xlabel(x_label)
+    for a in ax:
+        a.grid(alpha=0.3)
+        a.legend(fontsize=8)
+    fig.suptitle(title)
+    p = _save(fig, path)
+    plt.close(fig)
+    return p

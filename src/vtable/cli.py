@@ -93,6 +93,19 @@ def _parser() -> argparse.ArgumentParser:
     ident.add_argument("runs", nargs="+", help="RUN.toml (or .h5) files of one configuration")
     ident.add_argument("--json", nargs="?", const="-", default=None,
                        help="write JSON (to a file, or stdout with no value)")
+    asx = sub.add_parser("assess", help="how the table changes what a specimen feels: the "
+                         "five models of §9.4, coupled modes, spectra, a verdict and plots")
+    asx.add_argument("specimen", nargs="?", default="sdof_frame",
+                     help="a specimen preset (sdof_frame, table8_1, ...) or a TOML file with "
+                          "a [specimen] table (sdof or shear_building) [sdof_frame]")
+    asx.add_argument("--record", default="elcentro",
+                     help="elcentro, a .AT2 or .csv file, or fema:ID[a|b] [elcentro]")
+    asx.add_argument("--raw", action="store_true",
+                     help="use the record as recorded, without the §9.2 processing "
+                          "(length scale 3.2801, 4 in peak command)")
+    asx.add_argument("--out", default="vtable-assess", help="folder for the plots "
+                     "[vtable-assess]")
+    asx.add_argument("--json", action="store_true")
     pr = sub.add_parser("presets", help="list the named configurations")
     pr.add_argument("--json", action="store_true")
     return p
@@ -454,6 +467,59 @@ def _print_simulation(s: dict[str, Any]) -> None:
         print("  wrote " + ", ".join(s["files"]))
 
 
+def cmd_assess(a: argparse.Namespace) -> dict[str, Any]:
+    from pathlib import Path
+
+    import numpy as np
+
+    from vtable.signals.processing import process_record
+    from vtable.signals.records import load_record
+    from vtable.sim.experiment import load_specimen
+    from vtable.studies import interaction as ia
+    from vtable.viz import figures
+
+    rec = load_record(a.record)
+    if a.raw:
+        acc, dt, label = rec.acc, rec.dt, rec.name
+    else:
+        cmd = process_record(rec)
+        acc, dt, label = cmd.acceleration, cmd.dt, f"{rec.name} (§9.2 processed)"
+    res = ia.assess(load_specimen(a.specimen), acc, dt, label)
+    s = res.specimen
+    out = Path(a.out)
+    f_s = np.linspace(0.5, 10.0, 39)
+    ref = np.column_stack([f_s, np.full_like(f_s, s.damping)])
+    xi = np.linspace(0.0, 0.20, 21)
+    files = [
+        figures.psv_spectra_png(out / "psv_spectra.png", res.periods, res.psv,
+                                f"{s.title}: PSV, {label}, ξ_s {100 * s.damping:.0f} %"),
+        figures.coupled_sweep_png(out / "coupled_vs_frequency.png", f_s, "f_s (Hz)",
+                                  ia.sweep(s, "frequency", f_s), ref,
+                                  "coupled mode vs structural frequency (Figs 9.4-9.5)"),
+        figures.coupled_sweep_png(out / "coupled_vs_damping.png", 100 * xi, "ξ_s (%)",
+                                  ia.sweep(s, "damping", xi, names=["hybrid"]),
+                                  np.column_stack([np.full_like(xi, s.frequency), xi]),
+                                  "coupled mode vs structural damping (Figs 9.7-9.8)"),
+    ]
+    for par, label_x in (("weight", "mass"), ("height", "height")):
+        curves = {f"{label_x} x{k:g}": ia.sweep(ia.dataclasses.replace(
+            s, **{par: getattr(s, par) * k}), "frequency", f_s, names=["hybrid"])["hybrid"]
+            for k in (0.5, 1.0, 1.5)}
+        files.append(figures.coupled_sweep_png(
+            out / f"coupled_vs_{label_x}.png", f_s, "f_s (Hz)", curves, ref,
+            f"hybrid model: varying structural {label_x} (Figs 9.9-9.12)"))
+    return {"verdict": res.verdict(), "specimen": s.title, "record": label,
+            "modes": {k: {"f_hz": f, "damping": z} for k, (f, z) in res.modes.items()},
+            "psv_at_specimen_period_m_s": res.psv_at_specimen,
+            "rocking_share": res.rocking_share, "time_elongation": res.elongation,
+            "compensated_error": res.compensated_error, "files": [str(f) for f in files]}
+
+
+def _print_assess(d: dict[str, Any]) -> None:
+    print(d["verdict"])
+    print("wrote " + ", ".join(d["files"]))
+
+
 def cmd_presets(a: argparse.Namespace) -> dict[str, Any]:
     from vtable.analytic import configs
 
@@ -471,6 +537,7 @@ _COMMANDS = {
     "identify": (cmd_identify, _print_identify),
     "diagnose": (cmd_diagnose, _print_diagnose),
     "compare": (cmd_compare, _print_compare),
+    "assess": (cmd_assess, _print_assess),
 }
 
 

