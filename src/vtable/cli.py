@@ -106,6 +106,22 @@ def _parser() -> argparse.ArgumentParser:
     asx.add_argument("--out", default="vtable-assess", help="folder for the plots "
                      "[vtable-assess]")
     asx.add_argument("--json", action="store_true")
+    sd = sub.add_parser("study", help="a heights x records study on Dask, stored as it "
+                        "runs and resumable")
+    sd.add_argument("--store", required=True, help="results folder (resumed if it exists)")
+    sd.add_argument("--heights", type=float, nargs="+", required=True,
+                    help="specimen heights above the actuator line, in")
+    sd.add_argument("--records", nargs="+", default=["elcentro"],
+                    help="elcentro, .AT2/.csv files, fema:ID [elcentro]")
+    sd.add_argument("--specimen", default="sdof_frame", help="SDOF specimen [sdof_frame]")
+    sd.add_argument("--model", choices=["virtual", "analytic"], default="virtual",
+                    help="the virtual table (MuJoCo) or the analytical models [virtual]")
+    sd.add_argument("--duration", type=float, default=None,
+                    help="seconds of each processed record (virtual: 4 by default)")
+    sd.add_argument("--scheduler", default=None, help="a Dask scheduler address "
+                    "[a local cluster]")
+    sd.add_argument("--workers", type=int, default=2, help="local cluster workers [2]")
+    sd.add_argument("--json", action="store_true")
     pr = sub.add_parser("presets", help="list the named configurations")
     pr.add_argument("--json", action="store_true")
     return p
@@ -520,6 +536,32 @@ def _print_assess(d: dict[str, Any]) -> None:
     print("wrote " + ", ".join(d["files"]))
 
 
+def cmd_study(a: argparse.Namespace) -> dict[str, Any]:
+    from vtable.studies.scaleout import height_record_study, run_study
+
+    common: dict[str, Any] = {"specimen": a.specimen}
+    if a.duration is not None or a.model == "virtual":
+        common["duration"] = a.duration if a.duration is not None else 4.0
+    study = height_record_study(a.heights, a.records, a.model, **common)
+    return {"store": a.store, "model": a.model,
+            "points": run_study(study, a.store, scheduler=a.scheduler, n_workers=a.workers)}
+
+
+def _print_study(d: dict[str, Any]) -> None:
+    print(f"{len(d['points'])} points in {d['store']} ({d['model']})")
+    for k, r in d["points"].items():
+        if d["model"] == "virtual":
+            ratio = " ".join(f"{x:.2f}" for x in r["psa_ratio"])
+            print(f"  {k:14s} h {r['height_in']:6.0f} in  peak θ "
+                  f"{1e3 * r['peaks_si']['pitch_disp']:.3f} mrad  PSA(x_t+hθ)/PSA(x_c) "
+                  f"at {r['periods_s']} s: {ratio}")
+        else:
+            f, xi = r["modes"]["hybrid"]
+            ps = r["psv_at_specimen"]
+            print(f"  {k:14s} h {r['height_in']:6.0f} in  hybrid f_c {f:.2f} Hz, ξ_c "
+                  f"{100 * xi:.1f} %, PSV vs fixed {100 * (ps['hybrid'] / ps['fixed base'] - 1):+.0f} %")
+
+
 def cmd_presets(a: argparse.Namespace) -> dict[str, Any]:
     from vtable.analytic import configs
 
@@ -538,6 +580,7 @@ _COMMANDS = {
     "diagnose": (cmd_diagnose, _print_diagnose),
     "compare": (cmd_compare, _print_compare),
     "assess": (cmd_assess, _print_assess),
+    "study": (cmd_study, _print_study),
 }
 
 
