@@ -92,6 +92,7 @@ def test_store_refuses_another_study(tmp_path):
         from vtable.studies.scaleout import run_study
         run_study(Study("vtable.nowhere:f", {"a": {}}), tmp_path / "x")
     (tmp_path / "points" / "r0-h100.json").write_text("{broken")
-    with pytest.raises(VtableError, match="r0-h100.json: unreadable"):
+    with pytest.raises(VtableError, match=r"r0-h100\.json: unreadable"):
         Store(tmp_path).load()
-    json.loads((tmp_path / "study.json").read_text())
+    assert json.loads((tmp_path / "study.json").read_text())["points"]["r0-h200"] == {
+        "record": "elcentro", "height_in": 200.0}

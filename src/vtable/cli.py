@@ -558,8 +558,9 @@ def _print_study(d: dict[str, Any]) -> None:
         else:
             f, xi = r["modes"]["hybrid"]
             ps = r["psv_at_specimen"]
+            dv = 100 * (ps["hybrid"] / ps["fixed base"] - 1)
             print(f"  {k:14s} h {r['height_in']:6.0f} in  hybrid f_c {f:.2f} Hz, ξ_c "
-                  f"{100 * xi:.1f} %, PSV vs fixed {100 * (ps['hybrid'] / ps['fixed base'] - 1):+.0f} %")
+                  f"{100 * xi:.1f} %, PSV vs fixed {dv:+.0f} %")
 
 
 def cmd_presets(a: argparse.Namespace) -> dict[str, Any]:
