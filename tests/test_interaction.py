@@ -117,3 +117,16 @@ def test_vtable_assess_cli(tmp_path, capsys):
         assert (tmp_path / f.split("/")[-1]).stat().st_size > 10_000
     assert main(["assess", "concrete_blocks", "--out", str(tmp_path)]) == 2
     assert "sdof or shear_building" in capsys.readouterr().err
+
+
+def test_vtable_assess_a_building_file_through_its_first_mode(tmp_path, capsys):
+    f = tmp_path / "building.toml"
+    f.write_text('[specimen]\nkind = "shear_building"\ntitle = "3-storey frame"\n'
+                 "weights_kip = [20.0, 20.0, 20.0]\nheights_in = [80.0, 160.0, 240.0]\n"
+                 "frequencies_hz = [3.0, 8.5, 13.0]\ndamping = 0.02\n")
+    assert main(["assess", str(f), "--out", str(tmp_path / "plots"), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["modes"]["fixed base"]["f_hz"] == pytest.approx(3.0, rel=1e-3)
+    h = np.array([80.0, 160.0, 240.0])
+    assert f"at {(h**2).sum() / h.sum():.0f} in" in d["verdict"]  # h_e1, eq 4.24
+    assert d["modes"]["hybrid"]["f_hz"] < 3.0

@@ -96,3 +96,18 @@ def test_store_refuses_another_study(tmp_path):
         Store(tmp_path).load()
     assert json.loads((tmp_path / "study.json").read_text())["points"]["r0-h200"] == {
         "record": "elcentro", "height_in": 200.0}
+
+
+def test_study_on_a_scheduler_address(tmp_path):
+    from dask.distributed import LocalCluster
+
+    from vtable.studies.scaleout import run_study
+
+    lines = []
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                      dashboard_address=None) as cluster:
+        out = run_study(height_record_study([219.0, 300.0], ["elcentro"], "analytic"),
+                        tmp_path, scheduler=cluster.scheduler_address, progress=lines.append)
+    assert out["r0-h219"]["modes"]["hybrid"][0] == pytest.approx(2.54, abs=0.01)
+    assert out["r0-h300"]["modes"]["hybrid"][0] < out["r0-h219"]["modes"]["hybrid"][0]
+    assert lines[0].startswith("study: 2 points, 0 already") and lines[-1].startswith("[2/2]")
