@@ -222,6 +222,10 @@ def height_record_study(heights_in, records, model: str = "virtual",
     """The grid heights × records through `model` (virtual or analytic)."""
     if model not in FUNCTIONS:
         raise VtableError(f"study model must be virtual or analytic, got {model!r}")
+    from vtable.signals.records import load_record
+
+    for r in records:  # a bad record fails here in one line, before any cluster starts
+        load_record(str(r))
     points = {}
     records = [str(Path(r).resolve()) if Path(r).is_file() else str(r) for r in records]
     for r_i, rec in enumerate(records):
