@@ -1,4 +1,5 @@
-"""Matplotlib figures (PNG): transfer functions with coherence."""
+"""Matplotlib figures (PNG): transfer functions with coherence, response spectra and
+coupled-mode sweeps."""
 
 from __future__ import annotations
 
@@ -10,11 +11,7 @@ import numpy as np
 def transfer_function_png(path: str | Path, f, H, coherence=None, title: str = "",
                           f_max: float | None = None) -> Path:
     """Amplitude, phase and coherence against frequency, as in the report's figures."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = _plt()
     f, H = np.asarray(f), np.asarray(H)
     sel = f > 0 if f_max is None else (f > 0) & (f <= f_max)
     rows = 3 if coherence is not None else 2
@@ -32,12 +29,7 @@ def transfer_function_png(path: str | Path, f, H, coherence=None, title: str = "
     for a in ax:
         a.grid(alpha=0.3)
     fig.suptitle(title)
-    fig.tight_layout()
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p, dpi=110)
-    plt.close(fig)
-    return p
+    return _save(fig, path)
 
 
 def _plt():
@@ -50,11 +42,12 @@ def _plt():
 
 
 def _save(fig, path: str | Path) -> Path:
+    """Lay out, write as PNG (creating the folder) and close."""
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
     fig.savefig(p, dpi=110)
-    fig.clf()
+    _plt().close(fig)
     return p
 
 
@@ -69,9 +62,7 @@ def psv_spectra_png(path: str | Path, periods, psv: dict, title: str = "") -> Pa
     ax.grid(alpha=0.3, which="both")
     ax.legend()
     ax.set_title(title)
-    p = _save(fig, path)
-    plt.close(fig)
-    return p
+    return _save(fig, path)
 
 
 def coupled_sweep_png(path: str | Path, x, x_label: str, curves: dict, reference=None,
@@ -97,6 +88,4 @@ def coupled_sweep_png(path: str | Path, x, x_label: str, curves: dict, reference
         a.grid(alpha=0.3)
         a.legend(fontsize=8)
     fig.suptitle(title)
-    p = _save(fig, path)
-    plt.close(fig)
-    return p
+    return _save(fig, path)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from typing import Any
 
@@ -12,6 +11,7 @@ import numpy as np
 
 from vtable import __version__
 from vtable.errors import UnstableError, VtableError
+from vtable.jsonable import jsonable
 
 
 class _Parser(argparse.ArgumentParser):
@@ -45,8 +45,8 @@ def _parser() -> argparse.ArgumentParser:
                           "file with a [specimen] table [sdof_frame]")
     sim.add_argument("--command", default="random", dest="kind",
                      choices=["random", "sine", "pulse", "earthquake"])
-    sim.add_argument("--record", default=None, help="a PEER .AT2 file (earthquake) "
-                     "[El Centro 1940]")
+    sim.add_argument("--record", default=None, help="earthquake: elcentro, a .AT2 or .csv "
+                     "file, or fema:ID[a|b] [elcentro]")
     sim.add_argument("--duration", type=float, default=11.0, help="s [11]")
     sim.add_argument("--band", type=float, nargs=2, default=[0.0, 25.0], help="Hz [0 25]")
     sim.add_argument("--peak", type=float, default=None, help="peak command, in")
@@ -276,7 +276,7 @@ def cmd_diagnose(a: argparse.Namespace) -> dict[str, Any]:
     if a.json:
         from pathlib import Path
 
-        Path(a.json).write_text(json.dumps(_jsonable(out), indent=2))
+        Path(a.json).write_text(json.dumps(jsonable(out), indent=2))
         out["_wrote"] = [a.json]
     if a.rerun:
         from vtable.viz.diagnosis_rerun import log_diagnosis
@@ -484,6 +484,7 @@ def _print_simulation(s: dict[str, Any]) -> None:
 
 
 def cmd_assess(a: argparse.Namespace) -> dict[str, Any]:
+    from dataclasses import replace
     from pathlib import Path
 
     import numpy as np
@@ -518,9 +519,9 @@ def cmd_assess(a: argparse.Namespace) -> dict[str, Any]:
                                   "coupled mode vs structural damping (Figs 9.7-9.8)"),
     ]
     for par, label_x in (("weight", "mass"), ("height", "height")):
-        curves = {f"{label_x} x{k:g}": ia.sweep(ia.dataclasses.replace(
-            s, **{par: getattr(s, par) * k}), "frequency", f_s, names=["hybrid"])["hybrid"]
-            for k in (0.5, 1.0, 1.5)}
+        curves = {f"{label_x} x{k:g}": ia.sweep(replace(s, **{par: getattr(s, par) * k}),
+                                                "frequency", f_s, names=["hybrid"])["hybrid"]
+                  for k in (0.5, 1.0, 1.5)}
         files.append(figures.coupled_sweep_png(
             out / f"coupled_vs_{label_x}.png", f_s, "f_s (Hz)", curves, ref,
             f"hybrid model: varying structural {label_x} (Figs 9.9-9.12)"))
@@ -585,18 +586,6 @@ _COMMANDS = {
 }
 
 
-def _jsonable(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, float | np.floating):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer | np.bool_):
-        return x.item()
-    return x
-
-
 def main(argv: list[str] | None = None) -> int:
     try:
         a = _parser().parse_args(argv)
@@ -607,11 +596,11 @@ def main(argv: list[str] | None = None) -> int:
         elif a.command == "identify" and a.json not in (None, "-"):
             from pathlib import Path
 
-            Path(a.json).write_text(json.dumps(_jsonable(result), indent=2))
+            Path(a.json).write_text(json.dumps(jsonable(result), indent=2))
             show(result)
             print(f"wrote {a.json}")
         elif a.json:
-            print(json.dumps(_jsonable(result), indent=2))
+            print(json.dumps(jsonable(result), indent=2))
         else:
             show(result)
         return 0

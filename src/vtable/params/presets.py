@@ -86,18 +86,19 @@ def table_sdof(name: str) -> TableSDOFParams:
     return TableSDOFParams.from_dict(d, f"models.toml [{fam}.{row}]")
 
 
+def model_part(key: str, name: str, cls: type) -> Any:
+    """One part of a physical parameter set, e.g. ``model_part("table8_1", "rocking",
+    RockingSpring)`` reads models.toml [table8_1.rocking]."""
+    return cls.from_dict(_file("models")[key][name], f"models.toml [{key}.{name}]")
+
+
 def _physical(key: str) -> tuple[SDOFSpecimen, float, float, Callable[[str, type], Any]]:
     """For the physical sets (Tables 8.1, 5.1): the structure (specimens.toml [key]), the
     table mass and inertia (eerc.toml), and part(name, cls) reading models.toml [key.name]."""
     spec = specimen(key)
     assert isinstance(spec, SDOFSpecimen)
     t = eerc_table().geometry
-    d = _file("models")[key]
-
-    def part(name: str, cls: type) -> Any:
-        return cls.from_dict(d[name], f"models.toml [{key}.{name}]")
-
-    return spec, t.mass, t.pitch_inertia, part
+    return spec, t.mass, t.pitch_inertia, lambda name, cls: model_part(key, name, cls)
 
 
 def hybrid(name: str = "table9.1") -> HybridParams:

@@ -25,37 +25,33 @@ def band_limited_random(duration: float, dt: float, band: tuple[float, float] = 
     With `period` (s, a multiple of dt) the signal repeats exactly with that period
     ("periodic random"), so transfer functions over whole periods have no leakage.
     """
+    if peak is not None and rms is not None:
+        raise VtableError("give peak or rms, not both")
     t = time_axis(duration, dt)
     if period is not None:
         n_p = round(period / dt)
         if n_p < 2 or abs(n_p * dt - period) > 1e-9 * period:
             raise VtableError(f"period {period!r} s must be a multiple of dt = {dt!r} s")
         _, one = band_limited_random(period - dt, dt, band, None, None, seed)
-        x = np.resize(one, len(t))
-        x /= np.sqrt(np.mean(one**2))
-        if peak is not None:
-            x *= peak / np.max(np.abs(x))
-        elif rms is not None:
-            x *= rms
-        return t, x
+        return t, _scaled(np.resize(one, len(t)) / np.sqrt(np.mean(one**2)), peak, rms)
     lo, hi = band
     nyq = 0.5 / dt
     if not (0 <= lo < hi <= nyq):
         raise VtableError(f"band {band} must satisfy 0 <= low < high <= Nyquist {nyq:g} Hz")
-    if peak is not None and rms is not None:
-        raise VtableError("give peak or rms, not both")
     f = np.fft.rfftfreq(len(t), dt)
     inband = (f >= lo) & (f <= hi) & (f > 0)
     rng = np.random.default_rng(seed)
     spec = np.zeros(len(f), dtype=complex)
     spec[inband] = np.exp(2j * np.pi * rng.random(int(inband.sum())))
     x = np.fft.irfft(spec, n=len(t))
-    x /= np.sqrt(np.mean(x**2))
+    return t, _scaled(x / np.sqrt(np.mean(x**2)), peak, rms)
+
+
+def _scaled(x: np.ndarray, peak: float | None, rms: float | None) -> np.ndarray:
+    """Unit-rms `x` scaled to `peak` (max |x|) or `rms`, or left at unit rms."""
     if peak is not None:
-        x *= peak / np.max(np.abs(x))
-    elif rms is not None:
-        x *= rms
-    return t, x
+        return x * (peak / np.max(np.abs(x)))
+    return x * rms if rms is not None else x
 
 
 def sine(duration: float, dt: float, frequency: float, amplitude: float,

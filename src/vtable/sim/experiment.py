@@ -18,14 +18,7 @@ from vtable.params.base import read_toml
 from vtable.params.specimen import NoSpecimen, Specimen, specimen_from_dict
 from vtable.params.virtual import VirtualTable, virtual_table
 from vtable.runs import FORMAT_UNITS, Run, specimen_table, write_run
-from vtable.signals import (
-    band_limited_random,
-    el_centro,
-    process_record,
-    pulse,
-    read_at2,
-    sine,
-)
+from vtable.signals import band_limited_random, load_record, process_record, pulse, sine
 from vtable.sim.channels import result_run
 from vtable.sim.simulator import SimResult, Simulator
 
@@ -47,7 +40,8 @@ def make_command(kind: str = "random", *, duration: float = 11.0,
                  frequency: float = 2.0, seed: int = 0, record: str | None = None,
                  length_scale: float = 3.2801) -> Command:
     """random (band-limited, §3.2), sine, pulse or earthquake (§9.2 processing of the
-    bundled El Centro record or a PEER .AT2 file); `peak_in` is the peak displacement."""
+    record named as `load_record` takes it: elcentro, a .AT2 or .csv file, fema:ID);
+    `peak_in` is the peak displacement."""
     if kind == "random":
         peak = units.to_si(peak_in if peak_in is not None else 0.25, "in")
         t, x = band_limited_random(duration, COMMAND_DT, band, peak=peak, seed=seed)
@@ -65,7 +59,7 @@ def make_command(kind: str = "random", *, duration: float = 11.0,
         t, x = pulse(duration, COMMAND_DT, width=1.0, amplitude=amp, start=0.5)
         return Command("pulse", t, x, {"kind": "pulse", "peak_in": units.from_si(amp, "in")})
     if kind == "earthquake":
-        rec = el_centro() if record in (None, "elcentro") else read_at2(record)
+        rec = load_record(record)
         peak = units.to_si(peak_in if peak_in is not None else 4.0, "in")
         cmd = process_record(rec, length_scale=length_scale, peak_displacement=peak)
         t_new = np.arange(0.0, cmd.time[-1] + 1e-12, COMMAND_DT)

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from vtable.errors import VtableError
+from vtable.jsonable import jsonable
 
 FORMAT = "vtable-study/1"
 
@@ -70,7 +71,7 @@ class Store:
         return {p.stem for p in self.points_dir.glob("*.json")}
 
     def write(self, key: str, result: Mapping[str, Any]) -> None:
-        _atomic_write(self.points_dir / f"{key}.json", json.dumps(_jsonable(result)))
+        _atomic_write(self.points_dir / f"{key}.json", json.dumps(jsonable(result)))
 
     def load(self) -> dict[str, dict[str, Any]]:
         """Every finished point's result, by key."""
@@ -90,18 +91,6 @@ def _atomic_write(path: Path, text: str) -> None:
         f.flush()
         os.fsync(f.fileno())
     os.replace(tmp, path)
-
-
-def _jsonable(x: Any) -> Any:
-    if isinstance(x, Mapping):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    if isinstance(x, list | tuple):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.generic):
-        return x.item()
-    return x
 
 
 def resolve(function: str) -> Callable[..., Mapping[str, Any]]:
