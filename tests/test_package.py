@@ -63,3 +63,25 @@ def test_normal_install_runs(wheel, tmp_path):
                        env=env, timeout=120)
     assert r.returncode == 0, r.stderr[-2000:]
     assert "2.5402" in r.stdout
+
+
+def test_numba_cache_never_inside_the_installed_package(wheel, tmp_path):
+    """Issue 9: `vtable demo` after `pip install .` left numba's cache inside the installed
+    package, and that leftover folder shadowed a later editable install. The compiled
+    kernels must be cached in the user's cache folder instead."""
+    target = tmp_path / "site"
+    r = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target",
+                        str(target), str(wheel)], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    cache = tmp_path / "xdg"
+    code = ("import numpy as np; from vtable.studies import response_spectrum;"
+            "s = response_spectrum(np.sin(np.arange(400) * 0.1), 0.01, np.array([0.5]), 0.05);"
+            "print(float(s.psa[0]) > 0)")
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env.update({"PYTHONPATH": str(target), "XDG_CACHE_HOME": str(cache)})
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path,
+                       env=env, timeout=300)
+    assert r.returncode == 0 and "True" in r.stdout, r.stderr[-2000:]
+    inside = [p for p in (target / "vtable").rglob("*") if p.suffix in (".nbi", ".nbc")]
+    assert inside == []
+    assert list((cache / "vtable" / "numba").rglob("*.nbi"))  # the cache went here

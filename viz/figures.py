@@ -42,12 +42,17 @@ def _plt():
 
 
 def _save(fig, path: str | Path) -> Path:
-    """Lay out, write as PNG (creating the folder) and close."""
+    """Lay out, write as PNG (atomically, creating the folder) and close; a failed write is
+    one line naming the path."""
+    from vtable.fileio import atomic_path
+
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.tight_layout()
-    fig.savefig(p, dpi=110)
-    _plt().close(fig)
+    try:
+        fig.tight_layout()
+        with atomic_path(p) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+    finally:
+        _plt().close(fig)
     return p
 
 

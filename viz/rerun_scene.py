@@ -17,6 +17,7 @@ from scipy.spatial.transform import Rotation
 from vtable.mjcf.meshes import braced_frame, slab_with_ribs
 from vtable.params.bodies import MASS_BLOCK
 from vtable.units import to_si
+from vtable.viz.recording import rrd_file
 
 COLORS = {"horizontal": [50, 100, 230], "vertical": [230, 130, 30], "stabilizer": [80, 180, 80]}
 KIP = to_si(1.0, "kip")
@@ -29,9 +30,13 @@ def log_simulation(res, path: str | Path, channels: dict[str, np.ndarray] | None
     ``channels/``. Pitch and roll are multiplied by `exaggeration` in the 3D view only;
     force arrows are `force_scale` m per kip."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    rec = rr.RecordingStream(application_id)
-    rec.save(str(path))
+    with rrd_file(path, application_id) as rec:
+        _log_simulation(rec, res, channels, exaggeration, force_scale)
+    return path
+
+
+def _log_simulation(rec: rr.RecordingStream, res, channels, exaggeration: float,
+                    force_scale: float) -> None:
     b, vt = res.built, res.built.vt
     g, lay = vt.table.geometry, vt.layout
     t = res.t - res.t[0]
@@ -106,8 +111,6 @@ def log_simulation(res, path: str | Path, channels: dict[str, np.ndarray] | None
         rr.send_columns(f"channels/{name}", indexes=times, recording=rec,
                         columns=rr.Scalars.columns(scalars=np.asarray(v, dtype=float)))
     rec.send_blueprint(blueprint(list(channels or {})))
-    rec.flush()
-    return path
 
 
 def blueprint(channel_names: list[str]) -> rrb.Blueprint:

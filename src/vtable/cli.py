@@ -47,7 +47,8 @@ def _parser() -> argparse.ArgumentParser:
                      choices=["random", "sine", "pulse", "earthquake"])
     sim.add_argument("--record", default=None, help="earthquake: elcentro, a .AT2 or .csv "
                      "file, or fema:ID[a|b] [elcentro]")
-    sim.add_argument("--duration", type=float, default=11.0, help="s [11]")
+    sim.add_argument("--duration", type=float, default=None,
+                     help="s [11; an earthquake: the whole processed record]")
     sim.add_argument("--band", type=float, nargs=2, default=[0.0, 25.0], help="Hz [0 25]")
     sim.add_argument("--peak", type=float, default=None, help="peak command, in")
     sim.add_argument("--freq", type=float, default=2.0, help="sine frequency, Hz [2]")
@@ -76,7 +77,8 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--n", type=int, default=40, help="number of frequencies [40]")
     t.add_argument("--log", action="store_true", help="log-spaced frequencies")
     t.add_argument("--nperseg", type=int, default=2048, help="run: frame length [2048]")
-    t.add_argument("--png", default=None, help="run: also plot amplitude, phase, coherence")
+    t.add_argument("--png", default=None, help="also plot amplitude and phase (and, for a "
+                   "run, coherence) to this PNG file")
     dg = sub.add_parser("diagnose", help="find the physics a model of the runs is missing")
     dg.add_argument("runs", nargs="+", help="RUN.toml (or .h5) files of one configuration")
     dg.add_argument("--with", dest="with_", default="",
@@ -219,8 +221,14 @@ def cmd_tf(a: argparse.Namespace) -> dict[str, Any]:
     model.check_stable()
     f = (np.geomspace if a.log else np.linspace)(a.fmin, a.fmax, a.n)
     H = model.freqresp(f, a.out, a.inp)
-    return {"model": model.title, "output": a.out, "input": a.inp, "f_hz": f.tolist(),
-            "magnitude": np.abs(H).tolist(), "phase_deg": np.degrees(np.angle(H)).tolist()}
+    d = {"model": model.title, "output": a.out, "input": a.inp, "f_hz": f.tolist(),
+         "magnitude": np.abs(H).tolist(), "phase_deg": np.degrees(np.angle(H)).tolist()}
+    if a.png:
+        from vtable.viz.figures import transfer_function_png
+
+        transfer_function_png(a.png, f, H, None, f"{model.title}: {a.out}/{a.inp}")
+        d["png"] = a.png
+    return d
 
 
 def _print_tf(d: dict[str, Any]) -> None:
@@ -376,6 +384,8 @@ def cmd_simulate(a: argparse.Namespace) -> dict[str, Any]:
 
 def _print_simulate(s: dict[str, Any]) -> None:
     print(f"{s['specimen']}: {s['command']}, {s['duration_s']:.2f} s")
+    for n in s["notes"]:
+        print(f"  note: {n}")
     print(f"  {'channel':<12} {'peak':>10}")
     for k, v in s["peaks"].items():
         print(f"  {k:<12} {v['peak']:10.4g} {v['unit']}")
@@ -420,7 +430,7 @@ def _sim_summary(exp) -> dict[str, Any]:
             ("p1_stab", "kip")]
     peaks = {k: {"peak": float(np.max(np.abs(ch[k]))), "unit": u} for k, u in keys if k in ch}
     return {"peaks": peaks, "exceedances": [str(e) for e in exp.result.exceedances],
-            "files": [str(f) for f in exp.files]}
+            "files": [str(f) for f in exp.files], "notes": list(exp.notes)}
 
 
 def _demo_simulation(out: str) -> dict[str, Any]:
@@ -586,23 +596,53 @@ _COMMANDS = {
 }
 
 
+def _interrupted(e: BaseException) -> bool:
+    """A KeyboardInterrupt, or an error raised because one was pending (numba-compiled code
+    returns a SystemError chained to the interrupt)."""
+    seen = set()
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return True
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return False
+
+
+def _quiet_stdout() -> None:
+    """After a closed pipe: send what is left of stdout to /dev/null, so the interpreter's
+    final flush does not complain."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+
+
+def _emit(a: argparse.Namespace, result: dict[str, Any], show) -> None:
+    if a.command == "diagnose":
+        show(result)
+    elif a.command == "identify" and a.json not in (None, "-"):
+        from vtable.fileio import write_text
+
+        write_text(a.json, json.dumps(jsonable(result), indent=2))
+        show(result)
+        print(f"wrote {a.json}")
+    elif a.json:
+        print(json.dumps(jsonable(result), indent=2))
+    else:
+        show(result)
+    sys.stdout.flush()
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run one command; exit codes: 0 ok, 2 bad input (one line on stderr), 3 unstable
+    configuration, 130 interrupted (Ctrl-C), 141 output pipe closed (quietly)."""
     try:
         a = _parser().parse_args(argv)
         run, show = _COMMANDS[a.command]
-        result = run(a)
-        if a.command == "diagnose":
-            show(result)
-        elif a.command == "identify" and a.json not in (None, "-"):
-            from pathlib import Path
-
-            Path(a.json).write_text(json.dumps(jsonable(result), indent=2))
-            show(result)
-            print(f"wrote {a.json}")
-        elif a.json:
-            print(json.dumps(jsonable(result), indent=2))
-        else:
-            show(result)
+        _emit(a, run(a), show)
         return 0
     except UnstableError as e:
         print(f"vtable: {e}", file=sys.stderr)
@@ -610,8 +650,17 @@ def main(argv: list[str] | None = None) -> int:
     except VtableError as e:
         print(f"vtable: error: {e}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        _quiet_stdout()
+        return 141
     except KeyboardInterrupt:
+        print("vtable: interrupted", file=sys.stderr)
         return 130
+    except Exception as e:
+        if _interrupted(e):
+            print("vtable: interrupted", file=sys.stderr)
+            return 130
+        raise
 
 
 if __name__ == "__main__":

@@ -39,10 +39,18 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     `path` when the block ends without an exception, removed otherwise."""
     p = Path(path)
     if p.exists() and not p.is_file() and not p.is_dir():  # a device or a pipe
-        yield p
+        try:
+            yield p
+        except OSError as e:
+            raise _fail(p, e) from None
         return
     if p.is_dir():
         raise VtableError(f"{p}: cannot write: is a folder")
+    for up in p.parents:
+        if up.exists():
+            if not up.is_dir():
+                raise VtableError(f"{p}: cannot write: {up} is a file, not a folder")
+            break
     try:
         p.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)

@@ -27,49 +27,112 @@ COMMAND_DT = 0.001
 
 @dataclass(frozen=True)
 class Command:
-    """A horizontal displacement command (SI) and its run-format [command] table."""
+    """A horizontal displacement command (SI), its run-format [command] table, and notes
+    on how it was made (what a user should know: scaling, truncation)."""
 
     name: str
     t: np.ndarray
     x: np.ndarray
     table: dict[str, Any]
+    notes: tuple[str, ...] = ()
 
 
-def make_command(kind: str = "random", *, duration: float = 11.0,
+#: default length of the generated commands (s); an earthquake plays its whole record
+DEFAULT_DURATION = 11.0
+
+
+def make_command(kind: str = "random", *, duration: float | None = None,
                  band: tuple[float, float] = (0.0, 25.0), peak_in: float | None = None,
                  frequency: float = 2.0, seed: int = 0, record: str | None = None,
                  length_scale: float = 3.2801) -> Command:
     """random (band-limited, §3.2), sine, pulse or earthquake (§9.2 processing of the
     record named as `load_record` takes it: elcentro, a .AT2 or .csv file, fema:ID);
-    `peak_in` is the peak displacement."""
+    `peak_in` is the peak displacement. `duration` (s) defaults to 11 s, and for an
+    earthquake to the whole record; a shorter one takes the record's beginning (cut before
+    the §9.2 integration, so the command still starts and ends at rest)."""
+    if duration is not None and not (np.isfinite(duration) and duration > 0):
+        raise VtableError(f"duration must be a positive number of seconds, got {duration!r}")
     if kind == "random":
         peak = units.to_si(peak_in if peak_in is not None else 0.25, "in")
-        t, x = band_limited_random(duration, COMMAND_DT, band, peak=peak, seed=seed)
+        t, x = band_limited_random(duration or DEFAULT_DURATION, COMMAND_DT, band, peak=peak,
+                                   seed=seed)
         return Command(f"random {band[0]:g}-{band[1]:g} Hz", t, x,
                        {"kind": "random", "band_hz": list(band), "peak_in": units.from_si(
                            peak, "in"), "seed": seed})
     if kind == "sine":
         amp = units.to_si(peak_in if peak_in is not None else 0.1, "in")
-        t, x = sine(duration, COMMAND_DT, frequency, amp, ramp=min(1.0, duration / 4))
+        d = duration or DEFAULT_DURATION
+        t, x = sine(d, COMMAND_DT, frequency, amp, ramp=min(1.0, d / 4))
         return Command(f"sine {frequency:g} Hz", t, x,
                        {"kind": "sine", "frequency_hz": frequency,
                         "peak_in": units.from_si(amp, "in")})
     if kind == "pulse":
         amp = units.to_si(peak_in if peak_in is not None else 1.0, "in")
-        t, x = pulse(duration, COMMAND_DT, width=1.0, amplitude=amp, start=0.5)
+        t, x = pulse(duration or DEFAULT_DURATION, COMMAND_DT, width=1.0, amplitude=amp,
+                     start=0.5)
         return Command("pulse", t, x, {"kind": "pulse", "peak_in": units.from_si(amp, "in")})
     if kind == "earthquake":
-        rec = load_record(record)
-        peak = units.to_si(peak_in if peak_in is not None else 4.0, "in")
-        cmd = process_record(rec, length_scale=length_scale, peak_displacement=peak)
-        t_new = np.arange(0.0, cmd.time[-1] + 1e-12, COMMAND_DT)
-        x = np.interp(t_new, cmd.time, cmd.displacement)
-        return Command(f"{rec.name}", t_new, x,
-                       {"kind": "earthquake", "record": rec.name,
-                        "length_scale": length_scale, "time_scale": float(np.sqrt(length_scale)),
-                        "peak_in": units.from_si(peak, "in")})
+        return _earthquake(record, duration, peak_in, length_scale)
     raise VtableError(f"unknown command kind {kind!r}; expected random, sine, pulse or "
                       "earthquake")
+
+
+def _earthquake(record: str | None, duration: float | None, peak_in: float | None,
+                length_scale: float) -> Command:
+    rec = load_record(record)
+    peak = units.to_si(peak_in if peak_in is not None else 4.0, "in")
+    time_scale = float(np.sqrt(length_scale))
+    notes = list(getattr(rec, "notes", ()))
+    window = None
+    full = rec.duration / time_scale
+    if duration is not None:
+        if duration > full * (1 + 1e-9):
+            raise VtableError(f"--duration {duration:g} s is longer than the processed record "
+                              f"{rec.name} ({full:.2f} s after the time scale "
+                              f"{time_scale:.4g})")
+        window = (0.0, min(duration * time_scale, rec.duration))
+        notes.append(f"first {duration:g} s of the processed record (record time 0-"
+                     f"{window[1]:.2f} s)")
+    cmd = process_record(rec, length_scale=length_scale, peak_displacement=peak, window=window)
+    notes.append(f"§9.2 processing: length scale {length_scale:g}, time scale "
+                 f"{time_scale:.4g}, integrated with zero end conditions, scaled to "
+                 f"±{units.from_si(peak, 'in'):g} in peak"
+                 + ("" if peak_in is not None else " (the default; --peak sets it)"))
+    t_new = np.arange(0.0, cmd.time[-1] + 1e-12, COMMAND_DT)
+    x = np.interp(t_new, cmd.time, cmd.displacement)
+    table = {"kind": "earthquake", "record": rec.name, "length_scale": length_scale,
+             "time_scale": time_scale, "peak_in": units.from_si(peak, "in")}
+    return Command(f"{rec.name}", t_new, x, table, tuple(notes))
+
+
+def check_playable(command: Command, vt: VirtualTable, control_dt: float,
+                   output_dt: float) -> list[str]:
+    """Refuse what the table or the simulation cannot play, before running: a sine above
+    the table's band (Table 2.2), any content at or above the Nyquist frequency of the
+    output rate (it would alias into the run file). Returns notes (a random band reaching
+    beyond the table's band is played, as the report's 0-50 Hz random tests were, and
+    said)."""
+    band = vt.table.specs.bandwidth
+    nyq = 0.5 / max(control_dt, output_dt)
+    tab = command.table
+    notes = []
+    if tab.get("kind") == "sine":
+        f = float(tab["frequency_hz"])
+        if f > band:
+            raise VtableError(f"sine {f:g} Hz is above the table's 0-{band:g} Hz band (Table "
+                              "2.2): the table cannot play it")
+        if f >= nyq:
+            raise VtableError(f"sine {f:g} Hz is at or above the Nyquist frequency {nyq:g} Hz "
+                              "of the recorded channels: it would alias")
+    if tab.get("kind") == "random":
+        lo, hi = (float(v) for v in tab["band_hz"])
+        if hi >= nyq:
+            raise VtableError(f"random band {lo:g}-{hi:g} Hz reaches the Nyquist frequency "
+                              f"{nyq:g} Hz of the recorded channels: it would alias")
+        if hi > band:
+            notes.append(f"the random band reaches {hi:g} Hz, beyond the table's 0-{band:g} "
+                         "Hz band (Table 2.2): the table attenuates it")
+    return notes
 
 
 def load_specimen(name_or_path: str | None) -> Specimen:
@@ -93,6 +156,7 @@ class Experiment:
     run: Run
     command: Command
     files: list[Path] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
     def channel(self, name: str) -> np.ndarray:
         """A channel in its run-file unit (the report's units)."""
@@ -109,6 +173,8 @@ def run_experiment(specimen: Specimen, command: Command, *, vt: VirtualTable | N
     if valve not in ("linear", "nonlinear"):
         raise VtableError(f"valve must be linear or nonlinear, got {valve!r}")
     built = build(vt, specimen)
+    notes = [*command.notes, *check_playable(command, vt, float(built.model.opt.timestep),
+                                             output_dt)]
     if valve == "linear":
         ctl = standard_controllers(vt, rc_filter=("x", "twist") if rc_filter else ())
     else:
@@ -118,7 +184,8 @@ def run_experiment(specimen: Specimen, command: Command, *, vt: VirtualTable | N
             "table": {"preset": "eerc"},
             "control": {k: v.to_dict() for k, v in vt.settings.items()},
             "specimen": specimen_table(specimen), "command": command.table}
-    exp = Experiment(res, result_run(res, meta, str(out or command.name)), command)
+    exp = Experiment(res, result_run(res, meta, str(out or command.name)), command,
+                     notes=notes)
     if out is not None:
         exp.files += list(write_run(exp.run, out))
     if rerun is not None:
