@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import re
 import sys
 from typing import Any
 
@@ -12,6 +14,27 @@ import numpy as np
 from vtable import __version__
 from vtable.errors import UnstableError, VtableError
 from vtable.jsonable import jsonable
+
+
+_NUMBER = re.compile(r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?", re.ASCII)
+
+
+def _number(text: str) -> float:
+    """A plain decimal number (ASCII digits, optional exponent), finite: Python's float()
+    would also take '1_000', full-width or Arabic-Indic digits, 'nan' and 'inf'."""
+    if not _NUMBER.fullmatch(text.strip()):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a plain number")
+    v = float(text)
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"{text!r} is too large")
+    return v
+
+
+def _integer(text: str) -> int:
+    """A plain integer (ASCII digits)."""
+    if not re.fullmatch(r"[+-]?\d+", text.strip(), re.ASCII):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a plain integer")
+    return int(text)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -47,17 +70,17 @@ def _parser() -> argparse.ArgumentParser:
                      choices=["random", "sine", "pulse", "earthquake"])
     sim.add_argument("--record", default=None, help="earthquake: elcentro, a .AT2 or .csv "
                      "file, or fema:ID[a|b] [elcentro]")
-    sim.add_argument("--duration", type=float, default=None,
+    sim.add_argument("--duration", type=_number, default=None,
                      help="s [11; an earthquake: the whole processed record]")
-    sim.add_argument("--band", type=float, nargs=2, default=[0.0, 25.0], help="Hz [0 25]")
-    sim.add_argument("--peak", type=float, default=None, help="peak command, in")
-    sim.add_argument("--freq", type=float, default=2.0, help="sine frequency, Hz [2]")
-    sim.add_argument("--seed", type=int, default=0)
+    sim.add_argument("--band", type=_number, nargs=2, default=[0.0, 25.0], help="Hz [0 25]")
+    sim.add_argument("--peak", type=_number, default=None, help="peak command, in")
+    sim.add_argument("--freq", type=_number, default=2.0, help="sine frequency, Hz [2]")
+    sim.add_argument("--seed", type=_integer, default=0)
     sim.add_argument("--valve", choices=["linear", "nonlinear"], default="linear",
                      help="linear servovalves (eqs 6.1-6.5) or appendix C valves on H1-H3")
     sim.add_argument("--out", default=None, help="run file stem (writes STEM.csv, STEM.toml)")
     sim.add_argument("--rerun", default=None, help="write a Rerun recording (.rrd)")
-    sim.add_argument("--exaggerate", type=float, default=50.0,
+    sim.add_argument("--exaggerate", type=_number, default=50.0,
                      help="pitch/roll exaggeration in the 3D view [50]")
     sim.add_argument("--json", action="store_true")
     ex = sub.add_parser("export-mjcf", help="write the virtual table as MJCF + meshes")
@@ -72,11 +95,11 @@ def _parser() -> argparse.ArgumentParser:
                          "configuration, or a measured run (RUN.toml) by H1 with coherence")
     t.add_argument("--out", default="x_t", help="output [x_t]")
     t.add_argument("--in", dest="inp", default="x_c", help="input [x_c]")
-    t.add_argument("--fmin", type=float, default=0.5, help="lowest frequency, Hz [0.5]")
-    t.add_argument("--fmax", type=float, default=20.0, help="highest frequency, Hz [20]")
-    t.add_argument("--n", type=int, default=40, help="number of frequencies [40]")
+    t.add_argument("--fmin", type=_number, default=0.5, help="lowest frequency, Hz [0.5]")
+    t.add_argument("--fmax", type=_number, default=20.0, help="highest frequency, Hz [20]")
+    t.add_argument("--n", type=_integer, default=40, help="number of frequencies [40]")
     t.add_argument("--log", action="store_true", help="log-spaced frequencies")
-    t.add_argument("--nperseg", type=int, default=2048, help="run: frame length [2048]")
+    t.add_argument("--nperseg", type=_integer, default=2048, help="run: frame length [2048]")
     t.add_argument("--png", default=None, help="also plot amplitude and phase (and, for a "
                    "run, coherence) to this PNG file")
     dg = sub.add_parser("diagnose", help="find the physics a model of the runs is missing")
@@ -111,18 +134,18 @@ def _parser() -> argparse.ArgumentParser:
     sd = sub.add_parser("study", help="a heights x records study on Dask, stored as it "
                         "runs and resumable")
     sd.add_argument("--store", required=True, help="results folder (resumed if it exists)")
-    sd.add_argument("--heights", type=float, nargs="+", required=True,
+    sd.add_argument("--heights", type=_number, nargs="+", required=True,
                     help="specimen heights above the actuator line, in")
     sd.add_argument("--records", nargs="+", default=["elcentro"],
                     help="elcentro, .AT2/.csv files, fema:ID [elcentro]")
     sd.add_argument("--specimen", default="sdof_frame", help="SDOF specimen [sdof_frame]")
     sd.add_argument("--model", choices=["virtual", "analytic"], default="virtual",
                     help="the virtual table (MuJoCo) or the analytical models [virtual]")
-    sd.add_argument("--duration", type=float, default=None,
+    sd.add_argument("--duration", type=_number, default=None,
                     help="seconds of each processed record (virtual: 4 by default)")
     sd.add_argument("--scheduler", default=None, help="a Dask scheduler address "
                     "[a local cluster]")
-    sd.add_argument("--workers", type=int, default=2, help="local cluster workers [2]")
+    sd.add_argument("--workers", type=_integer, default=2, help="local cluster workers [2]")
     sd.add_argument("--json", action="store_true")
     pr = sub.add_parser("presets", help="list the named configurations")
     pr.add_argument("--json", action="store_true")

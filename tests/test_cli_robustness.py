@@ -1,0 +1,101 @@
+"""Issue 9, the command line itself: interrupts, closed pipes, failed writes, commands the
+table cannot play, and arguments that are not plain numbers. Each test failed before the
+fix it names."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from vtable.cli import main
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _exe() -> list[str]:
+    exe = shutil.which("vtable")
+    return [exe] if exe else [sys.executable, "-m", "vtable.cli"]
+
+
+def test_closed_pipe_ends_quietly():
+    """`vtable presets | head -1` used to end in a BrokenPipeError traceback."""
+    # more output than a pipe buffer holds, so the writer meets the closed pipe
+    p = subprocess.Popen([*_exe(), "tf", "eerc-sdof", "--n", "20000"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE)
+    p.stdout.read(5)
+    p.stdout.close()
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=60) == 141
+    assert err == ""
+
+
+def test_ctrl_c_is_one_line_and_exit_130(tmp_path):
+    p = subprocess.Popen([*_exe(), "simulate", "--duration", "1500", "--peak", "0.01"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    time.sleep(2.0)
+    p.send_signal(signal.SIGINT)
+    out, err = p.communicate(timeout=60)
+    assert p.returncode == 130
+    assert err == "vtable: interrupted\n"
+
+
+@pytest.mark.parametrize("target, why", [("/dev/full", "No space left on device"),
+                                         ("FILE/x.png", "is a file, not a folder")])
+def test_a_failed_write_is_one_line_naming_the_path(capsys, tmp_path, target, why):
+    """`tf --png /dev/full` used to say "wrote"; a folder that is a file, a traceback."""
+    (tmp_path / "FILE").write_text("")
+    target = target.replace("FILE", str(tmp_path / "FILE"))
+    code, out, err = run(capsys, "tf", "eerc-sdof", "--png", target)
+    assert code == 2 and "wrote" not in out
+    assert err.count("\n") == 1 and target in err and why in err
+
+
+def test_tf_png_of_a_model_is_written(capsys, tmp_path):
+    """`tf eerc-sdof --png x.png` wrote nothing and exited 0."""
+    png = tmp_path / "x.png"
+    code, out, _ = run(capsys, "tf", "eerc-sdof", "--png", str(png))
+    assert code == 0 and f"wrote {png}" in out
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+    assert not list(tmp_path.glob(".*tmp"))  # no temporary file left behind
+
+
+def test_earthquake_duration_is_honoured_and_the_scaling_said(capsys):
+    """`simulate --command earthquake --duration 3` ignored the duration and rescaled to
+    4 in without a word."""
+    code, out, err = run(capsys, "simulate", "--command", "earthquake", "--duration", "3",
+                         "--peak", "0.5", "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["duration_s"] == pytest.approx(3.0, abs=0.01)
+    assert d["peaks"]["h_span"]["peak"] == pytest.approx(0.5, rel=1e-3)
+    assert any("first 3 s" in n for n in d["notes"])
+    assert any("scaled to ±0.5 in peak" in n for n in d["notes"])
+    code, _, err = run(capsys, "simulate", "--command", "earthquake", "--duration", "300")
+    assert code == 2 and "longer than the processed record" in err
+
+
+@pytest.mark.parametrize("args, msg", [
+    (["--command", "sine", "--freq", "999"], "above the table's 0-20 Hz band"),
+    (["--command", "random", "--band", "0", "150", "--duration", "2"], "would alias"),
+])
+def test_commands_the_table_cannot_play_are_refused(capsys, args, msg):
+    """`simulate --command sine --freq 999` played a 1 Hz alias while the run file said
+    999 Hz."""
+    code, out, err = run(capsys, "simulate", *args)
+    assert code == 2 and out == "" and msg in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("value", ["1_000", "１２", "٣", "nan", "inf"])
+def test_numeric_arguments_are_plain_numbers(capsys, value):
+    code, _, err = run(capsys, "tf", "eerc-sdof", "--fmax", value)
+    assert code == 2 and "--fmax" in err and err.count("\n") == 1
