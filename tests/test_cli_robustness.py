@@ -44,7 +44,7 @@ def test_ctrl_c_is_one_line_and_exit_130(tmp_path):
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
     time.sleep(2.0)
     p.send_signal(signal.SIGINT)
-    out, err = p.communicate(timeout=60)
+    _out, err = p.communicate(timeout=60)
     assert p.returncode == 130
     assert err == "vtable: interrupted\n"
 

@@ -15,7 +15,6 @@ from vtable import __version__
 from vtable.errors import UnstableError, VtableError
 from vtable.jsonable import jsonable
 
-
 _NUMBER = re.compile(r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?", re.ASCII)
 
 

@@ -80,7 +80,7 @@ def atomic_open(path: str | Path, mode: str = "w", **kw: Any) -> Iterator[IO]:
     p = Path(path)
     with atomic_path(p) as tmp:
         try:
-            fh = open(tmp, mode, **kw)  # noqa: SIM115
+            fh = open(tmp, mode, **kw)
         except OSError as e:
             raise _fail(p, e) from None
         try:
