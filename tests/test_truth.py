@@ -172,6 +172,29 @@ def test_two_directional_pitch_loop_section_8_6_2():
     assert osc2[2][0] > 20  # the pitch servo's own mode
 
 
+def test_newton_for_the_whole_table_with_a_raised_platen_com():
+    """With the platen c.o.m. e above the actuator line (vtable's virtual table: ≈20.2 in),
+    the actuator force equals the momentum rate of platen + specimen, and the rocking
+    moment equals the angular momentum rate about the actuator line (small angles)."""
+    e = 20.2 * const.INCH
+    table = truth.eerc_table(pitch="hybrid", com_height_in=e / const.INCH)
+    res = truth.simulate(table, SDOF_81, bare_random(10.0), fs=1024.0)
+    ch, it = res.channels, res.internal
+    m_t, m_s, h = 100 * const.KIP / const.G, 68 * const.KIP / const.G, 219 * const.INCH
+    force = ch["h1_force"] + ch["h2_force"] + ch["h3_force"]
+    momentum = m_t * (ch["avg_hacc"] + e * ch["pitch_acc"]) + m_s * ch["acc_n_ne"]
+    assert np.max(np.abs(force - momentum)) < 1e-9 * np.max(np.abs(force))
+    k_th, c_th = 2.22e10 * const.LB_IN, 3.70e8 * const.LB_IN  # Table 8.1
+    moment = -k_th * it["theta"] - c_th * it["omega"]
+    rate = (1251 * const.KIP_IN_S2 * ch["pitch_acc"] + m_t * e * ch["avg_hacc"]
+            + m_s * h * ch["acc_n_ne"])
+    assert np.max(np.abs(moment - rate)) < 1e-9 * np.max(np.abs(moment))
+    # the raised c.o.m. alone makes a bare table pitch; at e = 0 it does not
+    bare = [truth.simulate(truth.eerc_table(pitch="hybrid", com_height_in=x), NONE,
+                           bare_random(5.0)).channels["pitch_acc"] for x in (20.2, 0.0)]
+    assert np.std(bare[0]) > 1e-3 and np.max(np.abs(bare[1])) == 0.0
+
+
 # ---------------------------------------------------------------------------------------------
 # LNEC
 
@@ -236,6 +259,26 @@ def test_lnec_drive_file_run_in_si(tmp_path):
     # the acquisition's sample k is the drive's sample k + 37
     y = run.channels["avg_hdisp"]
     assert np.corrcoef(y, res.channels["avg_hdisp"][37:])[0, 1] > 0.999
+
+
+def test_campaign_is_one_configuration(tmp_path):
+    from vtable.runs import campaign
+
+    b = truth.building([20.0, 20.0], [80.0, 140.0], storey_k_kip_in=[60.0, 40.0], xi=0.02)
+    paths = truth.campaign(tmp_path, truth.eerc_table(pitch="two_directional"), b,
+                           truth.perturb(b, seed=1), duration_s=8.0, noise=0.01)
+    runs = campaign(paths)
+    assert [r.meta["command"]["kind"] for r in runs] == ["random", "random", "earthquake"]
+    spans = [np.max(np.abs(r.channels["h_span"])) / const.INCH for r in runs]
+    assert spans == pytest.approx([0.1, 1.0, 3.0], rel=0.01)  # peaks fall between samples
+    assert {"floor1_acc", "floor2_disp", "v1_force", "p4_stab", "pitch_disp"} <= set(
+        runs[0].channels)
+    assert runs[0].meta["specimen"]["frequencies_hz"] != pytest.approx(b.frequencies_hz(),
+                                                                        rel=0.01)
+    few = truth.write_run(tmp_path / "few", truth.simulate(
+        truth.eerc_table(), b, truth.random_command(2.0, peak_in=0.1)), b,
+        channels=["avg_hdisp", "acc_n_ne"])
+    assert few[1].read_text().splitlines()[0] == "time,h_span,avg_hdisp,acc_n_ne"
 
 
 @pytest.mark.parametrize("fs", [200.0, 256.0, 500.0, 1024.0, 150.0])

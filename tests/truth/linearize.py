@@ -15,8 +15,11 @@ SCALE = {m.S_X: 1e-3, m.S_V: 1e-2, m.S_TH: 1e-5, m.S_OM: 1e-4, m.S_PL: 1e5, m.S_
 
 
 def jacobian(b: Built, rel: float = 1e-4) -> tuple[np.ndarray, list[int]]:
-    """∂ṡ/∂s at rest (x_c = 0) over the active states, by central differences."""
+    """∂ṡ/∂s at rest (x_c = 0) over the active states, by central differences. A pure valve
+    delay is left out (it has no finite state); everything else is in."""
     act = b.active_states()
+    fl = b.fl.copy()
+    fl[m.F_DELAY] = 0
     ns = b.n_state
     s0 = np.zeros(ns)
     ds = np.zeros(ns)
@@ -27,9 +30,9 @@ def jacobian(b: Built, rel: float = 1e-4) -> tuple[np.ndarray, list[int]]:
         sp, sm = s0.copy(), s0.copy()
         sp[i] += h
         sm[i] -= h
-        m.rhs(0.0, sp, 0.0, 0.0, 0.0, b.p, b.fl, b.Ms, b.Ks, b.Cs, b.hs, b.c2s, ds, aux)
+        m.rhs(0.0, sp, 0.0, 0.0, 0.0, b.p, fl, b.Ms, b.Ks, b.Cs, b.hs, b.c2s, ds, aux)
         fp = ds[act].copy()
-        m.rhs(0.0, sm, 0.0, 0.0, 0.0, b.p, b.fl, b.Ms, b.Ks, b.Cs, b.hs, b.c2s, ds, aux)
+        m.rhs(0.0, sm, 0.0, 0.0, 0.0, b.p, fl, b.Ms, b.Ks, b.Cs, b.hs, b.c2s, ds, aux)
         J[:, col] = (fp - ds[act]) / (2 * h)
     return J, act
 

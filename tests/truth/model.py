@@ -11,7 +11,10 @@ Specimen (relative coordinates u_i = x_i - x_t - h_i θ, as eqs 7.1-7.2, 8.7-8.9
     m_i ẍ_i = -r_i,  r = K u + C u̇ + (storey nonlinearities),
     F_x += Σ r_i,  M_θ += Σ h_i r_i.
 Actuator (eqs 6.1-6.5, B.4-B.6, lumped): u = k_t[(x_c - x_m) - k_p P_fb], P_fb = P_L or
-the RC high-pass of P_L (eq B.4); (V/4β_e) Ṗ_L = q - k_ct P_L - A ẋ_m; F_h = A P_L.
+the RC high-pass of P_L (eq B.4); u -> [delay] -> [spool lag τ] -> [orifice √(P_s - sgn P_L),
+eq C.14] -> [rated-flow cap A v_max] -> q; (V/4β_e) Ṗ_L = q - k_ct P_L - A ẋ_m (ẋ_m the
+piston velocity relative to the reaction mass); F_h = A P_L; Coulomb friction F_r tanh(ẋ_m/ε)
+(eq C.12). LNEC: u = K_q [P e_V + I ∫e_V + D ė_V] + f_ff A ẋ_c with e_V = K_d (x_c - x_m).
 Pitch: hybrid M = -k_θ θ - c_θ θ̇ (eq 8.31); two-directional eq 8.2 servo moment M_r plus
 passive M_p = -k_p θ - c_p θ̇ (eq 8.6).
 """
@@ -67,20 +70,25 @@ def rhs(t, s, xc, vc, udel, p, fl, Ms, Ks, Cs, hs, c2s, ds, aux):
     vf = s[S_VF] if fl[F_FOUND] else 0.0
     vpist = s[S_VP] if fl[F_BACK] else s[S_V]
     vrel = vpist - vf
-    # --- valve: command, orifice, saturation, lag ------------------------------------------
+    # --- valve: command, spool lag (and delay), orifice, rated-flow cap -----------------------
     u = controller(t, s, xc, vc, p, fl)
     if fl[F_PID]:
         ds[S_INT] = p[P_KD] * (xc - ((s[S_XP] if fl[F_BACK] else s[S_X]) - s[S_XF]))
     if fl[F_DELAY]:
         u = udel
+    if fl[F_LAG]:
+        ds[S_Q] = (u - s[S_Q]) / p[P_TAU]  # first-order spool lag; the state is in flow units
+        u = s[S_Q]
     pl = s[S_PL]
     ps0 = p[P_PS]
     qc = u
     if fl[F_ORIFICE]:
+        # eq C.14 normalised so that the no-load gain is the linear one
         sg = 1.0 if u >= 0.0 else -1.0
         cc = ps0 - sg * pl
         if fl[F_PUMP] and cc > 0.0:
-            # q = a sqrt(C - r q), a = |u|/sqrt(P_s0): q² + a² r q - a² C = 0
+            # supply sags with the flow: q = a sqrt(C - r q), a = |u|/sqrt(P_s0), so
+            # q² + a² r q - a² C = 0
             a2 = u * u / ps0
             r = p[P_PUMP]
             qa = 0.5 * (-a2 * r + np.sqrt(a2 * a2 * r * r + 4.0 * a2 * cc))
@@ -94,11 +102,7 @@ def rhs(t, s, xc, vc, udel, p, fl, Ms, Ks, Cs, hs, c2s, ds, aux):
             qc = qmax
         elif qc < -qmax:
             qc = -qmax
-    if fl[F_LAG]:
-        ds[S_Q] = (qc - s[S_Q]) / p[P_TAU]
-        q = s[S_Q]
-    else:
-        q = qc
+    q = qc
     # --- oil column (eqs 6.3, B.6, C.6-C.11) ------------------------------------------------
     flow = q - p[P_KCT] * pl - A * vrel
     if fl[F_AIR]:

@@ -121,7 +121,8 @@ def _noisy(res: Result, noise: float, seed: int) -> dict[str, np.ndarray]:
 
 
 def write_run(path: str | Path, res: Result, declared: Specimen | dict, noise: float = 0.02,
-              seed: int = 0, drive: dict | None = None, title: str | None = None) -> list[Path]:
+              seed: int = 0, drive: dict | None = None, title: str | None = None,
+              channels: list[str] | None = None) -> list[Path]:
     """Write RUN.csv + RUN.toml (and the drive file in drive-file mode).
 
     declared: what the lab says it tested ([specimen]); a Specimen or the table itself.
@@ -129,6 +130,8 @@ def write_run(path: str | Path, res: Result, declared: Specimen | dict, noise: f
     "offset": "auto" | "number"}: no h_span column; the command divided by `scale` goes to
     STEM_drive.csv (time, displacement in `unit`); the acquisition starts offset_samples
     late, so drive_offset_s = offset_samples/fs (written, or "auto").
+    channels: the channels to write (default: all the run has; h_span is implied unless
+    in drive-file mode).
     Returns the paths written (toml, csv[, drive])."""
     stem = Path(path)
     if stem.suffix in (".toml", ".csv"):
@@ -137,6 +140,12 @@ def write_run(path: str | Path, res: Result, declared: Specimen | dict, noise: f
     units = SI_UNITS if si else EERC_UNITS
     chans = _noisy(res, noise, seed)
     names = [k for k in ORDER if k in chans] + [k for k in chans if k not in ORDER]
+    if channels is not None:
+        missing = [k for k in channels if k not in chans]
+        if missing:
+            raise TruthError(f"write_run: the run has no channel(s) {missing}; it has "
+                             f"{', '.join(names)}")
+        names = [k for k in names if k in channels or k == "h_span"]
     t = res.t
     cmd_table = dict(res.command.table)
     written = []

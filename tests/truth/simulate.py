@@ -24,6 +24,11 @@ DT_MAX = 5e-4  # s, largest internal step
 class Result:
     """Clean channels on the output grid, in SI (m, m/s, m/s², N, rad, rad/s²).
 
+    Displacements h*_disp/avg_hdisp and h_vel are the actuators' (piston relative to the
+    reaction mass); avg_hacc is the platen's absolute acceleration at the actuator line;
+    h*_force is A·ΔP per actuator; v*_force and p*_stab are the dynamic increments (the
+    static weight is carried by the pit air pressure, §2.2); pot_*/floor*_disp are absolute.
+
     `sensors` maps each channel to the physical sensor group it belongs to; channels of
     the same quantity measured by different sensors (h1_disp..h3_disp, acc_n_ne/acc_n_nw,
     pot_n_sw/pot_n_se) get independent noise in `write_run`. `internal` holds truth
@@ -122,6 +127,7 @@ def _channels(b: Built, S: np.ndarray, X: np.ndarray, D: np.ndarray):
         ch.update({"v1_force": -fv, "v2_force": fv, "v3_force": fv, "v4_force": -fv,
                    "p1_stab": -fp, "p2_stab": fp, "p3_stab": fp, "p4_stab": -fp})
     internal = {"x_t": S[:, m.S_X], "v_t": S[:, m.S_V], "theta": S[:, m.S_TH],
+                "omega": S[:, m.S_OM], "m_pitch": X[:, m.A_MR] + X[:, m.A_MP],
                 "p_load": S[:, m.S_PL], "x_f": S[:, m.S_XF], "q_cmd": X[:, m.A_QCMD],
                 "base_shear": X[:, m.A_VBASE]}
     if n:
