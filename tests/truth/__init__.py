@@ -1,0 +1,29 @@
+"""An independent truth simulator for vtable's acceptance tests.
+
+It shares no code with vtable (a test walks these files' imports): the report's planar
+equations — one-directional (eq 7.7), two-directional (eq 8.16) and hybrid (eq 8.37)
+families — with the servo-hydraulic loop written from its physical constants (eqs 6.1-6.5,
+B.4-B.6, Table B.5), the effects of vtable's catalog and three outside it written out
+directly, the LNEC uniaxial table, its own commands, and its own writer of the run format.
+
+    import truth
+    table = truth.eerc_table(pitch="hybrid", effects={"actuator_friction": {"friction": 3.0}})
+    spec = truth.sdof(weight_kip=68.0, height_in=219.0, f_hz=2.87, xi=0.01)
+    cmd = truth.random_command(duration_s=11, band_hz=(0, 25), peak_in=0.15, seed=1)
+    res = truth.simulate(table, spec, cmd, fs=256.0)
+    decl = truth.perturb(spec, seed=5)
+    truth.write_run("out/run0", res, declared=decl, noise=0.02, seed=11)
+"""
+
+from .commands import Command, earthquake_command, random_command, sine_command
+from .errors import TruthError
+from .linearize import jacobian, modes
+from .runfile import campaign, write_run
+from .simulate import Result, simulate
+from .specimens import Specimen, building, none, perturb, rigid, sdof
+from .tables import EFFECTS, OUTSIDE_CATALOG, Table, eerc_table, lnec_table
+
+__all__ = ["EFFECTS", "OUTSIDE_CATALOG", "Command", "Result", "Specimen", "Table",
+           "TruthError", "building", "campaign", "earthquake_command", "eerc_table",
+           "jacobian", "lnec_table", "modes", "none", "perturb", "random_command", "rigid",
+           "sdof", "simulate", "sine_command", "write_run"]

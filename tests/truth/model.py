@@ -1,0 +1,293 @@
+"""The equations of motion, written out directly (SI), and a fixed-step RK4 integrator.
+
+Generalised coordinates: platen x_t (at the horizontal actuator line) and pitch θ
+(positive when a point above the table moves +x), optional piston x_p (backlash),
+optional reaction mass x_f (foundation compliance), the specimen's floors x_i (absolute).
+
+Platen (Lagrange, c.o.m. at height e, inertia I about the actuator line):
+    [m_t + m_b        m_t e + m_b h_b ] [ẍ_t]   [F_x]
+    [m_t e + m_b h_b  I + I_b + m_b h_b²] [θ̈ ] = [M_θ]
+Specimen (relative coordinates u_i = x_i - x_t - h_i θ, as eqs 7.1-7.2, 8.7-8.9):
+    m_i ẍ_i = -r_i,  r = K u + C u̇ + (storey nonlinearities),
+    F_x += Σ r_i,  M_θ += Σ h_i r_i.
+Actuator (eqs 6.1-6.5, B.4-B.6, lumped): u = k_t[(x_c - x_m) - k_p P_fb], P_fb = P_L or
+the RC high-pass of P_L (eq B.4); u -> [delay] -> [spool lag τ] -> [orifice √(P_s - sgn P_L),
+eq C.14] -> [rated-flow cap A v_max] -> q; (V/4β_e) Ṗ_L = q - k_ct P_L - A ẋ_m (ẋ_m the
+piston velocity relative to the reaction mass); F_h = A P_L; Coulomb friction F_r tanh(ẋ_m/ε)
+(eq C.12). LNEC: u = K_q [P e_V + I ∫e_V + D ė_V] + f_ff A ẋ_c with e_V = K_d (x_c - x_m).
+Pitch: hybrid M = -k_θ θ - c_θ θ̇ (eq 8.31); two-directional eq 8.2 servo moment M_r plus
+passive M_p = -k_p θ - c_p θ̇ (eq 8.6).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+# ---- state indices -----------------------------------------------------------------------
+S_X, S_V, S_TH, S_OM, S_PL, S_PF, S_Q, S_XP, S_VP, S_XF, S_VF, S_MR, S_INT, S_Z = range(14)
+N_BASE = 14  # floors follow: x_i at N_BASE + i, v_i at N_BASE + n + i
+
+# ---- parameter indices -------------------------------------------------------------------
+(P_MT, P_MTE, P_I, P_MB, P_MBH, P_IB, P_A, P_V, P_BETA, P_KCT, P_KT, P_KP, P_RC, P_PS,
+ P_VMAX, P_TAU, P_DELAY, P_AIR, P_FRIC, P_VEPS, P_KTH, P_CTH, P_IR, P_WR, P_XIR, P_KR,
+ P_KPAS, P_CPAS, P_MF, P_KF, P_CF, P_GAP, P_KC, P_CC, P_MP, P_PUMP, P_CPLAT, P_KQ, P_KD,
+ P_PIDP, P_PIDI, P_PIDD, P_FF, P_K1, P_DY, P_ALPHA, P_BWN) = range(47)
+N_PARAM = 47
+
+# ---- flags ---------------------------------------------------------------------------------
+(F_PITCH, F_PID, F_FFILT, F_ORIFICE, F_FRIC, F_SAT, F_LAG, F_DELAY, F_AIR, F_FOUND, F_BACK,
+ F_PUMP, F_YIELD, F_ADD, F_N) = range(15)
+N_FLAG = 15
+
+# ---- auxiliary outputs of the right-hand side ----------------------------------------------
+(A_FH, A_ACC, A_ALPHA, A_MR, A_MP, A_XM, A_VM, A_AF, A_QCMD, A_U, A_VBASE) = range(11)
+N_AUX = 11
+
+
+@njit(cache=True)
+def controller(t, s, xc, vc, p, fl):
+    """Valve command u (m³/s of flow it asks for) from the current state."""
+    xm = s[S_XP] - s[S_XF] if fl[F_BACK] else s[S_X] - s[S_XF]
+    vm = s[S_VP] - s[S_VF] if fl[F_BACK] else s[S_V] - s[S_VF]
+    if fl[F_PID]:
+        e = p[P_KD] * (xc - xm)  # volts
+        ed = p[P_KD] * (vc - vm)
+        uv = p[P_PIDP] * e + p[P_PIDI] * s[S_INT] + p[P_PIDD] * ed
+        return p[P_KQ] * uv + p[P_FF] * p[P_A] * vc
+    pfb = s[S_PF] if fl[F_FFILT] else s[S_PL]
+    return p[P_KT] * ((xc - xm) - p[P_KP] * pfb)
+
+
+@njit(cache=True)
+def rhs(t, s, xc, vc, udel, p, fl, Ms, Ks, Cs, hs, c2s, ds, aux):
+    """ds = ṡ. `udel` is the delayed valve command (used when F_DELAY is set)."""
+    n = fl[F_N]
+    for i in range(ds.shape[0]):
+        ds[i] = 0.0
+    A = p[P_A]
+    # --- kinematics at the actuator --------------------------------------------------------
+    vf = s[S_VF] if fl[F_FOUND] else 0.0
+    vpist = s[S_VP] if fl[F_BACK] else s[S_V]
+    vrel = vpist - vf
+    # --- valve: command, spool lag (and delay), orifice, rated-flow cap -----------------------
+    u = controller(t, s, xc, vc, p, fl)
+    if fl[F_PID]:
+        ds[S_INT] = p[P_KD] * (xc - ((s[S_XP] if fl[F_BACK] else s[S_X]) - s[S_XF]))
+    if fl[F_DELAY]:
+        u = udel
+    if fl[F_LAG]:
+        ds[S_Q] = (u - s[S_Q]) / p[P_TAU]  # first-order spool lag; the state is in flow units
+        u = s[S_Q]
+    pl = s[S_PL]
+    ps0 = p[P_PS]
+    qc = u
+    if fl[F_ORIFICE]:
+        # eq C.14 normalised so that the no-load gain is the linear one
+        sg = 1.0 if u >= 0.0 else -1.0
+        cc = ps0 - sg * pl
+        if fl[F_PUMP] and cc > 0.0:
+            # supply sags with the flow: q = a sqrt(C - r q), a = |u|/sqrt(P_s0), so
+            # q² + a² r q - a² C = 0
+            a2 = u * u / ps0
+            r = p[P_PUMP]
+            qa = 0.5 * (-a2 * r + np.sqrt(a2 * a2 * r * r + 4.0 * a2 * cc))
+            qc = sg * qa
+        else:
+            root = np.sqrt(abs(cc) / ps0)
+            qc = u * root if cc >= 0.0 else -u * root
+    if fl[F_SAT]:
+        qmax = A * p[P_VMAX]
+        if qc > qmax:
+            qc = qmax
+        elif qc < -qmax:
+            qc = -qmax
+    q = qc
+    # --- oil column (eqs 6.3, B.6, C.6-C.11) ------------------------------------------------
+    flow = q - p[P_KCT] * pl - A * vrel
+    if fl[F_AIR]:
+        pmin = 0.02 * ps0
+        p1 = max(0.5 * ps0 + 0.5 * pl, pmin)
+        p2 = max(0.5 * ps0 - 0.5 * pl, pmin)
+        b1 = 1.0 / (1.0 / p[P_BETA] + p[P_AIR] / (1.4 * p1))
+        b2 = 1.0 / (1.0 / p[P_BETA] + p[P_AIR] / (1.4 * p2))
+        dpl = 2.0 * (b1 + b2) / p[P_V] * flow
+    else:
+        dpl = 4.0 * p[P_BETA] / p[P_V] * flow
+    ds[S_PL] = dpl
+    if fl[F_FFILT]:
+        ds[S_PF] = -s[S_PF] / p[P_RC] + dpl  # eq B.4
+    fh = A * pl
+    ffr = 0.0
+    if fl[F_FRIC]:
+        ffr = p[P_FRIC] * np.tanh(vrel / p[P_VEPS])  # eq C.12, smoothed sign
+    # --- force reaching the platen ---------------------------------------------------------
+    if fl[F_BACK]:
+        d = s[S_XP] - s[S_X]
+        g = 0.5 * p[P_GAP]
+        fc = 0.0
+        if d > g:
+            fc = p[P_KC] * (d - g) + p[P_CC] * (s[S_VP] - s[S_V])
+        elif d < -g:
+            fc = p[P_KC] * (d + g) + p[P_CC] * (s[S_VP] - s[S_V])
+        ds[S_XP] = s[S_VP]
+        ds[S_VP] = (fh - ffr - fc) / p[P_MP]
+        fx = fc
+    else:
+        fx = fh - ffr
+    fx -= p[P_CPLAT] * (s[S_V] - vf)
+    mth = 0.0
+    # --- pitch ------------------------------------------------------------------------------
+    th = s[S_TH]
+    om = s[S_OM]
+    mr = 0.0
+    mp = 0.0
+    if fl[F_PITCH] == 1:
+        mp = -p[P_KTH] * th - p[P_CTH] * om  # eq 8.31
+    elif fl[F_PITCH] == 2:
+        mr = s[S_MR]
+        # eq 8.2 with θ_c = 0
+        ds[S_MR] = p[P_IR] * p[P_WR] ** 2 * (-p[P_KR] * th - om) - 2.0 * p[P_XIR] * p[P_WR] * mr
+        mp = -p[P_KPAS] * th - p[P_CPAS] * om  # eq 8.6
+    mth += mr + mp
+    # --- specimen ----------------------------------------------------------------------------
+    vbase = 0.0
+    if n > 0:
+        x0 = N_BASE
+        v0 = N_BASE + n
+        uu = np.empty(n)
+        ud = np.empty(n)
+        for i in range(n):
+            uu[i] = s[x0 + i] - s[S_X] - hs[i] * th
+            ud[i] = s[v0 + i] - s[S_V] - hs[i] * om
+        r = np.zeros(n)
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += Ks[i, j] * uu[j] + Cs[i, j] * ud[j]
+            r[i] = acc
+        # storey nonlinearities as storey forces f_j acting on drift d_j = u_j - u_{j-1}
+        for j in range(n):
+            dd = ud[j] - (ud[j - 1] if j > 0 else 0.0)
+            fj = 0.0
+            if fl[F_ADD]:
+                fj += c2s[j] * abs(dd) * dd
+            if j == 0 and fl[F_YIELD]:
+                z = s[S_Z]
+                dy = p[P_DY]
+                sgn = 1.0 if dd * z >= 0.0 else -1.0
+                ds[S_Z] = dd * (1.0 - (abs(z) / dy) ** p[P_BWN] * (0.5 + 0.5 * sgn))
+                fj += p[P_K1] * (1.0 - p[P_ALPHA]) * (z - uu[0])
+            r[j] += fj
+            if j > 0:
+                r[j - 1] -= fj
+        for i in range(n):
+            ds[x0 + i] = s[v0 + i]
+            ds[v0 + i] = -r[i] / Ms[i]
+            fx += r[i]
+            mth += hs[i] * r[i]
+            vbase += r[i]
+    # --- platen ------------------------------------------------------------------------------
+    ds[S_X] = s[S_V]
+    if fl[F_PITCH] == 0:
+        ax = fx / (p[P_MT] + p[P_MB])
+        al = 0.0
+    else:
+        m11 = p[P_MT] + p[P_MB]
+        m12 = p[P_MTE] + p[P_MBH]
+        m22 = p[P_I] + p[P_IB]
+        det = m11 * m22 - m12 * m12
+        ax = (m22 * fx - m12 * mth) / det
+        al = (m11 * mth - m12 * fx) / det
+        ds[S_TH] = om
+    ds[S_V] = ax
+    ds[S_OM] = al
+    # --- foundation (reaction mass): actuator and friction react on it ----------------------
+    af = 0.0
+    if fl[F_FOUND]:
+        ff = -p[P_KF] * s[S_XF] - p[P_CF] * s[S_VF] - fh + ffr + p[P_CPLAT] * (s[S_V] - vf)
+        af = ff / p[P_MF]
+        ds[S_XF] = s[S_VF]
+        ds[S_VF] = af
+    aux[A_FH] = fh
+    aux[A_ACC] = ax
+    aux[A_ALPHA] = al
+    aux[A_MR] = mr
+    aux[A_MP] = mp
+    aux[A_XM] = (s[S_XP] if fl[F_BACK] else s[S_X]) - s[S_XF]
+    aux[A_VM] = vrel
+    aux[A_AF] = af
+    aux[A_QCMD] = qc
+    aux[A_U] = u
+    aux[A_VBASE] = vbase
+
+
+@njit(cache=True)
+def integrate(p, fl, Ms, Ks, Cs, hs, c2s, s0, xc, vc, dt, nsteps, every, ndelay):
+    """RK4 at step dt; the command is given at half steps (xc[2k] at t_k, xc[2k+1] at
+    t_k + dt/2). Returns states, aux and state derivatives every `every` steps (from
+    step 0).
+
+    The valve delay is `ndelay` half steps (≥ 2), applied to the valve command u."""
+    ns = s0.shape[0]
+    nrec = nsteps // every + 1
+    S = np.empty((nrec, ns))
+    X = np.empty((nrec, N_AUX))
+    D = np.empty((nrec, ns))
+    s = s0.copy()
+    k1 = np.empty(ns)
+    k2 = np.empty(ns)
+    k3 = np.empty(ns)
+    k4 = np.empty(ns)
+    tmp = np.empty(ns)
+    aux = np.empty(N_AUX)
+    dummy = np.empty(N_AUX)
+    # valve-command history at half steps (for the delay)
+    uh = np.zeros(2 * nsteps + 3)
+    rec = 0
+    for k in range(nsteps + 1):
+        t = k * dt
+        i0 = 2 * k
+        # history: u at t_k from the current state
+        uh[i0] = controller(t, s, xc[i0], vc[i0], p, fl)
+        ud0 = 0.0
+        ud1 = 0.0
+        ud2 = 0.0
+        if fl[F_DELAY]:
+            j = i0 - ndelay
+            ud0 = uh[j] if j >= 0 else 0.0
+            j1 = i0 + 1 - ndelay
+            if j1 >= 0:
+                # the half-step value is interpolated between whole steps already stored
+                if j1 % 2 == 1:
+                    ud1 = 0.5 * (uh[j1 - 1] + uh[j1 + 1]) if j1 + 1 <= i0 else uh[j1 - 1]
+                else:
+                    ud1 = uh[j1]
+            j2 = i0 + 2 - ndelay
+            if j2 >= 0:
+                if j2 % 2 == 1:
+                    ud2 = 0.5 * (uh[j2 - 1] + uh[j2 + 1]) if j2 + 1 <= i0 else uh[j2 - 1]
+                else:
+                    ud2 = uh[j2]
+        rhs(t, s, xc[i0], vc[i0], ud0, p, fl, Ms, Ks, Cs, hs, c2s, k1, aux)
+        if k % every == 0:
+            S[rec, :] = s
+            X[rec, :] = aux
+            D[rec, :] = k1
+            rec += 1
+        if k == nsteps:
+            break
+        for i in range(ns):
+            tmp[i] = s[i] + 0.5 * dt * k1[i]
+        rhs(t + 0.5 * dt, tmp, xc[i0 + 1], vc[i0 + 1], ud1, p, fl, Ms, Ks, Cs, hs, c2s, k2,
+            dummy)
+        for i in range(ns):
+            tmp[i] = s[i] + 0.5 * dt * k2[i]
+        rhs(t + 0.5 * dt, tmp, xc[i0 + 1], vc[i0 + 1], ud1, p, fl, Ms, Ks, Cs, hs, c2s, k3,
+            dummy)
+        for i in range(ns):
+            tmp[i] = s[i] + dt * k3[i]
+        rhs(t + dt, tmp, xc[i0 + 2], vc[i0 + 2], ud2, p, fl, Ms, Ks, Cs, hs, c2s, k4, dummy)
+        for i in range(ns):
+            s[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+    return S, X, D

@@ -1,0 +1,147 @@
+"""Simulate a table + specimen under a command and return the clean channels (SI)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import signal
+
+from . import constants as c
+from . import model as m
+from .build import CONNECTION_HZ, Built, build
+from .commands import Command
+from .errors import TruthError
+from .linearize import jacobian
+from .specimens import Specimen
+from .tables import Table
+
+DT_MAX = 5e-4  # s, largest internal step
+
+
+@dataclass
+class Result:
+    """Clean channels on the output grid, in SI (m, m/s, m/s², N, rad, rad/s²).
+
+    Displacements h*_disp/avg_hdisp and h_vel are the actuators' (piston relative to the
+    reaction mass); avg_hacc is the platen's absolute acceleration at the actuator line;
+    h*_force is A·ΔP per actuator; v*_force and p*_stab are the dynamic increments (the
+    static weight is carried by the pit air pressure, §2.2); pot_*/floor*_disp are absolute.
+
+    `sensors` maps each channel to the physical sensor group it belongs to; channels of
+    the same quantity measured by different sensors (h1_disp..h3_disp, acc_n_ne/acc_n_nw,
+    pot_n_sw/pot_n_se) get independent noise in `write_run`. `internal` holds truth
+    quantities that are not measured (x_t, θ, P_L, storey drift, base shear, ...)."""
+
+    t: np.ndarray
+    fs: float
+    channels: dict[str, np.ndarray]
+    internal: dict[str, np.ndarray]
+    table: Table
+    specimen: Specimen
+    command: Command
+    dt: float
+    built: Built
+    notes: list[str] = field(default_factory=list)
+
+
+def _steps(fs: float, duration: float, dt_max: float) -> tuple[int, int, float]:
+    if not (isinstance(fs, int | float) and fs > 0):
+        raise TruthError(f"simulate: fs must be a positive sample rate, got {fs!r}")
+    n_out = math.floor(duration * fs + 1e-9) + 1
+    n_sub = max(1, math.ceil(1.0 / (fs * dt_max) - 1e-9))
+    return n_out, n_sub, 1.0 / (fs * n_sub)
+
+
+def stable_step(table: Table, spec: Specimen) -> float:
+    """Largest internal step: 0.5 ms, or less when the fastest linearised root λ (valve lag,
+    friction smoothing, backlash connection ...) needs it: |λ| dt ≤ 2 (RK4 is stable to
+    ≈ 2.8 on both axes)."""
+    b = build(table, spec, 0.0)
+    rho = float(np.max(np.abs(np.linalg.eigvals(jacobian(b)[0]))))
+    if b.fl[m.F_BACK]:
+        rho = max(rho, 2 * np.pi * CONNECTION_HZ)
+    return min(DT_MAX, 2.0 / rho)
+
+
+def _sensor_filter(x: np.ndarray, dt: float, cutoff_hz: float) -> np.ndarray:
+    """4-pole Butterworth analog low-pass (§2.3), discretised exactly for inputs that are
+    linear between samples (first-order hold), applied along axis 0."""
+    A, B, C, D = signal.zpk2ss(*signal.butter(4, 2 * np.pi * cutoff_hz, analog=True,
+                                              output="zpk"))
+    Ad, Bd, Cd, Dd, _ = signal.cont2discrete((A, B, C, D), dt, method="foh")
+    z, p, k = signal.ss2zpk(Ad, Bd, Cd, Dd)
+    sos = signal.zpk2sos(z, p, k)
+    return signal.sosfilt(sos, x, axis=0)
+
+
+def simulate(table: Table, spec: Specimen, cmd: Command, fs: float = 256.0) -> Result:
+    """Run `cmd` on `table` carrying `spec`; channels sampled at `fs` (any rate: the
+    internal RK4 step is 1/(fs·n) ≤ 0.5 ms, smaller if `stable_step` asks)."""
+    n_out, n_sub, dt = _steps(fs, cmd.duration, stable_step(table, spec))
+    built = build(table, spec, dt)
+    nsteps = (n_out - 1) * n_sub
+    th = np.arange(2 * nsteps + 3) * (0.5 * dt)
+    xc, vc = cmd.at(th)
+    filt = table.effects.get("sensor_filter")
+    every = 1 if filt else n_sub
+    ndelay = round(2 * built.delay / dt) if built.delay > 0 else 0
+    s0 = np.zeros(built.n_state)
+    S, X, D = m.integrate(built.p, built.fl, built.Ms, built.Ks, built.Cs, built.hs, built.c2s,
+                          s0, xc, vc, dt, nsteps, every, ndelay)
+    if not np.all(np.isfinite(S)):
+        raise TruthError("simulate: the response diverged (unstable configuration)")
+    ch, internal = _channels(built, S, X, D)
+    if filt:
+        names = list(ch)
+        arr = _sensor_filter(np.column_stack([ch[k] for k in names]), dt, filt["cutoff_hz"])
+        ch = {k: arr[::n_sub, j] for j, k in enumerate(names)}
+        internal = {k: v[::n_sub] for k, v in internal.items()}
+    t = np.arange(n_out) / fs
+    out = {"h_span": xc[0:2 * nsteps + 1:2 * n_sub]}
+    out.update(ch)
+    return Result(t, float(fs), out, internal, table, spec, cmd, dt, built)
+
+
+def _channels(b: Built, S: np.ndarray, X: np.ndarray, D: np.ndarray):
+    tab = b.table
+    n = int(b.fl[m.F_N])
+    ch: dict[str, np.ndarray] = {}
+    na = tab.actuators
+    xm, vm = X[:, m.A_XM], X[:, m.A_VM]
+    for i in range(1, na + 1):
+        ch[f"h{i}_disp"] = xm
+    ch["avg_hdisp"] = xm
+    ch["h_vel"] = vm
+    ch["avg_hacc"] = D[:, m.S_V]
+    for i in range(1, na + 1):
+        ch[f"h{i}_force"] = X[:, m.A_FH] / na
+    if tab.pitch != "none":
+        ch["pitch_acc"] = D[:, m.S_OM]
+        ch["pitch_disp"] = S[:, m.S_TH]
+    if tab.pitch == "two_directional":
+        # positive θ lowers the +x side; M_y = -Σ x_i F_i; pattern ∓ on the ±x actuators
+        fv = X[:, m.A_MR] / (4 * c.EERC_VERTICAL_ARM)
+        fp = X[:, m.A_MP] / (4 * c.EERC_STABILIZER_ARM)
+        ch.update({"v1_force": -fv, "v2_force": fv, "v3_force": fv, "v4_force": -fv,
+                   "p1_stab": -fp, "p2_stab": fp, "p3_stab": fp, "p4_stab": -fp})
+    internal = {"x_t": S[:, m.S_X], "v_t": S[:, m.S_V], "theta": S[:, m.S_TH],
+                "omega": S[:, m.S_OM], "m_pitch": X[:, m.A_MR] + X[:, m.A_MP],
+                "p_load": S[:, m.S_PL], "x_f": S[:, m.S_XF], "q_cmd": X[:, m.A_QCMD],
+                "base_shear": X[:, m.A_VBASE]}
+    if n:
+        x0, v0 = m.N_BASE, m.N_BASE + n
+        top_x, top_a = S[:, x0 + n - 1], D[:, v0 + n - 1]
+        ch["acc_n_ne"] = top_a
+        ch["acc_n_nw"] = top_a
+        ch["pot_n_sw"] = top_x
+        ch["pot_n_se"] = top_x
+        if b.specimen.kind == "shear_building" and n >= 1:
+            for i in range(n):
+                ch[f"floor{i + 1}_acc"] = D[:, v0 + i]
+                ch[f"floor{i + 1}_disp"] = S[:, x0 + i]
+        u1 = S[:, x0] - S[:, m.S_X] - b.hs[0] * S[:, m.S_TH]
+        internal["drift1"] = u1
+        internal["top_rel"] = top_x - S[:, m.S_X] - b.hs[n - 1] * S[:, m.S_TH]
+    return ch, internal
