@@ -34,7 +34,7 @@ from vtable.ident.structure import (
     rocking_springs_fit,
 )
 from vtable.ident.tf import TransferFunction, transfer_function
-from vtable.ident.validity import Flag, flags_json, inherit, loop_flags, marker
+from vtable.ident.validity import Flag, flags_json, inherit, loop_flags, marker, settled
 from vtable.params.loops import OpenLoop
 from vtable.params.specimen import NoSpecimen, RigidBlock, SDOFSpecimen, ShearBuilding
 from vtable.runs.model import FORMAT_UNITS, Run
@@ -162,10 +162,10 @@ def _servo_loop(run: Run, spec, m_t: float, out: dict[str, Any]) -> None:
         what = "eq 7.9 fit (the notch of f_s, ξ_s)"
         choice = frame_for_mode(n_samples, run.fs, spec.frequency, spec.damping, what)
         fit, _ = fit_on(choice.nperseg)
-        try:  # once more on frames for the fitted (f_s, ξ_s)
+        try:  # once more on frames for the fitted (f_s, ξ_s), if they are sound
             again = frame_for_mode(n_samples, run.fs, fit["f_s"],
                                    min(max(fit["xi_s"], 1e-4), 0.5), what)
-            if again.nperseg != choice.nperseg:
+            if again.nperseg != choice.nperseg and settled(fit, ("f_s", "xi_s")):
                 fit, _ = fit_on(again.nperseg)
                 choice = again
         except VtableError:
@@ -209,21 +209,39 @@ def _row(out: dict[str, Any], rows: dict[str, ModalEstimate], key: str,
 
 def _springs(spec: SDOFSpecimen, rows: dict[str, ModalEstimate], out: dict[str, Any]) -> None:
     """k_r (eq 5.4) from the fixed-base and rocking-coupled frequencies, k_h (eq 5.5)
-    with the coupled one; the frequencies' flags carry over."""
+    with the coupled one, as a `Fit` whose standard errors propagate the frequencies'
+    (k_r is undetermined when f_f and f_r differ by less than their errors); the
+    frequencies' flags carry over."""
     for k in ("fixed", "rocking", "coupled"):
         if k not in rows:
             raise VtableError(f"needs the three Table 3.1 frequencies; the {k} row was skipped")
-    f_f, f_r, f_c = rows["fixed"], rows["rocking"], rows["coupled"]
-    k_r = closed_forms.rocking_stiffness_from_frequencies(f_f.f, f_r.f, spec.mass, spec.height)
-    k_h = closed_forms.horizontal_stiffness_from_frequencies(f_f.f, f_c.f, spec.mass,
-                                                             spec.height, k_r)
-    flags: list[Flag] = []
-    for e in (f_f, f_r, f_c):
+    est = [rows["fixed"], rows["rocking"], rows["coupled"]]
+
+    def springs(f: np.ndarray) -> np.ndarray:
+        k_r = closed_forms.rocking_stiffness_from_frequencies(f[0], f[1], spec.mass, spec.height)
+        return np.array([k_r, closed_forms.horizontal_stiffness_from_frequencies(
+            f[0], f[2], spec.mass, spec.height, k_r)])
+
+    f = np.array([e.f for e in est])
+    sf = np.array([e.primary.stderr.get("f_n", np.nan) for e in est])
+    k = springs(f)
+    J = np.empty((2, 3))
+    for i in range(3):  # central differences, steps well inside the frequencies' spacing
+        h = 1e-7 * f[i]
+        J[:, i] = (springs(f + h * np.eye(3)[i]) - springs(f - h * np.eye(3)[i])) / (2 * h)
+    sk = np.sqrt((J**2) @ sf**2)
+    fit = Fit({"k_r": float(k[0]), "k_h": float(k[1])},
+              {"k_r": float(sk[0]), "k_h": float(sk[1])}, float("nan"), float("nan"), 3,
+              "eqs 5.4, 5.5 from the Table 3.1 frequencies").checked()
+    flags: list[Flag] = list(fit.flags)
+    for e in est:
         flags += inherit(e.primary.flags, e.name, params=("f_n",))
     out["springs_from_frequencies"] = {
-        "k_r_lb_in_per_rad": units.from_si(k_r, "lb-in/rad"),
-        "k_h_kip_per_in": units.from_si(k_h, "kip/in"), "equations": "5.4, 5.5",
-        "flags": flags_json(flags)}
+        "k_r_lb_in_per_rad": units.from_si(k[0], "lb-in/rad"),
+        "k_h_kip_per_in": units.from_si(k[1], "kip/in"),
+        "stderr": {"k_r_lb_in_per_rad": units.from_si(sk[0], "lb-in/rad"),
+                   "k_h_kip_per_in": units.from_si(sk[1], "kip/in")},
+        "equations": "5.4, 5.5", "flags": flags_json(flags)}
 
 
 # ---- rocking impedance and hysteresis ----------------------------------------------------
@@ -374,9 +392,11 @@ def print_identification(d: dict[str, Any]) -> None:
             _warn_lines(fl)
     if "springs_from_frequencies" in d:
         s = d["springs_from_frequencies"]
-        print(f"  springs (eqs 5.4, 5.5): k_r {s['k_r_lb_in_per_rad']:.3g} lb-in/rad, "
-              f"k_h {s['k_h_kip_per_in']:.3g} kip/in"
-              + (" ⚠ from flagged frequencies" if s["flags"] else ""))
+        fl, e = s["flags"], s["stderr"]
+        print(f"  springs (eqs 5.4, 5.5): k_r {s['k_r_lb_in_per_rad']:.3g} ± "
+              f"{e['k_r_lb_in_per_rad']:.2g}{_mark(fl, 'k_r')} lb-in/rad, k_h "
+              f"{s['k_h_kip_per_in']:.3g} ± {e['k_h_kip_per_in']:.2g}{_mark(fl, 'k_h')} kip/in"
+              + (" ⚠ from flagged frequencies" if any(f["source"] for f in fl) else ""))
         _warn_lines(s["flags"])
     if "rocking_impedance" in d:
         g = d["rocking_impedance"]

@@ -17,6 +17,7 @@ from vtable.ident import channels
 from vtable.ident.fits import Fit, amplitude_fit, circle_fit, fit_mode
 from vtable.ident.frames import FrameChoice, frame_for_mode
 from vtable.ident.tf import TransferFunction, transfer_function, transfer_function_via
+from vtable.ident.validity import settled
 from vtable.params.specimen import RigidBlock, SDOFSpecimen, ShearBuilding
 from vtable.runs.model import Run
 
@@ -131,17 +132,19 @@ def _estimate(name: str, run: Run, make_tf: Callable[[int], TransferFunction],
               f_guess: float, xi_guess: float, power: int, complex_fit: bool,
               nperseg: int | None) -> ModalEstimate:
     """A mode fitted on frames chosen for it (vtable.ident.frames): first for the guess
-    (f, ξ), then once more for the fitted (f, ξ) if that calls for another frame. A
-    given `nperseg` is used as is (its validity is still checked)."""
+    (f, ξ), then once more for the fitted (f, ξ) if that calls for another frame and the
+    first fit is sound enough to go by (`validity.settled`). A given `nperseg` is used
+    as is (its validity is still checked)."""
     n_samples = len(run.time)
     if nperseg:
         return _modal(name, make_tf(nperseg), f_guess, power, complex_fit)
     choice = frame_for_mode(n_samples, run.fs, f_guess, xi_guess, name)
     est = replace(_modal(name, make_tf(choice.nperseg), f_guess, power, complex_fit),
                   frame=choice)
-    xi = est.xi if np.isfinite(est.xi) else xi_guess
+    if not settled(est.primary, ("f_n", "xi_n")):  # a fit to choose nothing from
+        return est
     try:
-        again = frame_for_mode(n_samples, run.fs, est.f, min(max(xi, 1e-4), 0.5), name)
+        again = frame_for_mode(n_samples, run.fs, est.f, min(max(est.xi, 1e-4), 0.5), name)
     except VtableError:
         return est
     if again.nperseg == choice.nperseg:

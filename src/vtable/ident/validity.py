@@ -117,6 +117,14 @@ def fit_flags(fit: Fit) -> tuple[Flag, ...]:
     return tuple(out)
 
 
+def settled(fit: Fit, params: Iterable[str]) -> bool:
+    """Whether `params` of the fit are good enough to choose frames from: no flag on
+    them other than ``unresolved`` (which the new frames address), and no ``poor_fit``."""
+    keep = set(params)
+    return not any((f.param in keep and f.code != "unresolved") or f.code == "poor_fit"
+                   for f in fit.flags)
+
+
 #: a steady sine has max|x|/rms(x) = √2; above this the motion is not steady cycles
 STEADY_CREST_MAX = 1.6
 
