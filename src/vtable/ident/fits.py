@@ -30,7 +30,8 @@ class Fit:
 
     `bounds` are the optimiser's bounds per parameter, `modes` the (frequency, damping)
     parameter pairs, `context` what the data allowed (resolution_hz, averages, and
-    coherence: the mean γ² of the fitted lines); `flags` follow from all of them
+    coherence: the mean γ² of the fitted lines), `correlation` the parameters' pairwise
+    correlations ("a,b" -> ρ); `flags` follow from all of them
     (`vtable.ident.validity.fit_flags`)."""
 
     params: dict[str, float]
@@ -44,6 +45,7 @@ class Fit:
     modes: tuple[tuple[str, str], ...] = ()
     context: dict[str, float] = field(default_factory=dict)
     flags: tuple[Flag, ...] = ()
+    correlation: dict[str, float] = field(default_factory=dict)
 
     def __getitem__(self, key: str) -> float:
         return self.params[key]
@@ -79,7 +81,10 @@ def _spacing(f: np.ndarray) -> float | None:
 
 
 def _stats(resid: np.ndarray, target: np.ndarray, J: np.ndarray | None, names: Sequence[str],
-           x: np.ndarray) -> tuple[dict[str, float], float, float]:
+           x: np.ndarray, corr: dict[str, float] | None = None
+           ) -> tuple[dict[str, float], float, float]:
+    """Standard errors, R², normalised RMS residual; pairwise parameter correlations go
+    into `corr` ("a,b" -> ρ) when given."""
     n, p = len(resid), len(names)
     ss = float(resid @ resid)
     tot = float(np.sum((target - target.mean()) ** 2)) or 1.0
@@ -88,6 +93,11 @@ def _stats(resid: np.ndarray, target: np.ndarray, J: np.ndarray | None, names: S
         try:
             cov = np.linalg.inv(J.T @ J) * ss / (n - p)
             stderr = {k: float(np.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(names)}
+            d = np.sqrt(np.abs(np.diag(cov)))
+            if corr is not None and np.all(d > 0):
+                r = cov / np.outer(d, d)
+                corr.update({f"{names[i]},{names[j]}": float(r[i, j])
+                             for i in range(p) for j in range(i + 1, p)})
         except np.linalg.LinAlgError:
             pass
     rms_t = float(np.sqrt(np.mean(target**2))) or 1.0
@@ -119,10 +129,12 @@ def _select(f, H, coherence, band, min_coherence):
 def _least_squares(fun: Callable, x0, lb, ub, names, target, method: str,
                    modes: tuple[tuple[str, str], ...] = (), context=None, **kw) -> Fit:
     sol = scipy.optimize.least_squares(fun, x0, bounds=(lb, ub), x_scale="jac", **kw)
-    stderr, r2, nrmse = _stats(sol.fun, target, sol.jac, names, sol.x)
+    corr: dict[str, float] = {}
+    stderr, r2, nrmse = _stats(sol.fun, target, sol.jac, names, sol.x, corr)
     fit = Fit(dict(zip(names, map(float, sol.x), strict=True)), stderr, r2, nrmse,
               len(sol.fun), method, {"cost": float(sol.cost), "nfev": float(sol.nfev)},
-              {k: (float(a), float(b)) for k, a, b in zip(names, lb, ub, strict=True)}, modes)
+              {k: (float(a), float(b)) for k, a, b in zip(names, lb, ub, strict=True)}, modes,
+              correlation=corr)
     return fit.checked(**(context or {}))
 
 

@@ -7,6 +7,9 @@ when
 - ``not_finite``: a parameter is NaN or infinite (e.g. appendix D's ξ² < 0, eq D.11);
 - ``stderr_large``: its standard error exceeds its magnitude;
 - ``no_stderr``: its standard error is NaN or infinite (the method gives none);
+- ``correlated``: two parameters correlated beyond `CORRELATION_MAX` (from the
+  covariance σ²(JᵀJ)⁻¹): only a combination of them is determined, each alone is not
+  (an over-damped loop: f_o and ξ_o);
 - ``poor_fit``: R² < `R2_MIN`: the model explains too little of the fitted quantity;
 - ``low_coherence``: the mean coherence γ² of the fitted lines is below `COHERENCE_MIN`;
 - ``unresolved``: a damping whose half-power band 2ξf holds fewer than
@@ -35,12 +38,14 @@ if TYPE_CHECKING:
 R2_MIN = 0.9
 #: below this mean γ² over the fitted lines, noise or nonlinearity dominates them
 COHERENCE_MIN = 0.8
+#: above this |ρ| two parameters are not determined separately
+CORRELATION_MAX = 0.995
 #: a parameter within this fraction of a bound (relative to the bound) is on it
 BOUND_TOLERANCE = 1e-3
 
 #: a short marker for the printed tables, by flag code
 MARKERS = {"at_bound": "at bound", "not_finite": "no value", "stderr_large": "σ > value",
-           "no_stderr": "no σ", "unresolved": "unresolved"}
+           "no_stderr": "no σ", "unresolved": "unresolved", "correlated": "correlated"}
 
 SYMBOLS = {"f_o": "f_o", "xi_o": "ξ_o", "k_o": "k_o", "f_s": "f_s", "xi_s": "ξ_s",
            "f_n": "f_n", "xi_n": "ξ_n", "gain": "gain", "P_n": "P_n"}
@@ -86,6 +91,13 @@ def fit_flags(fit: Fit) -> tuple[Flag, ...]:
         elif e > abs(v):
             out.append(Flag("stderr_large", f"{s} = {v:.4g} ± {e:.2g}: the standard error "
                             "exceeds the value", k))
+    for pair, rho in fit.correlation.items():
+        a, b = pair.split(",")
+        if abs(rho) > CORRELATION_MAX:
+            for k in (a, b):
+                out.append(Flag("correlated", f"{_sym(k)}: correlated {rho:+.4f} with "
+                                f"{_sym(b if k == a else a)}: only a combination of the two "
+                                "is determined", k))
     df = fit.context.get("resolution_hz")
     if df is not None and math.isfinite(df) and df > 0:
         for fk, xk in fit.modes:
