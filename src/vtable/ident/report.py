@@ -104,6 +104,10 @@ def identify_run(run: Run, table_weight_kip: float = EERC_TABLE_KIP) -> dict[str
         if pitch_is_zero(run):
             notes.append("pitch_acc is zero throughout: taken as a table without pitch "
                          "(x_eff = x_t)")
+        why = channels.channel_problem(run, "h_span")
+        if why:
+            notes.append(f"{why}: H_f and H_r are H1 estimates with x_eff and x_t as inputs "
+                         "(sensor noise biases them near the fixed-base notch of x_eff)")
         _section(out, "table 3.1: fixed base",
                  lambda: _row(out, rows, "fixed", fixed_base(run)))
         _section(out, "table 3.1: base rotation coupling", lambda: _row(
@@ -199,7 +203,7 @@ def _row(out: dict[str, Any], rows: dict[str, ModalEstimate], key: str,
     out["table_3_1"].append({
         "case": e.name, "f_hz": e.f, "damping": e.xi, "method": p.method,
         "nperseg": 2 * (e.tf.f.size - 1), "averages": e.tf.averages,
-        "resolution_hz": float(e.tf.f[1] - e.tf.f[0]),
+        "resolution_hz": e.tf.resolution_hz,
         "frame": e.frame.why if e.frame else "given --nperseg",
         "flags": flags_json(p.flags)})
     out["table_3_1_methods"][e.name] = {
@@ -282,7 +286,9 @@ def _rocking(run: Run, rows: dict[str, ModalEstimate], out: dict[str, Any],
     c = pitch_channel(run)
     if "coupled" in rows:
         f_eval = rows["coupled"].f
-        base = inherit(rows["coupled"].primary.flags, "coupled frequency", params=("f_n",))
+        # G_r is smooth in ω: only a flagged frequency itself carries over
+        base = inherit(rows["coupled"].primary.flags, "coupled frequency", params=("f_n",),
+                       whole_fit=False)
         where = "the Table 3.1 coupled frequency"
     else:
         f_eval, base = pitch_resonance(run)
@@ -347,6 +353,30 @@ def _frame(d: dict[str, Any]) -> str:
     return "" if a is None else f", {int(a)} averages, Δf {r:.3g} Hz"
 
 
+def _v(x: float | None, fmt: str, scale: float = 1.0, width: int = 0) -> str:
+    """A number for the printed tables, "—" when there is none (NaN, None)."""
+    if x is None or not np.isfinite(x):
+        return f"{'—':>{width}}"
+    return f"{scale * x:{width}{fmt}}"
+
+
+def _print_methods(m: dict[str, Any]) -> None:
+    """The comparison methods of one Table 3.1 row, each with its flag markers."""
+    parts = []
+    for key, label in (("appendix_d", "appendix D"), ("circle", "circle fit")):
+        fit = m.get(key)
+        if fit is None or fit is m.get("primary") or (
+                m.get("primary") and fit["method"] == m["primary"]["method"]):
+            continue
+        p, fl = fit["params"], fit["flags"]
+        parts.append(f"{label} {_v(p['f_n'], '.3f')} Hz{_mark(fl, 'f_n')} "
+                     f"{_v(p['xi_n'], '.2f', 100)} %{_mark(fl, 'xi_n')}")
+    for label, why in m.get("skipped", {}).items():
+        parts.append(f"{label} skipped ({why})")
+    if parts:
+        print("      compare: " + "; ".join(parts))
+
+
 def print_identification(d: dict[str, Any]) -> None:
     """The identification of one run, each number with its flags (⚠)."""
     print(f"{d['run']}: {d['duration_s']:.1f} s at {d['fs_hz']:.0f} Hz")
@@ -380,16 +410,21 @@ def print_identification(d: dict[str, Any]) -> None:
               f"f_s {p['f_s']:.3f} Hz{_mark(fl, 'f_s')}, ξ_s {p['xi_s']:.4f}"
               f"{_mark(fl, 'xi_s')} (R² {o['r2']:.4f}{_frame(o)})")
         _warn_lines(fl)
+        if fl:
+            print(f"      frames: {o['frame']}")
         if o.get("note"):
             print(f"      note: {o['note']}")
     if d.get("table_3_1"):
         print(f"  {'Table 3.1':<28} {'f (Hz)':>8} {'damping (%)':>12}   frames")
         for row in d["table_3_1"]:
             fl = row["flags"]
-            print(f"  {row['case']:<28} {row['f_hz']:8.3f}{_mark(fl, 'f_n')} "
-                  f"{100 * row['damping']:12.2f}{_mark(fl, 'xi_n')}   "
+            print(f"  {row['case']:<28} {_v(row['f_hz'], '.3f', width=8)}{_mark(fl, 'f_n')} "
+                  f"{_v(row['damping'], '.2f', 100, 12)}{_mark(fl, 'xi_n')}   "
                   f"{row['nperseg']} pts, {row['averages']} avg, Δf {row['resolution_hz']:.3g} Hz")
             _warn_lines(fl)
+            if fl:
+                print(f"      frames: {row['frame']}")
+            _print_methods(d.get("table_3_1_methods", {}).get(row["case"], {}))
     if "springs_from_frequencies" in d:
         s = d["springs_from_frequencies"]
         fl, e = s["flags"], s["stderr"]

@@ -151,13 +151,13 @@ def loop_flags(crest_factor: float, f_hz: float) -> list[Flag]:
                  "of a random motion, not a damping ratio")]
 
 
-def inherit(flags: Iterable[Flag], source: str,
-            params: Iterable[str] | None = None) -> list[Flag]:
+def inherit(flags: Iterable[Flag], source: str, params: Iterable[str] | None = None,
+            whole_fit: bool = True) -> list[Flag]:
     """The flags a derived number takes from the fit `source`: all of them, or those of
-    `params` and the whole-fit ones."""
+    `params` and (unless `whole_fit` is False) the whole-fit ones."""
     keep = None if params is None else set(params)
     return [Flag(f.code, f"{source}: {f.text}", None, source) for f in flags
-            if keep is None or f.param is None or f.param in keep]
+            if keep is None or f.param in keep or (f.param is None and whole_fit)]
 
 
 def flags_json(flags: Iterable[Flag]) -> list[dict[str, Any]]:
