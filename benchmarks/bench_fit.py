@@ -1,5 +1,6 @@
 """The three-parameter open-loop fit (eq 6.15) on a 512-line transfer function with
-coherence weighting and noise: time per fit."""
+coherence weighting and noise: time per fit (validity flags included), and the flags of
+a fit whose ξ_o is beyond its bound."""
 
 from __future__ import annotations
 
@@ -21,6 +22,10 @@ def main() -> None:
     print(f"fit: f_o {fit['f_o']:.3f} Hz, xi_o {fit['xi_o']:.4f}, k_o {fit['k_o']:.3f} "
           f"(true 12.6, 0.477, 25.07), {int(fit.extra['nfev'])} evaluations")
     print(f"time per fit on 512 lines: {t * 1e3:.2f} ms (target < 20 ms)")
+    print(f"flags: {[f.code for f in fit.flags] or 'none'}")
+    over = fit_open_loop(f, h_open_loop(f, 12.6, 8.0, 25.07), coh)
+    print(f"ξ_o = 8 (bound 5): fitted {over['xi_o']:.3f}, flags "
+          f"{sorted({(f.code, f.param) for f in over.flags})}")
 
 
 if __name__ == "__main__":

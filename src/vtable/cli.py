@@ -98,7 +98,8 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--fmax", type=_number, default=20.0, help="highest frequency, Hz [20]")
     t.add_argument("--n", type=_integer, default=40, help="number of frequencies [40]")
     t.add_argument("--log", action="store_true", help="log-spaced frequencies")
-    t.add_argument("--nperseg", type=_integer, default=2048, help="run: frame length [2048]")
+    t.add_argument("--nperseg", type=_integer, default=None, help="run: frame length [the "
+                   "longest power of two giving >= 8 averages at 50 %% overlap]")
     t.add_argument("--png", default=None, help="also plot amplitude and phase (and, for a "
                    "run, coherence) to this PNG file")
     dg = sub.add_parser("diagnose", help="find the physics a model of the runs is missing")
@@ -208,23 +209,58 @@ def _is_run(path: str) -> bool:
 
 
 def cmd_tf_run(a: argparse.Namespace) -> dict[str, Any]:
-    from vtable.ident import transfer_function
+    """H1 with coherence between two channels of a run, on frames giving >= 8 averages
+    (vtable.ident.frames) unless --nperseg says otherwise; too few averages are warned."""
+    from vtable.ident import channels, transfer_function
+    from vtable.ident.frames import FEWEST_AVERAGES, MIN_AVERAGES, averages, frame_for_averages
     from vtable.runs import read_any
 
     run = read_any(a.config)
     out = "avg_hdisp" if a.out == "x_t" else a.out
     inp = "h_span" if a.inp == "x_c" else a.inp
-    tf = transfer_function(run.channel(inp), run.channel(out), run.fs, a.nperseg)
+    x, y = run.channel(inp), run.channel(out)
+    for name, kind in ((inp, "input"), (out, "output")):
+        why = channels.channel_problem(run, name)
+        if why:
+            raise VtableError(f"{run.name}: {why}: no transfer function with it as the {kind}")
+    if not (0 <= a.fmin < a.fmax):
+        raise VtableError(f"need 0 <= --fmin < --fmax, got {a.fmin:g}, {a.fmax:g}")
+    n_samples, warnings = len(x), []
+    n8 = frame_for_averages(n_samples, MIN_AVERAGES)
+    if a.nperseg is not None:
+        if not 16 <= a.nperseg <= n_samples:
+            raise VtableError(f"--nperseg must be between 16 and the run's {n_samples} samples, "
+                              f"got {a.nperseg}")
+        n, why = a.nperseg, "given --nperseg"
+    elif n8 is not None:
+        n, why = n8, f"the longest power-of-two frame giving >= {MIN_AVERAGES} averages"
+    else:
+        n = frame_for_averages(n_samples, FEWEST_AVERAGES)
+        if n is None:
+            raise VtableError(f"{run.name}: {n_samples} samples are too short for a transfer "
+                              f"function of {FEWEST_AVERAGES} averages")
+        why = f"the record is too short for {MIN_AVERAGES} averages of 64-point frames"
+    nd = averages(n_samples, n)
+    better = f"; --nperseg {n8} gives {averages(n_samples, n8)}" if n8 and n8 != n else ""
+    if nd <= 1:
+        warnings.append(f"1 average ({n} of {n_samples} samples): the coherence is 1 by "
+                        f"construction and means nothing; the estimate is not averaged{better}")
+    elif nd < MIN_AVERAGES:
+        warnings.append(f"{nd} averages (< {MIN_AVERAGES}): large random error, coherence "
+                        f"biased towards 1{better}")
+    tf = transfer_function(x, y, run.fs, n)
     sel = (tf.f >= a.fmin) & (tf.f <= a.fmax)
     d = {"model": run.name, "output": out, "input": inp, "f_hz": tf.f[sel].tolist(),
          "magnitude": np.abs(tf.H[sel]).tolist(),
          "phase_deg": np.degrees(np.angle(tf.H[sel])).tolist(),
-         "coherence": tf.coherence[sel].tolist(), "averages": tf.averages}
+         "coherence": tf.coherence[sel].tolist(), "averages": tf.averages, "nperseg": n,
+         "resolution_hz": run.fs / n, "frame": why, "coherence_meaningful": nd > 1,
+         "warnings": warnings}
     if a.png:
         from vtable.viz.figures import transfer_function_png
 
-        transfer_function_png(a.png, tf.f[sel], tf.H[sel], tf.coherence[sel],
-                              f"{run.name}: {out}/{inp}")
+        transfer_function_png(a.png, tf.f[sel], tf.H[sel], tf.coherence[sel] if nd > 1 else None,
+                              f"{run.name}: {out}/{inp} ({nd} averages)")
         d["png"] = a.png
     return d
 
@@ -254,12 +290,19 @@ def cmd_tf(a: argparse.Namespace) -> dict[str, Any]:
 
 
 def _print_tf(d: dict[str, Any]) -> None:
+    run = "coherence" in d
     print(f"{d['model']}: {d['output']}/{d['input']}"
-          + (f" (H1, {d['averages']} averages)" if "coherence" in d else ""))
+          + (f" (H1, {d['averages']} average{'s' * (d['averages'] != 1)} of "
+             f"{d['nperseg']}-point frames, Δf "
+             f"{d['resolution_hz']:.3g} Hz: {d['frame']})" if run else ""))
+    for w in d.get("warnings", []):
+        print(f"  ⚠ {w}")
     coh = d.get("coherence")
-    print(f"  {'f (Hz)':>9}  {'|H|':>10}  {'phase (deg)':>11}" + ("  coherence" if coh else ""))
+    show = run and d.get("coherence_meaningful", True)
+    print(f"  {'f (Hz)':>9}  {'|H|':>10}  {'phase (deg)':>11}" + ("  coherence" if run else ""))
     for i, (f, m, p) in enumerate(zip(d["f_hz"], d["magnitude"], d["phase_deg"], strict=True)):
-        print(f"  {f:9.3f}  {m:10.4g}  {p:11.2f}" + (f"  {coh[i]:9.3f}" if coh else ""))
+        print(f"  {f:9.3f}  {m:10.4g}  {p:11.2f}"
+              + ((f"  {coh[i]:9.3f}" if show else f"  {'—':>9}") if run else ""))
     if d.get("png"):
         print(f"  wrote {d['png']}")
 

@@ -1,26 +1,38 @@
 """Fits of the report's models to transfer functions (§6.7, §7.6, App. D, §3.3).
 
 Every fit returns a `Fit`: parameters, their standard errors (from the Jacobian at the
-optimum, σ²(JᵀJ)⁻¹ with σ² the residual variance) and goodness of fit (R² of the fitted
-quantity and the normalised RMS residual).
+optimum, σ²(JᵀJ)⁻¹ with σ² the residual variance), goodness of fit (R² of the fitted
+quantity and the normalised RMS residual) and its `flags` (vtable.ident.validity: at a
+bound, standard error larger than the value, poor R² or coherence, a damping the
+frequency resolution does not resolve, too few averages). A fit knows the resolution of
+its lines and their coherence; `Fit.checked(averages=...)` adds what only the caller
+knows.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 import scipy.optimize
 
 from vtable.errors import VtableError
+from vtable.ident.validity import Flag, fit_flags
 
 TWO_PI = 2 * np.pi
 
 
 @dataclass(frozen=True)
 class Fit:
-    """Fitted parameters with standard errors and goodness of fit."""
+    """Fitted parameters with standard errors, goodness of fit and validity flags.
+
+    `bounds` are the optimiser's bounds per parameter, `modes` the (frequency, damping)
+    parameter pairs, `context` what the data allowed (resolution_hz, averages, and
+    coherence: the mean γ² of the fitted lines), `correlation` the parameters' pairwise
+    correlations ("a,b" -> ρ); `flags` follow from all of them
+    (`vtable.ident.validity.fit_flags`)."""
 
     params: dict[str, float]
     stderr: dict[str, float]
@@ -29,13 +41,50 @@ class Fit:
     n_points: int
     method: str
     extra: dict[str, float] = field(default_factory=dict)
+    bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
+    modes: tuple[tuple[str, str], ...] = ()
+    context: dict[str, float] = field(default_factory=dict)
+    flags: tuple[Flag, ...] = ()
+    correlation: dict[str, float] = field(default_factory=dict)
 
     def __getitem__(self, key: str) -> float:
         return self.params[key]
 
+    def checked(self, **context: float | None) -> Fit:
+        """This fit with `context` added (None values ignored) and its flags recomputed."""
+        ctx = {**self.context, **{k: float(v) for k, v in context.items() if v is not None}}
+        new = replace(self, context=ctx)
+        return replace(new, flags=fit_flags(new))
+
+    def flags_of(self, param: str) -> list[Flag]:
+        return [f for f in self.flags if f.param == param]
+
+    @property
+    def ok(self) -> bool:
+        """No flags: every number of the fit can be quoted as a result."""
+        return not self.flags
+
+    def to_json(self) -> dict[str, Any]:
+        return {"params": self.params, "stderr": self.stderr, "r2": self.r2,
+                "nrmse": self.nrmse, "method": self.method, "n_points": self.n_points,
+                "resolution_hz": self.context.get("resolution_hz"),
+                "averages": self.context.get("averages"),
+                "flags": [f.to_json() for f in self.flags]}
+
+
+def _spacing(f: np.ndarray) -> float | None:
+    """The line spacing of a frequency axis (the resolution of a Welch estimate)."""
+    d = np.diff(np.asarray(f, dtype=float))
+    return float(np.median(d)) if len(d) else None
+
+
+
 
 def _stats(resid: np.ndarray, target: np.ndarray, J: np.ndarray | None, names: Sequence[str],
-           x: np.ndarray) -> tuple[dict[str, float], float, float]:
+           x: np.ndarray, corr: dict[str, float] | None = None
+           ) -> tuple[dict[str, float], float, float]:
+    """Standard errors, R², normalised RMS residual; pairwise parameter correlations go
+    into `corr` ("a,b" -> ρ) when given."""
     n, p = len(resid), len(names)
     ss = float(resid @ resid)
     tot = float(np.sum((target - target.mean()) ** 2)) or 1.0
@@ -44,6 +93,11 @@ def _stats(resid: np.ndarray, target: np.ndarray, J: np.ndarray | None, names: S
         try:
             cov = np.linalg.inv(J.T @ J) * ss / (n - p)
             stderr = {k: float(np.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(names)}
+            d = np.sqrt(np.abs(np.diag(cov)))
+            if corr is not None and np.all(d > 0):
+                r = cov / np.outer(d, d)
+                corr.update({f"{names[i]},{names[j]}": float(r[i, j])
+                             for i in range(p) for j in range(i + 1, p)})
         except np.linalg.LinAlgError:
             pass
     rms_t = float(np.sqrt(np.mean(target**2))) or 1.0
@@ -51,7 +105,10 @@ def _stats(resid: np.ndarray, target: np.ndarray, J: np.ndarray | None, names: S
 
 
 def _select(f, H, coherence, band, min_coherence):
+    """The lines of (f, H) in `band` with coherence >= `min_coherence`, √coherence
+    weights, and the fit context (resolution of the whole axis, mean γ² of the lines)."""
     f, H = np.asarray(f, dtype=float), np.asarray(H, dtype=complex)
+    df = _spacing(f)
     ok = np.isfinite(H) & (f > 0)
     if band is not None:
         ok &= (f >= band[0]) & (f <= band[1])
@@ -61,16 +118,24 @@ def _select(f, H, coherence, band, min_coherence):
         ok &= coherence >= min_coherence
         w = np.sqrt(np.clip(coherence, 0, 1))
     if ok.sum() < 4:
-        raise VtableError(f"only {int(ok.sum())} usable frequency lines for the fit (band "
-                          f"{band}, coherence >= {min_coherence})")
-    return f[ok], H[ok], w[ok]
+        where = "" if band is None else f" in {band[0]:.3g}-{band[1]:.3g} Hz"
+        raise VtableError(f"only {int(ok.sum())} usable frequency lines{where} with coherence "
+                          f">= {min_coherence:g} (a fit needs 4)")
+    ctx = {"resolution_hz": df,
+           "coherence": None if coherence is None else float(np.mean(w[ok] ** 2))}
+    return f[ok], H[ok], w[ok], ctx
 
 
-def _least_squares(fun: Callable, x0, lb, ub, names, target, method: str, **kw) -> Fit:
+def _least_squares(fun: Callable, x0, lb, ub, names, target, method: str,
+                   modes: tuple[tuple[str, str], ...] = (), context=None, **kw) -> Fit:
     sol = scipy.optimize.least_squares(fun, x0, bounds=(lb, ub), x_scale="jac", **kw)
-    stderr, r2, nrmse = _stats(sol.fun, target, sol.jac, names, sol.x)
-    return Fit(dict(zip(names, map(float, sol.x), strict=True)), stderr, r2, nrmse,
-               len(sol.fun), method, {"cost": float(sol.cost), "nfev": float(sol.nfev)})
+    corr: dict[str, float] = {}
+    stderr, r2, nrmse = _stats(sol.fun, target, sol.jac, names, sol.x, corr)
+    fit = Fit(dict(zip(names, map(float, sol.x), strict=True)), stderr, r2, nrmse,
+              len(sol.fun), method, {"cost": float(sol.cost), "nfev": float(sol.nfev)},
+              {k: (float(a), float(b)) for k, a, b in zip(names, lb, ub, strict=True)}, modes,
+              correlation=corr)
+    return fit.checked(**(context or {}))
 
 
 # ---- the bare-table servo loop (eq 6.15) -----------------------------------------------
@@ -95,7 +160,7 @@ def phase_crossover(f: np.ndarray, H: np.ndarray) -> float:
 def fit_open_loop(f, H, coherence=None, band=None, min_coherence=0.9) -> Fit:
     """(f_o, ξ_o, k_o) of eq 6.15 by bounded nonlinear least squares on the amplitude
     (weighted by √coherence), f_o started at the 180° phase crossing (§6.7)."""
-    f, H, w = _select(f, H, coherence, band, min_coherence)
+    f, H, w, ctx = _select(f, H, coherence, band, min_coherence)
     f0 = phase_crossover(f, H)
     h0 = float(np.abs(np.interp(f0, f, np.abs(H))))
     xi0 = 0.5
@@ -107,7 +172,8 @@ def fit_open_loop(f, H, coherence=None, band=None, min_coherence=0.9) -> Fit:
 
     return _least_squares(resid, [f0, xi0, max(k0, 1.0)], [0.1, 0.01, 0.1],
                           [200.0, 5.0, 1e4], ("f_o", "xi_o", "k_o"), w * mag,
-                          "eq 6.15 amplitude fit", xtol=1e-10, ftol=1e-10)
+                          "eq 6.15 amplitude fit", (("f_o", "xi_o"),), ctx,
+                          xtol=1e-10, ftol=1e-10)
 
 
 # ---- table + SDOF (eq 7.9) ----------------------------------------------------------------
@@ -126,7 +192,7 @@ def h_table_sdof(f_hz, f_o, xi_o, k_o, f_s, xi_s, u) -> np.ndarray:
 def fit_table_sdof(f, H, u: float, coherence=None, band=None, min_coherence=0.9) -> Fit:
     """(f_o, ξ_o, k_o, f_s, ξ_s) of eq 7.9 with the mass ratio u known, on the amplitude
     (§7.6); f_o started just below the 180° crossing, f_s at the notch."""
-    f, H, w = _select(f, H, coherence, band, min_coherence)
+    f, H, w, ctx = _select(f, H, coherence, band, min_coherence)
     mag = np.abs(H)
     f0 = phase_crossover(f, H)
     low = f < 0.6 * f0
@@ -138,7 +204,8 @@ def fit_table_sdof(f, H, u: float, coherence=None, band=None, min_coherence=0.9)
     return _least_squares(resid, [0.95 * f0, 0.5, 25.0, fs0, 0.03],
                           [0.1, 0.01, 0.1, 0.05, 1e-4], [200.0, 5.0, 1e4, 100.0, 0.5],
                           ("f_o", "xi_o", "k_o", "f_s", "xi_s"), w * mag,
-                          "eq 7.9 amplitude fit", xtol=1e-10, ftol=1e-10)
+                          "eq 7.9 amplitude fit", (("f_o", "xi_o"), ("f_s", "xi_s")), ctx,
+                          xtol=1e-10, ftol=1e-10)
 
 
 # ---- a single mode, complex curve fit --------------------------------------------------
@@ -154,7 +221,7 @@ def fit_mode(f, H, band, coherence=None, power: int = 2, min_coherence: float = 
     """f_n, ξ_n and a real gain of one mode by nonlinear least squares on the complex
     H (real and imaginary parts, weighted by √coherence) in `band`; started from the
     amplitude peak and the half-power width."""
-    f, H, w = _select(f, H, coherence, band, min_coherence)
+    f, H, w, ctx = _select(f, H, coherence, band, min_coherence)
     W = TWO_PI * f
     mag = np.abs(H) / W**power
     i = int(np.argmax(mag))
@@ -175,22 +242,29 @@ def fit_mode(f, H, band, coherence=None, power: int = 2, min_coherence: float = 
     target = np.concatenate([(H * w / scale).real, (H * w / scale).imag])
     return _least_squares(resid, [fn0, xi0, g0], [0.5 * fn0, 1e-4, -np.inf],
                           [2 * fn0, 0.9, np.inf], ("f_n", "xi_n", "gain"), target,
-                          "complex single-mode fit", xtol=1e-12, ftol=1e-12)
+                          "complex single-mode fit", (("f_n", "xi_n"),), ctx,
+                          xtol=1e-12, ftol=1e-12)
 
 
 # ---- appendix D amplitude fitting ---------------------------------------------------------
-def amplitude_fit(f, A, weighting: str = "A3", band=None) -> Fit:
+def amplitude_fit(f, A, weighting: str = "A3", band=None, coherence=None) -> Fit:
     """Appendix D: ω_n, ξ_n, P_n of a single mode from amplitudes A_k (force/acceleration
     to displacement form, eq D.2) by linear least squares: eq D.4 (A³ weighting, the
     report's choice) or eq D.3 (A²), normal equations D.10, parameters D.11. Amplitudes
-    are normalised to max 1 (D.11b) and P rescaled."""
+    are normalised to max 1 (D.11b) and P rescaled. `coherence` (of the lines of f) only
+    enters the validity flags."""
     f, A = np.asarray(f, dtype=float), np.abs(np.asarray(A))
+    df = _spacing(f)
     ok = np.isfinite(A) & (f > 0)
     if band is not None:
         ok &= (f >= band[0]) & (f <= band[1])
+    coh = None if coherence is None else float(np.mean(np.clip(coherence, 0, 1)[ok]))
     f, A = f[ok], A[ok]
     if len(f) < 4:
-        raise VtableError("appendix D fit needs at least 4 amplitudes")
+        where = "" if band is None else f" in {band[0]:.3g}-{band[1]:.3g} Hz"
+        raise VtableError(f"appendix D fit needs at least 4 amplitudes; {len(f)} lines{where} "
+                          f"at {df:.3g} Hz resolution" if df else
+                          "appendix D fit needs at least 4 amplitudes")
     scale = A.max()
     a = A / scale
     W = TWO_PI * f
@@ -203,7 +277,8 @@ def amplitude_fit(f, A, weighting: str = "A3", band=None) -> Fit:
     else:
         raise VtableError(f"weighting must be 'A3' (eq D.4) or 'A2' (eq D.3), got {weighting!r}")
     x, *_ = np.linalg.lstsq(M, rhs, rcond=None)  # = the normal equations D.10
-    return _d11(x, f, a, scale, M, rhs, f"appendix D ({weighting})")
+    return _d11(x, f, a, scale, M, rhs, f"appendix D ({weighting})").checked(
+        resolution_hz=df, coherence=coh)
 
 
 def _d11(x, f, a, scale, M, rhs, method) -> Fit:
@@ -222,13 +297,14 @@ def _d11(x, f, a, scale, M, rhs, method) -> Fit:
     n, p = M.shape
     sr = M @ x - rhs
     cov = np.linalg.pinv(M.T @ M) * float(sr @ sr) / max(n - p, 1)
+    # ω_n = x1^¼, ξ² = x2/(4√x1) + ½: ∂ξ/∂x1 = -x2/(16 ξ x1^1.5), ∂ξ/∂x2 = 1/(8 ξ ω_n²)
     J = np.array([[0.25 * x1**-0.75 / TWO_PI, 0, 0],
-                  [-x2 / (8 * xi * wn**2) * (0.25 * x1**-0.75) * 2 / wn * wn if xi else 0,
-                   1 / (8 * xi * wn**2) if xi else 0, 0],
+                  [-x2 / (16 * xi * x1**1.5), 1 / (8 * xi * wn**2), 0],
                   [0, 0, scale / (2 * np.sqrt(x3))]])
     c = J @ cov[:3, :3] @ J.T
     stderr = {k: float(np.sqrt(max(c[i, i], 0))) for i, k in enumerate(("f_n", "xi_n", "P_n"))}
-    return Fit({"f_n": wn / TWO_PI, "xi_n": xi, "P_n": P}, stderr, r2, nrmse, len(f), method)
+    return Fit({"f_n": wn / TWO_PI, "xi_n": xi, "P_n": P}, stderr, r2, nrmse, len(f), method,
+               modes=(("f_n", "xi_n"),))
 
 
 def amplitude_fit_global(f, amplitudes: Sequence, weighting: str = "A3", band=None) -> Fit:
@@ -264,7 +340,8 @@ def amplitude_fit_global(f, amplitudes: Sequence, weighting: str = "A3", band=No
     target = np.concatenate(blocks)
     _, r2, nrmse = _stats(resid, target, None, list(params), x)
     return Fit(params, {k: float("nan") for k in params}, r2, nrmse, len(target),
-               f"appendix D.2 global ({weighting})")
+               f"appendix D.2 global ({weighting})", modes=(("f_n", "xi_n"),)).checked(
+                   resolution_hz=_spacing(f))
 
 
 # ---- circle fitting and half-power bandwidth ----------------------------------------------
@@ -275,6 +352,7 @@ def circle_fit(f, H, band) -> Fit:
     mean over point pairs (a below, b above) of
     η = (ω_b² - ω_a²)/(ω_n² (tan(θ_a/2) + tan(θ_b/2))), ξ = η/2."""
     f, H = np.asarray(f, dtype=float), np.asarray(H, dtype=complex)
+    df = _spacing(f)
     sel = (f >= band[0]) & (f <= band[1]) & np.isfinite(H)
     f, Y = f[sel], 1j * TWO_PI * f[sel] * H[sel]
     if len(f) < 5:
@@ -309,7 +387,8 @@ def circle_fit(f, H, band) -> Fit:
     return Fit({"f_n": float(np.sqrt(wn2) / TWO_PI), "xi_n": float(np.mean(eta) / 2)},
                {"f_n": float(np.diff(f).mean() / 2),
                 "xi_n": float(np.std(eta) / 2 / np.sqrt(len(eta)))},
-               r2, nrmse, len(f), "circle fit", {"radius": R})
+               r2, nrmse, len(f), "circle fit", {"radius": R},
+               modes=(("f_n", "xi_n"),)).checked(resolution_hz=df)
 
 
 def half_power(f, A) -> Fit:
@@ -330,4 +409,4 @@ def half_power(f, A) -> Fit:
     return Fit({"f_n": fn, "xi_n": (f2 - f1) / (2 * fn)}, {"f_n": df / 2,
                                                            "xi_n": df / (2 * fn)},
                float("nan"), float("nan"), int(k - j + 1), "half-power bandwidth",
-               {"f1": f1, "f2": f2})
+               {"f1": f1, "f2": f2}, modes=(("f_n", "xi_n"),)).checked(resolution_hz=df)

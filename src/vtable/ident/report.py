@@ -1,8 +1,16 @@
-"""What `vtable identify` computes for a run: Table 3.1, springs from frequencies,
-rocking impedance, hysteresis, and the servo-loop fits (report units in the output)."""
+"""What `vtable identify` computes for a run: the servo-loop fit, Table 3.1, springs from
+frequencies, rocking impedance, hysteresis (report units in the output).
+
+Each section is its own guarded step: one that cannot be made (a channel absent, zero or
+constant, a record too short for the mode, a fit that fails) is listed under `skipped`
+with the reason, and the others are still made. Every fitted number carries its validity
+flags (vtable.ident.validity); numbers derived from flagged fits inherit them. Notes say
+what was assumed (no [specimen], a table without pitch, the table mass).
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -10,144 +18,439 @@ import numpy as np
 from vtable import units
 from vtable.analytic import closed_forms
 from vtable.errors import VtableError
+from vtable.ident import channels
 from vtable.ident.fits import Fit, fit_open_loop, fit_table_sdof
+from vtable.ident.frames import MIN_AVERAGES, frame_for_averages, frame_for_mode
 from vtable.ident.structure import (
+    ModalEstimate,
+    fixed_base,
+    fully_coupled,
     hysteresis,
+    pitch_channel,
+    pitch_is_zero,
     pitch_moment,
+    rocking_coupled,
     rocking_impedance,
-    rocking_springs,
-    table_3_1,
+    rocking_springs_fit,
 )
-from vtable.ident.tf import transfer_function
+from vtable.ident.tf import TransferFunction, transfer_function
+from vtable.ident.validity import Flag, flags_json, inherit, loop_flags, marker, settled
 from vtable.params.loops import OpenLoop
-from vtable.params.specimen import NoSpecimen, RigidBlock, SDOFSpecimen
-from vtable.runs.model import Run
+from vtable.params.specimen import NoSpecimen, RigidBlock, SDOFSpecimen, ShearBuilding
+from vtable.runs.model import FORMAT_UNITS, Run
+
+#: the servo-loop fits use this band (the report's 0-25 Hz random tests)
+SERVO_BAND = (0.2, 25.0)
+#: the EERC table's weight (§2.2, Table 8.1), for runs whose [table] is the eerc preset
+EERC_TABLE_KIP = 100.0
 
 
-def _fit_dict(fit: Fit) -> dict[str, Any]:
-    return {"params": fit.params, "stderr": fit.stderr, "r2": fit.r2, "nrmse": fit.nrmse,
-            "method": fit.method, "n_points": fit.n_points}
+def _fit_dict(fit: Fit | None) -> dict[str, Any] | None:
+    return None if fit is None else fit.to_json()
 
 
-def _has(run: Run, *names: str) -> bool:
-    return all(run.has(n) and not run.missing.get(n) for n in names)
+def _table_mass(run: Run, weight_kip: float) -> tuple[float, str | None]:
+    """m_t from the run's [table] (platen_mass_kg, or the eerc preset's 100 kips), else
+    `weight_kip` with a note saying it was assumed."""
+    t = run.meta.get("table") or {}
+    if isinstance(t, dict) and "platen_mass_kg" in t:
+        return float(t["platen_mass_kg"]), None
+    if isinstance(t, dict) and t.get("preset") == "eerc" and weight_kip == EERC_TABLE_KIP:
+        return units.weight_to_mass(weight_kip), None
+    return units.weight_to_mass(weight_kip), (
+        f"table mass: {weight_kip:g} kips assumed (the run's [table] gives no "
+        "platen_mass_kg)")
 
 
-def identify_run(run: Run, table_weight_kip: float = 100.0) -> dict[str, Any]:
-    """Everything identifiable from the run's channels; sections whose channels are absent
-    are listed under `skipped` with the reason."""
-    out: dict[str, Any] = {"run": run.name, "fs_hz": run.fs, "duration_s": run.duration,
-                           "reports": list(run.reports), "skipped": {}}
-    spec = run.specimen() if "specimen" in run.meta else NoSpecimen()
-    m_t = units.weight_to_mass(table_weight_kip)
-    # servo loop: x_t/x_c (eq 6.15 bare; eq 7.9 with a SDOF structure)
-    if _has(run, "h_span", "avg_hdisp"):
-        tf = transfer_function(run.channel("h_span"), run.channel("avg_hdisp"), run.fs,
-                               min(2048, 2 ** int(np.log2(len(run.time) / 4))))
-        try:
-            if isinstance(spec, NoSpecimen | RigidBlock):
-                fit = fit_open_loop(tf.f, tf.H, tf.coherence, band=(0.2, 25.0))
-                ol = OpenLoop(f_o=fit["f_o"], xi_o=fit["xi_o"], k_o=fit["k_o"])
-                out["open_loop"] = _fit_dict(fit)
-                out["open_loop"]["gain_margin"] = closed_forms.gain_margin_bare(ol)
-                mass = m_t + (spec.mass if isinstance(spec, RigidBlock) else 0.0)
-                f = np.array([2.0, 5.0, 10.0])
-                k_h, c_h = closed_forms.feedback_spring(mass, ol, f)  # eqs 5.15-5.16
-                out["horizontal_spring"] = {
-                    "f_hz": f.tolist(), "k_h_kip_per_in": units.from_si(k_h, "kip/in").tolist(),
-                    "c_h_lb_s_per_in": units.from_si(c_h, "lb-s/in").tolist()}
-            elif isinstance(spec, SDOFSpecimen):
-                fit = fit_table_sdof(tf.f, tf.H, spec.mass / m_t, tf.coherence, band=(0.2, 25.0))
-                out["table_sdof"] = _fit_dict(fit)
-        except VtableError as e:
-            out["skipped"]["servo loop fit"] = str(e)
-    else:
-        out["skipped"]["servo loop fit"] = "needs h_span and avg_hdisp"
-    # structure: Table 3.1, springs from frequencies
-    if isinstance(spec, SDOFSpecimen) and _has(run, "avg_hacc", "pitch_acc", "h_span") and (
-            _has(run, "acc_n_ne") or _has(run, "acc_n_nw")):
-        t = table_3_1(run)
-        out["table_3_1"] = [{"case": n, "f_hz": f, "damping": x} for n, f, x in t.rows()]
-        out["table_3_1_methods"] = {
-            e.name: {"primary": _fit_dict(e.primary), "appendix_d": _fit_dict(e.amplitude),
-                     "circle": _fit_dict(e.circle) if e.circle else None}
-            for e in (t.fixed, t.rocking, t.coupled)}
-        try:
-            k_r = closed_forms.rocking_stiffness_from_frequencies(t.fixed.f, t.rocking.f,
-                                                                 spec.mass, spec.height)
-            k_h = closed_forms.horizontal_stiffness_from_frequencies(
-                t.fixed.f, t.coupled.f, spec.mass, spec.height, k_r)
-            out["springs_from_frequencies"] = {
-                "k_r_lb_in_per_rad": units.from_si(k_r, "lb-in/rad"),
-                "k_h_kip_per_in": units.from_si(k_h, "kip/in"), "equations": "5.4, 5.5"}
-        except VtableError as e:
-            out["skipped"]["springs from frequencies"] = str(e)
-        f_c = t.coupled.f
-    else:
-        out["skipped"]["table 3.1"] = ("needs a sdof specimen and avg_hacc, pitch_acc, h_span "
-                                       "and acc_n_ne or acc_n_nw")
-        f_c = None
-    # rocking impedance and hysteresis from the vertical actuators and stabilizers
-    forces = [f"v{i}_force" for i in range(1, 5)] + [f"p{i}_stab" for i in range(1, 5)]
-    if _has(run, *forces) and (_has(run, "pitch_disp") or _has(run, "pitch_acc")):
-        G = {g: rocking_impedance(run, groups=grp) for g, grp in
-             (("total", ("vertical", "stabilizer")), ("vertical actuators", ("vertical",)),
-              ("stabilizers", ("stabilizer",)))}
-        if f_c is None:  # where the table pitches most, below 20 Hz
-            th = transfer_function(run.channel("h_span") if _has(run, "h_span") else
-                                   pitch_moment(run), run.channel("pitch_acc"), run.fs,
-                                   G["total"].f.size * 2 - 2)
-            band = (th.f > 0.5) & (th.f < 20.0)
-            f_c = float(th.f[band][np.argmax(np.abs(th.H[band]) / th.f[band] ** 2)])
-        f_eval = f_c
-        out["rocking_impedance"] = {"f_hz": f_eval, **{
-            g: dict(zip(("k_r_lb_in_per_rad", "c_r_lb_in_s_per_rad"),
-                        (units.from_si(k, "lb-in/rad"), units.from_si(c, "lb-in-s/rad")),
-                        strict=True))
-            for g, (k, c) in ((g, rocking_springs(tf, f_eval)) for g, tf in G.items())}}
-        if _has(run, "pitch_disp"):
-            h = hysteresis(run.channel("pitch_disp"), pitch_moment(run), run.dt, f_eval)
-            out["hysteresis"] = {"k_r_lb_in_per_rad": units.from_si(h.stiffness, "lb-in/rad"),
-                                 "c_r_lb_in_s_per_rad": units.from_si(h.damping_coefficient,
-                                                                      "lb-in-s/rad"),
-                                 "damping_ratio": h.damping_ratio, "equations": "5.12-5.13"}
-    else:
-        out["skipped"]["rocking impedance"] = "needs v1..v4_force, p1..p4_stab and pitch"
+def _section(out: dict[str, Any], name: str, step: Callable[[], None]) -> None:
+    """Run one section; a VtableError skips it with its message (anything else is a bug
+    and propagates)."""
+    try:
+        step()
+    except VtableError as e:
+        out["skipped"][name] = str(e)
+
+
+def _unusable_channels(run: Run) -> list[str]:
+    """The format's channels present but zero or constant throughout."""
+    out = []
+    for name in FORMAT_UNITS:
+        why = channels.channel_problem(run, name) if run.has(name) else None
+        if why and ("zero" in why or "constant" in why):
+            out.append(why)
     return out
 
 
+def identify_run(run: Run, table_weight_kip: float = EERC_TABLE_KIP) -> dict[str, Any]:
+    """Everything identifiable from the run's channels, each section in its own guarded
+    step; sections that cannot be made are listed under `skipped` with the reason."""
+    out: dict[str, Any] = {"run": run.name, "fs_hz": run.fs, "duration_s": run.duration,
+                           "reports": list(run.reports), "notes": [], "skipped": {}}
+    notes = out["notes"]
+    if "specimen" in run.meta:
+        spec = run.specimen()
+    else:
+        spec = NoSpecimen()
+        notes.append("no [specimen]: identified as a bare table")
+    notes.extend(_unusable_channels(run))
+    m_t, note = _table_mass(run, table_weight_kip)
+    if note and not isinstance(spec, ShearBuilding):
+        notes.append(note)
+
+    _section(out, "servo loop fit", lambda: _servo_loop(run, spec, m_t, out))
+    rows: dict[str, ModalEstimate] = {}
+    if isinstance(spec, SDOFSpecimen):
+        out["table_3_1"], out["table_3_1_methods"] = [], {}
+        if pitch_is_zero(run):
+            notes.append("pitch_acc is zero throughout: taken as a table without pitch "
+                         "(x_eff = x_t)")
+        why = channels.channel_problem(run, "h_span")
+        if why:
+            notes.append(f"{why}: H_f and H_r are H1 estimates with x_eff and x_t as inputs "
+                         "(sensor noise biases them near the fixed-base notch of x_eff)")
+        _section(out, "table 3.1: fixed base",
+                 lambda: _row(out, rows, "fixed", fixed_base(run)))
+        _section(out, "table 3.1: base rotation coupling", lambda: _row(
+            out, rows, "rocking", rocking_coupled(run, *_after(rows, "fixed"))))
+        _section(out, "table 3.1: transl. and rot. coupling", lambda: _row(
+            out, rows, "coupled", fully_coupled(
+                run, *_after(rows, "rocking" if "rocking" in rows else "fixed"))))
+        _section(out, "springs from frequencies", lambda: _springs(spec, rows, out))
+    else:
+        out["skipped"]["table 3.1"] = (
+            f"needs a sdof specimen, the run has {spec.kind}" +
+            (" (shear buildings: vtable.ident.structure.table_3_1)"
+             if isinstance(spec, ShearBuilding) else ""))
+    at: dict[str, Any] = {}
+    _section(out, "rocking impedance", lambda: _rocking(run, rows, out, at))
+    _section(out, "hysteresis", lambda: _hysteresis(run, out, at))
+    return out
+
+
+# ---- the servo loop -------------------------------------------------------------------
+def _servo_loop(run: Run, spec, m_t: float, out: dict[str, Any]) -> None:
+    """x_t/x_c: eq 6.15 (bare table, rigid mass) or eq 7.9 (a SDOF structure)."""
+    x_c, x_t = channels.require(run, "h_span", "avg_hdisp", purpose="the servo-loop fit x_t/x_c")
+    n_samples = len(run.time)
+    if isinstance(spec, NoSpecimen | RigidBlock):
+        # a broad loop resonance (ξ_o ~ 0.5): frames for averages, the report's 2048 at most
+        n = frame_for_averages(n_samples, MIN_AVERAGES, longest=2048) or \
+            frame_for_averages(n_samples, 2)
+        if n is None:
+            raise VtableError(f"{run.name}: {run.duration:.1f} s is too short for a transfer "
+                              "function with 2 averages")
+        tf = transfer_function(x_c, x_t, run.fs, n)
+        fit = fit_open_loop(tf.f, tf.H, tf.coherence, band=SERVO_BAND).checked(
+            averages=tf.averages)
+        ol = OpenLoop(f_o=fit["f_o"], xi_o=fit["xi_o"], k_o=fit["k_o"])
+        derived = inherit(fit.flags, "eq 6.15 fit")
+        d = _fit_dict(fit)
+        d["gain_margin"] = closed_forms.gain_margin_bare(ol)
+        d["gain_margin_flags"] = flags_json(derived)
+        out["open_loop"] = d
+        mass = m_t + (spec.mass if isinstance(spec, RigidBlock) else 0.0)
+        f = np.array([2.0, 5.0, 10.0])
+        k_h, c_h = closed_forms.feedback_spring(mass, ol, f)  # eqs 5.15-5.16
+        out["horizontal_spring"] = {
+            "f_hz": f.tolist(), "k_h_kip_per_in": units.from_si(k_h, "kip/in").tolist(),
+            "c_h_lb_s_per_in": units.from_si(c_h, "lb-s/in").tolist(),
+            "equations": "5.15, 5.16", "flags": flags_json(derived)}
+    elif isinstance(spec, SDOFSpecimen):
+        u = spec.mass / m_t
+
+        def fit_on(n: int) -> tuple[Fit, TransferFunction]:
+            tf = transfer_function(x_c, x_t, run.fs, n)
+            return fit_table_sdof(tf.f, tf.H, u, tf.coherence, band=SERVO_BAND).checked(
+                averages=tf.averages), tf
+
+        what = "eq 7.9 fit (the notch of f_s, ξ_s)"
+        choice = frame_for_mode(n_samples, run.fs, spec.frequency, spec.damping, what)
+        fit, _ = fit_on(choice.nperseg)
+        try:  # once more on frames for the fitted (f_s, ξ_s), if they are sound
+            again = frame_for_mode(n_samples, run.fs, fit["f_s"],
+                                   min(max(fit["xi_s"], 1e-4), 0.5), what)
+            if again.nperseg != choice.nperseg and settled(fit, ("f_s", "xi_s")):
+                fit, _ = fit_on(again.nperseg)
+                choice = again
+        except VtableError:
+            pass
+        d = _fit_dict(fit)
+        d["frame"] = choice.why
+        if channels.usable(run, "pitch_acc"):
+            d["note"] = ("eq 7.9 has no pitch: on a pitching table f_s, ξ_s are the "
+                         "structure's on the rocking table (compare Table 3.1's base "
+                         "rotation coupling)")
+        out["table_sdof"] = d
+    else:
+        raise VtableError("eq 6.15 is for a bare table or a rigid mass and eq 7.9 for a sdof "
+                          f"structure; no servo-loop model for a {spec.kind}")
+
+
+# ---- Table 3.1 and the springs ----------------------------------------------------------
+def _after(rows: dict[str, ModalEstimate], key: str) -> tuple[float, float]:
+    """(f, ξ) of an earlier row to start the next from."""
+    if key not in rows:
+        raise VtableError(f"needs the {key} row, which was skipped")
+    e = rows[key]
+    xi = float(min(max(e.xi, 1e-3), 0.5)) if np.isfinite(e.xi) else 0.02
+    return e.f, xi
+
+
+def _row(out: dict[str, Any], rows: dict[str, ModalEstimate], key: str,
+         e: ModalEstimate) -> None:
+    rows[key] = e
+    p = e.primary
+    out["table_3_1"].append({
+        "case": e.name, "f_hz": e.f, "damping": e.xi, "method": p.method,
+        "nperseg": 2 * (e.tf.f.size - 1), "averages": e.tf.averages,
+        "resolution_hz": e.tf.resolution_hz,
+        "frame": e.frame.why if e.frame else "given --nperseg",
+        "flags": flags_json(p.flags)})
+    out["table_3_1_methods"][e.name] = {
+        "primary": _fit_dict(p), "appendix_d": _fit_dict(e.amplitude),
+        "circle": _fit_dict(e.circle), "skipped": dict(e.skipped)}
+
+
+def _springs(spec: SDOFSpecimen, rows: dict[str, ModalEstimate], out: dict[str, Any]) -> None:
+    """k_r (eq 5.4) from the fixed-base and rocking-coupled frequencies, k_h (eq 5.5)
+    with the coupled one, as a `Fit` whose standard errors propagate the frequencies'
+    (k_r is undetermined when f_f and f_r differ by less than their errors); the
+    frequencies' flags carry over."""
+    for k in ("fixed", "rocking", "coupled"):
+        if k not in rows:
+            raise VtableError(f"needs the three Table 3.1 frequencies; the {k} row was skipped")
+    est = [rows["fixed"], rows["rocking"], rows["coupled"]]
+
+    def springs(f: np.ndarray) -> np.ndarray:
+        k_r = closed_forms.rocking_stiffness_from_frequencies(f[0], f[1], spec.mass, spec.height)
+        return np.array([k_r, closed_forms.horizontal_stiffness_from_frequencies(
+            f[0], f[2], spec.mass, spec.height, k_r)])
+
+    f = np.array([e.f for e in est])
+    sf = np.array([e.primary.stderr.get("f_n", np.nan) for e in est])
+    k = springs(f)
+    J = np.empty((2, 3))
+    for i in range(3):  # central differences, steps well inside the frequencies' spacing
+        h = 1e-7 * f[i]
+        J[:, i] = (springs(f + h * np.eye(3)[i]) - springs(f - h * np.eye(3)[i])) / (2 * h)
+    sk = np.sqrt((J**2) @ sf**2)
+    fit = Fit({"k_r": float(k[0]), "k_h": float(k[1])},
+              {"k_r": float(sk[0]), "k_h": float(sk[1])}, float("nan"), float("nan"), 3,
+              "eqs 5.4, 5.5 from the Table 3.1 frequencies").checked()
+    flags: list[Flag] = list(fit.flags)
+    for e in est:
+        flags += inherit(e.primary.flags, e.name, params=("f_n",))
+    out["springs_from_frequencies"] = {
+        "k_r_lb_in_per_rad": units.from_si(k[0], "lb-in/rad"),
+        "k_h_kip_per_in": units.from_si(k[1], "kip/in"),
+        "stderr": {"k_r_lb_in_per_rad": units.from_si(sk[0], "lb-in/rad"),
+                   "k_h_kip_per_in": units.from_si(sk[1], "kip/in")},
+        "equations": "5.4, 5.5", "flags": flags_json(flags)}
+
+
+# ---- rocking impedance and hysteresis ----------------------------------------------------
+def pitch_resonance(run: Run) -> tuple[float, list[Flag]]:
+    """Where the table pitches most per unit input, 0.5-20 Hz: the peak of |θ/x_c|
+    (θ/M without the command), over lines with coherence >= 0.5 and above the Hann
+    window's main lobe around 0 Hz (3 lines)."""
+    c = pitch_channel(run)
+    x = run.channels["h_span"] if channels.usable(run, "h_span") else pitch_moment(run)
+    n = frame_for_averages(len(run.time), MIN_AVERAGES) or frame_for_averages(len(run.time), 2)
+    if n is None:
+        raise VtableError(f"{run.name}: too short to locate the pitch resonance")
+    th = transfer_function(x, run.channels[c], run.fs, n)
+    p = 2 if c == "pitch_acc" else 0
+    df = th.f[1] - th.f[0]
+    band = (th.f >= max(0.5, 3 * df)) & (th.f <= 20.0) & (th.coherence >= 0.5)
+    if band.sum() < 3:
+        raise VtableError(f"{run.name}: no coherent pitch response in 0.5-20 Hz to evaluate "
+                          "G_r at")
+    fb = th.f[band]
+    amp = np.abs(th.H[band]) / fb**p
+    i = int(np.argmax(amp))
+    if i in (0, len(fb) - 1):
+        raise VtableError(f"{run.name}: the pitch response has no peak inside "
+                          f"{fb[0]:.3g}-{fb[-1]:.3g} Hz (largest at {fb[i]:.3g} Hz, the edge): "
+                          "no frequency to evaluate G_r at")
+    flags = []
+    if th.averages < MIN_AVERAGES:
+        flags.append(Flag("few_averages", f"pitch resonance located with {th.averages} "
+                          "averages"))
+    return float(fb[i]), flags
+
+
+def _rocking(run: Run, rows: dict[str, ModalEstimate], out: dict[str, Any],
+             at: dict[str, Any]) -> None:
+    """G_r = M/θ at the coupled frequency (or the pitch resonance without Table 3.1),
+    total and by group (eqs 5.9-5.11)."""
+    c = pitch_channel(run)
+    if "coupled" in rows:
+        f_eval = rows["coupled"].f
+        # G_r is smooth in ω: only a flagged frequency itself carries over
+        base = inherit(rows["coupled"].primary.flags, "coupled frequency", params=("f_n",),
+                       whole_fit=False)
+        where = "the Table 3.1 coupled frequency"
+    else:
+        f_eval, base = pitch_resonance(run)
+        where = "the pitch resonance of θ/x_c"
+    d: dict[str, Any] = {"f_hz": f_eval, "at": where, "theta_from": c, "skipped": {}}
+    for g, grp in (("total", ("vertical", "stabilizer")), ("vertical actuators", ("vertical",)),
+                   ("stabilizers", ("stabilizer",))):
+        try:
+            fit = rocking_springs_fit(rocking_impedance(run, groups=grp), f_eval, "G_r")
+        except VtableError as e:
+            if g == "total":
+                raise
+            d["skipped"][g] = str(e)
+            continue
+        d[g] = {"k_r_lb_in_per_rad": units.from_si(fit["k_r"], "lb-in/rad"),
+                "c_r_lb_in_s_per_rad": units.from_si(fit["c_r"], "lb-in-s/rad"),
+                "stderr": {"k_r_lb_in_per_rad": units.from_si(fit.stderr["k_r"], "lb-in/rad"),
+                           "c_r_lb_in_s_per_rad": units.from_si(fit.stderr["c_r"],
+                                                                "lb-in-s/rad")},
+                "coherence": fit.context.get("coherence"), "averages": fit.context["averages"],
+                "flags": flags_json([*fit.flags, *base])}
+    out["rocking_impedance"] = d
+    at["f"], at["flags"] = f_eval, base
+
+
+def _hysteresis(run: Run, out: dict[str, Any], at: dict[str, Any]) -> None:
+    """Eqs 5.12-5.13 on the moment-rotation loop at the G_r frequency."""
+    (th,) = channels.require(run, "pitch_disp", purpose="the moment-rotation loop")
+    if "f" not in at:
+        raise VtableError("needs the rocking-impedance frequency (that section was skipped)")
+    f_eval, base = at["f"], at["flags"]
+    h = hysteresis(th, pitch_moment(run), run.dt, f_eval)
+    reg = h.fit
+    loop = loop_flags(h.crest_factor, f_eval)
+    k_flags = [*(reg.flags if reg else ()), *base]
+    out["hysteresis"] = {
+        "f_hz": f_eval,
+        "k_r_lb_in_per_rad": units.from_si(h.stiffness, "lb-in/rad"),
+        "k_r_stderr_lb_in_per_rad": units.from_si(reg.stderr["k"], "lb-in/rad"),
+        "r2": reg.r2,
+        "c_r_lb_in_s_per_rad": units.from_si(h.damping_coefficient, "lb-in-s/rad"),
+        "damping_ratio": h.damping_ratio, "crest_factor": h.crest_factor,
+        "equations": "5.12-5.13", "flags": flags_json(k_flags),
+        "loop_flags": flags_json([*loop, *k_flags])}
+
+
+# ---- printing --------------------------------------------------------------------------
+def _warn_lines(flags: list[dict[str, Any]], indent: str = "      ") -> None:
+    seen = set()
+    for f in flags:
+        if f["text"] not in seen:
+            seen.add(f["text"])
+            print(f"{indent}⚠ {f['text']}")
+
+
+def _mark(flags: list[dict[str, Any]], param: str) -> str:
+    return marker([Flag(f["code"], f["text"], f["param"], f["source"]) for f in flags], param)
+
+
+def _frame(d: dict[str, Any]) -> str:
+    a, r = d.get("averages"), d.get("resolution_hz")
+    return "" if a is None else f", {int(a)} averages, Δf {r:.3g} Hz"
+
+
+def _v(x: float | None, fmt: str, scale: float = 1.0, width: int = 0) -> str:
+    """A number for the printed tables, "—" when there is none (NaN, None)."""
+    if x is None or not np.isfinite(x):
+        return f"{'—':>{width}}"
+    return f"{scale * x:{width}{fmt}}"
+
+
+def _print_methods(m: dict[str, Any]) -> None:
+    """The comparison methods of one Table 3.1 row, each with its flag markers."""
+    parts = []
+    for key, label in (("appendix_d", "appendix D"), ("circle", "circle fit")):
+        fit = m.get(key)
+        if fit is None or fit is m.get("primary") or (
+                m.get("primary") and fit["method"] == m["primary"]["method"]):
+            continue
+        p, fl = fit["params"], fit["flags"]
+        parts.append(f"{label} {_v(p['f_n'], '.3f')} Hz{_mark(fl, 'f_n')} "
+                     f"{_v(p['xi_n'], '.2f', 100)} %{_mark(fl, 'xi_n')}")
+    for label, why in m.get("skipped", {}).items():
+        parts.append(f"{label} skipped ({why})")
+    if parts:
+        print("      compare: " + "; ".join(parts))
+
+
 def print_identification(d: dict[str, Any]) -> None:
+    """The identification of one run, each number with its flags (⚠)."""
     print(f"{d['run']}: {d['duration_s']:.1f} s at {d['fs_hz']:.0f} Hz")
     for r in d["reports"]:
         print(f"  note: {r}")
+    for r in d.get("notes", []):
+        print(f"  note: {r}")
     if "open_loop" in d:
-        p = d["open_loop"]["params"]
-        e = d["open_loop"]["stderr"]
-        print(f"  open loop (eq 6.15): f_o {p['f_o']:.3f} ± {e['f_o']:.3f} Hz, ξ_o "
-              f"{p['xi_o']:.3f} ± {e['xi_o']:.3f}, k_o {p['k_o']:.2f} ± {e['k_o']:.2f} 1/s "
-              f"(R² {d['open_loop']['r2']:.4f}); gain margin {d['open_loop']['gain_margin']:.2f}")
+        o = d["open_loop"]
+        p, e, fl = o["params"], o["stderr"], o["flags"]
+        gm = "" if not o["gain_margin_flags"] else " ⚠ from a flagged fit"
+        print(f"  open loop (eq 6.15): f_o {p['f_o']:.3f} ± {e['f_o']:.3g} Hz"
+              f"{_mark(fl, 'f_o')}, ξ_o {p['xi_o']:.3f} ± {e['xi_o']:.3g}{_mark(fl, 'xi_o')}, "
+              f"k_o {p['k_o']:.2f} ± {e['k_o']:.3g} 1/s{_mark(fl, 'k_o')} "
+              f"(R² {o['r2']:.4f}{_frame(o)}); gain margin (eq 6.20) "
+              f"{o['gain_margin']:.2f}{gm}")
+        _warn_lines(fl)
+        hs = d.get("horizontal_spring")
+        if hs:
+            ks = ", ".join(f"{k:.3g}" for k in hs["k_h_kip_per_in"])
+            cs = ", ".join(f"{c:.3g}" for c in hs["c_h_lb_s_per_in"])
+            fs = ", ".join(f"{f:g}" for f in hs["f_hz"])
+            print(f"  horizontal spring (eqs 5.15-5.16) at {fs} Hz: k_h {ks} kip/in, c_h {cs} "
+                  "lb-s/in"
+                  + (" ⚠ from a flagged fit" if hs["flags"] else ""))
     if "table_sdof" in d:
-        p = d["table_sdof"]["params"]
-        print(f"  table + SDOF (eq 7.9): f_o {p['f_o']:.2f} Hz, ξ_o {p['xi_o']:.3f}, k_o "
-              f"{p['k_o']:.2f}, f_s {p['f_s']:.3f} Hz, ξ_s {p['xi_s']:.4f} "
-              f"(R² {d['table_sdof']['r2']:.4f})")
-    if "table_3_1" in d:
-        print(f"  {'Table 3.1':<28} {'f (Hz)':>8} {'damping (%)':>12}")
+        o = d["table_sdof"]
+        p, fl = o["params"], o["flags"]
+        print(f"  table + SDOF (eq 7.9): f_o {p['f_o']:.2f} Hz{_mark(fl, 'f_o')}, ξ_o "
+              f"{p['xi_o']:.3f}{_mark(fl, 'xi_o')}, k_o {p['k_o']:.2f}{_mark(fl, 'k_o')}, "
+              f"f_s {p['f_s']:.3f} Hz{_mark(fl, 'f_s')}, ξ_s {p['xi_s']:.4f}"
+              f"{_mark(fl, 'xi_s')} (R² {o['r2']:.4f}{_frame(o)})")
+        _warn_lines(fl)
+        if fl:
+            print(f"      frames: {o['frame']}")
+        if o.get("note"):
+            print(f"      note: {o['note']}")
+    if d.get("table_3_1"):
+        print(f"  {'Table 3.1':<28} {'f (Hz)':>8} {'damping (%)':>12}   frames")
         for row in d["table_3_1"]:
-            print(f"  {row['case']:<28} {row['f_hz']:8.3f} {100 * row['damping']:12.2f}")
+            fl = row["flags"]
+            print(f"  {row['case']:<28} {_v(row['f_hz'], '.3f', width=8)}{_mark(fl, 'f_n')} "
+                  f"{_v(row['damping'], '.2f', 100, 12)}{_mark(fl, 'xi_n')}   "
+                  f"{row['nperseg']} pts, {row['averages']} avg, Δf {row['resolution_hz']:.3g} Hz")
+            _warn_lines(fl)
+            if fl:
+                print(f"      frames: {row['frame']}")
+            _print_methods(d.get("table_3_1_methods", {}).get(row["case"], {}))
     if "springs_from_frequencies" in d:
         s = d["springs_from_frequencies"]
-        print(f"  springs (eqs 5.4, 5.5): k_r {s['k_r_lb_in_per_rad']:.3g} lb-in/rad, "
-              f"k_h {s['k_h_kip_per_in']:.3g} kip/in")
+        fl, e = s["flags"], s["stderr"]
+        print(f"  springs (eqs 5.4, 5.5): k_r {s['k_r_lb_in_per_rad']:.3g} ± "
+              f"{e['k_r_lb_in_per_rad']:.2g}{_mark(fl, 'k_r')} lb-in/rad, k_h "
+              f"{s['k_h_kip_per_in']:.3g} ± {e['k_h_kip_per_in']:.2g}{_mark(fl, 'k_h')} kip/in"
+              + (" ⚠ from flagged frequencies" if any(f["source"] for f in fl) else ""))
+        _warn_lines(s["flags"])
     if "rocking_impedance" in d:
         g = d["rocking_impedance"]
-        print(f"  rocking impedance G_r = M/θ at {g['f_hz']:.3f} Hz (eqs 5.9-5.11):")
+        print(f"  rocking impedance G_r = M/θ at {g['f_hz']:.3f} Hz, {g['at']} "
+              f"(eqs 5.9-5.11, θ from {g['theta_from']}):")
         for k in ("total", "vertical actuators", "stabilizers"):
-            print(f"    {k:<20} k_r {g[k]['k_r_lb_in_per_rad']:.3g} lb-in/rad, c_r "
-                  f"{g[k]['c_r_lb_in_s_per_rad']:.3g} lb-in-s/rad")
+            if k not in g:
+                print(f"    {k:<20} skipped: {g['skipped'][k]}")
+                continue
+            fl = g[k]["flags"]
+            print(f"    {k:<20} k_r {g[k]['k_r_lb_in_per_rad']:.3g}{_mark(fl, 'k_r')} lb-in/rad, "
+                  f"c_r {g[k]['c_r_lb_in_s_per_rad']:.3g}{_mark(fl, 'c_r')} lb-in-s/rad "
+                  f"(γ² {g[k]['coherence']:.3f}, {int(g[k]['averages'])} avg)")
+            _warn_lines(fl, "        ")
     if "hysteresis" in d:
         h = d["hysteresis"]
-        print(f"  hysteresis (eqs 5.12-5.13): k_r {h['k_r_lb_in_per_rad']:.3g} lb-in/rad, "
-              f"ξ_v {100 * h['damping_ratio']:.2f} %")
+        print(f"  hysteresis (eqs 5.12-5.13): k_r {h['k_r_lb_in_per_rad']:.3g} lb-in/rad "
+              f"(R² {h['r2']:.3f}){' ⚠' if h['flags'] else ''}, ξ_v "
+              f"{100 * h['damping_ratio']:.2f} %{' ⚠' if h['loop_flags'] else ''}")
+        _warn_lines(h["loop_flags"])
     for k, why in d["skipped"].items():
         print(f"  skipped {k}: {why}")

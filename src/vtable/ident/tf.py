@@ -1,7 +1,9 @@
 """Transfer-function estimation between two channels (report §3.2, eqs 3.1-3.2).
 
 H1 = G_xy/G_xx with coherence γ² = |G_xy|²/(G_xx G_yy), averaged over Hann-windowed,
-overlapping frames (scipy.signal.csd / welch); 2048-point frames as in §3.2.
+overlapping frames (scipy.signal.csd / welch); 2048-point frames as in §3.2 unless told.
+Which frame length a record allows (averages against resolution) is vtable.ident.frames'
+job; with one frame the coherence is 1 by construction.
 """
 
 from __future__ import annotations
@@ -22,6 +24,11 @@ class TransferFunction:
     H: np.ndarray
     coherence: np.ndarray
     averages: int
+
+    @property
+    def resolution_hz(self) -> float:
+        """Line spacing Δf = fs/nperseg."""
+        return float(self.f[1] - self.f[0])
 
     def at(self, f_hz) -> np.ndarray:
         """Interpolated H at other frequencies (real and imaginary parts separately)."""
