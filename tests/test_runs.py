@@ -743,3 +743,180 @@ def test_reading_costs_about_the_samples(tmp_path):
     # the samples plus a fixed number of text blocks (the reader before issue 9: 9x)
     assert peak < samples + 12 * BLOCK, f"peak {peak / samples:.2f} x the samples"
     assert peak < 2.5 * samples
+
+
+# ---- the property: any run file is a Run or one line naming the file ---------------------
+RATES = (100.0, 137.5, 150.0, 200.0, 256.0, 500.0, 1000.0, 1024.0)
+PRESENT = ("h_span", "avg_hdisp", "avg_hacc", "h1_force", "pitch_acc", "floor2_acc", "strain")
+WRONG_UNIT = {"length": "g", "acceleration": "kip", "force": "rad", "angular acceleration": "Hz"}
+LEVELS = ("top", "table", "table.horizontal", "table.controller", "table.limits", "control",
+          "control.horizontal", "command", "newtable")
+VALID = ("bom", "crlf", "trailing_blank", "unknown_key", "nan_cell", "empty_cell", "drop_table",
+         "drop_specimen", "drop_command", "units_noncolumn", "extra_unit")
+INVALID = ("semicolon", "tab", "non_utf8", "nul", "dup_time", "dec_time", "lost_sample",
+           "inf_cell", "huge_cell", "underscore_cell", "fullwidth_cell", "wrong_dim_unit",
+           "list_specimen", "list_control", "list_command", "bad_preset", "damping_percent",
+           "cut_fields", "band_above_nyquist")
+
+
+def _toml(meta: dict) -> str:
+    def val(v):
+        if isinstance(v, bool):
+            return str(v).lower()
+        if isinstance(v, str):
+            return '"' + v + '"'
+        if isinstance(v, list):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{ " + ", ".join(f"{k} = {val(x)}" for k, x in v.items()) + " }"
+        return repr(v)
+
+    lines = [f"{k} = {val(v)}" for k, v in meta.items() if not isinstance(v, dict)]
+    for k, v in meta.items():
+        if isinstance(v, dict):
+            lines += [f"[{k}]"] + [f"{kk} = {val(vv)}" for kk, vv in v.items()]
+    return "\n".join(lines) + "\n"
+
+
+@st.composite
+def run_files(draw):
+    """A valid run at an odd rate, then 0-3 mutations; returns the files, whether the
+    reader must refuse them (None: it may), and the unknown keys it must report."""
+    from vtable.runs.model import channel_dimension
+
+    fs = draw(st.sampled_from(RATES))
+    n = draw(st.integers(16, 80))
+    t0 = draw(st.sampled_from([0.0, -3.25, 0.5, 7.0, 1000.0]))
+    names = draw(st.lists(st.sampled_from(PRESENT), min_size=1, max_size=4, unique=True))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    t = t0 + np.arange(n) / fs
+    ulp7 = 10.0 ** (np.floor(np.log10(max(np.max(np.abs(t)), 1e-12))) - 6)
+    digits7 = draw(st.booleans()) and ulp7 < 0.4e-3 / fs  # 7-digit stamps the spec accepts
+    tcells = [f"{v:.7g}" if digits7 else repr(float(v)) for v in t]
+    rows = [[tcells[i]] + [repr(float(x)) for x in rng.uniform(-1, 1, len(names))]
+            for i in range(n)]
+    meta = {"format": "vtable-run/1", "title": "prop",
+            "table": {"preset": "eerc", "horizontal": {"count": 3},
+                      "controller": {"kind": "three_variable"}, "limits": {"stroke_in": 5.0}},
+            "control": {"horizontal": {"gain": 9.0, "delta_p": 1.5, "rate": 5.0}},
+            "specimen": {"kind": "sdof", "weight_kip": 68.4, "height_in": 219.0,
+                         "frequency_hz": 2.87, "damping": 0.01},
+            "command": {"kind": "random", "band_hz": [0.0, 25.0], "span": 400},
+            "units": {}}
+    muts = draw(st.lists(st.sampled_from(VALID + INVALID + ("truncate",)), max_size=3,
+                         unique=True))
+    # drop tables first, then valid changes, then invalid ones (which nothing undoes)
+    muts.sort(key=lambda m: 0 if m.startswith("drop_") else 1 if m in VALID else 2)
+    must_fail, may, unknown = False, False, []
+    mid = draw(st.integers(1, n - 3))
+    col = 1 + draw(st.integers(0, len(names) - 1))
+    for m in muts:
+        if m == "unknown_key":
+            level, key = draw(st.sampled_from(LEVELS)), "zz_" + draw(
+                st.text(string.ascii_lowercase, min_size=1, max_size=5))
+            target = {"top": meta, "newtable": meta.setdefault("zz_table", {})}.get(level)
+            if target is None:
+                parts = level.split(".")
+                if parts[0] not in meta:
+                    continue
+                target = meta[parts[0]]
+                for p in parts[1:]:
+                    target = target.setdefault(p, {})
+            target[key] = 1
+            unknown.append(key if level != "newtable" else "zz_table")
+        elif m in ("nan_cell", "empty_cell"):
+            rows[mid][col] = "nan" if m == "nan_cell" else ""
+        elif m.startswith("drop_"):
+            meta.pop(m[5:], None)
+        elif m == "units_noncolumn":
+            meta["units"]["zz_nocolumn"] = "mm"
+            unknown.append("zz_nocolumn")
+        elif m == "extra_unit" and "strain" in names:
+            meta["units"]["strain"] = draw(st.sampled_from(sorted(units.UNITS)))
+        elif m in ("semicolon", "tab"):
+            sep = ";" if m == "semicolon" else "\t"
+            rows[mid] = [sep.join(rows[mid][:2]), *rows[mid][2:], ""]  # as many cells
+            must_fail = True
+        elif m == "dup_time":
+            rows[mid + 1][0] = rows[mid][0]
+            must_fail = True
+        elif m == "dec_time":
+            rows[mid][0], rows[mid + 1][0] = rows[mid + 1][0], rows[mid][0]
+            must_fail = True
+        elif m == "lost_sample":
+            del rows[mid]
+            must_fail = True
+        elif m in ("inf_cell", "huge_cell", "underscore_cell", "fullwidth_cell"):
+            rows[mid][col] = {"inf_cell": "inf", "huge_cell": "1e308", "underscore_cell": "1_0",
+                              "fullwidth_cell": "１"}[m]
+            must_fail = True
+        elif m == "wrong_dim_unit":
+            dim = channel_dimension(names[col - 1])
+            if dim is not None:
+                meta["units"][names[col - 1]] = WRONG_UNIT[dim]
+                must_fail = True
+        elif m.startswith("list_") and m[5:] in meta:
+            sec, key = {"list_specimen": ("specimen", "weight_kip"),
+                        "list_control": ("control", "horizontal"),
+                        "list_command": ("command", "span")}[m]
+            if sec == "control":
+                meta[sec][key]["gain"] = [9.0]
+            else:
+                meta[sec][key] = [1.0]
+            must_fail = True
+        elif m == "bad_preset" and "table" in meta:
+            meta["table"]["preset"] = draw(st.sampled_from(["", "no-such-table", "EERC"]))
+            must_fail = True
+        elif m == "damping_percent" and "specimen" in meta:
+            meta["specimen"]["damping"] = 2.0
+            must_fail = True
+        elif m == "band_above_nyquist" and "command" in meta:
+            meta["command"]["band_hz"] = [0.0, fs]
+            must_fail = True
+    text = "time," + ",".join(names) + "\n" + "".join(",".join(r) + "\n" for r in rows)
+    if "cut_fields" in muts:
+        text = text[:text.rstrip("\n").rfind(",")]
+        must_fail = True
+    if "trailing_blank" in muts:
+        text += "\n  \n"
+    if "crlf" in muts:
+        text = text.replace("\n", "\r\n")
+    data = text.encode("utf-8")
+    if "bom" in muts:
+        data = b"\xef\xbb\xbf" + data
+    if "non_utf8" in muts or "nul" in muts:
+        at = data.index(b"\n") + 1 + draw(st.integers(0, len(data) - data.index(b"\n") - 3))
+        data = data[:at] + (b"\xff\xfe" if "non_utf8" in muts else b"\x00") + data[at:]
+        must_fail = True
+    if "truncate" in muts:
+        data = data[:draw(st.integers(0, len(data)))]
+        may = True
+    if not meta["units"]:
+        del meta["units"]
+    return data, _toml(meta), (None if may else must_fail), unknown, (fs, n, names, muts)
+
+
+@settings(max_examples=350, deadline=None, suppress_health_check=[
+    HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.data_too_large])
+@given(case=run_files())
+def test_any_run_file_is_a_run_or_one_line(tmp_path, case):
+    data, toml, must_fail, unknown, (fs, n, names, _mutations) = case
+    (tmp_path / "h.csv").write_bytes(data)
+    (tmp_path / "h.toml").write_text(toml)
+    try:
+        run = read_run(tmp_path / "h.toml")
+    except VtableError as e:
+        msg = str(e)
+        assert "\n" not in msg and ("h.csv" in msg or "h.toml" in msg), msg
+        assert must_fail is not False, f"a valid run was refused: {msg}"
+        return
+    assert must_fail is not True, "an invalid run was accepted"
+    assert np.all(np.diff(run.time) > 0)
+    for h in run.channels:
+        assert len(run.channels[h]) == len(run.time)
+        assert np.isnan(run.channels[h]).sum() == run.missing.get(h, 0)
+    if must_fail is False:  # untouched samples: exactly what was written
+        assert list(run.channels) == names and len(run.time) == n
+        assert run.fs == pytest.approx(fs, rel=1e-5)
+    for key in unknown:
+        assert any(repr(key) in m for m in run.reports), (key, run.reports)

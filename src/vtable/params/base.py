@@ -165,8 +165,9 @@ def check_number(v: Any, where: str, unit: str = "1") -> float:
     dim = units.dimension(unit)
     limit = units.PLAUSIBLE_MAX[dim]
     if not abs(si) <= limit:
-        raise VtableError(f"{where}: {_show(v)} {unit} is not a plausible {dim} (the limit is "
-                          f"{units.from_si(limit, unit):g} {unit})")
+        shown = f"{x:.6g}" if math.isfinite(x) else _show(v)
+        raise VtableError(f"{where}: {shown} {unit} is not a plausible {units.noun(dim)} (the "
+                          f"limit is {units.from_si(limit, unit):g} {unit})")
     return si
 
 

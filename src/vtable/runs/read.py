@@ -37,7 +37,7 @@ UNIFORM_TOL = 1e-3
 #: time stamps closer than this fraction of a step to the fitted grid are kept as they are
 #: (float rounding of a uniform grid); otherwise the grid t0 + k·dt replaces them
 GRID_TOL = 1e-9
-BLOCK = 1 << 22  # bytes read at a time
+BLOCK = 1 << 20  # bytes read at a time (the reader needs about 10 blocks beyond the samples)
 HEADER_MAX = 1 << 20
 
 _BOM = b"\xef\xbb\xbf"
@@ -281,8 +281,9 @@ def _count_lines(fh: IO[bytes]) -> int:
     return n + (last != b"\n")
 
 
-def read_csv(path: Path) -> tuple[list[str], np.ndarray]:
-    """Header and values of RUN.csv as a (columns x rows) array, NaN for missing samples.
+def read_csv(path: Path) -> tuple[list[str], np.ndarray, list[str]]:
+    """Header and values of RUN.csv as a (columns x rows) array, NaN for missing samples,
+    and notes (a last line without a line end).
 
     Memory: the array plus one block of text (`BLOCK` bytes and its cells)."""
     try:
@@ -299,7 +300,7 @@ def read_csv(path: Path) -> tuple[list[str], np.ndarray]:
                 from None
 
 
-def _read_csv(fh: IO[bytes], path: Path) -> tuple[list[str], np.ndarray]:
+def _read_csv(fh: IO[bytes], path: Path) -> tuple[list[str], np.ndarray, list[str]]:
     first = fh.readline(HEADER_MAX)
     if len(first) == HEADER_MAX and not first.endswith(b"\n"):
         raise VtableError(f"{path}: line 1 is longer than {HEADER_MAX} bytes; not a run CSV")
@@ -315,19 +316,24 @@ def _read_csv(fh: IO[bytes], path: Path) -> tuple[list[str], np.ndarray]:
         carry = block[cut:]
         if cut:
             rd.block(block[:cut])
+    notes = []
     if carry:
+        line = rd.line
         rd.block(carry + b"\n", last=True)
+        if carry.strip(b" \t\r"):
+            notes.append(f"{path}: the last line ({line}) has no line end; if the file was cut "
+                         "short, its last sample may be incomplete")
     data = rd.rows()
     if data.shape[1] < 2:
         raise VtableError(f"{path}: needs at least two samples, got {data.shape[1]}")
-    return header, data
+    return header, data, notes
 
 
 def parse_csv(text: str, where: Path) -> tuple[list[str], np.ndarray, dict[str, int]]:
     """Header, values (rows x columns, NaN for `nan` or empty) and missing counts of a
     run CSV given as text (the file reader is `read_csv`)."""
     fh = io.BytesIO(text.encode("utf-8"))
-    header, data = _read_csv(fh, Path(where))
+    header, data, _ = _read_csv(fh, Path(where))
     missing = {h: int(np.isnan(data[j]).sum()) for j, h in enumerate(header)}
     return header, data.T, missing
 
@@ -380,16 +386,16 @@ def _locate(first_line: int, what: str) -> Callable[[int], str]:
 
 def _check_channel(name: str, v: np.ndarray, unit: str, where: Path | str,
                    at: Callable[[int], str]) -> None:
-    """Values (SI) of plausible magnitude for the channel's dimension; finite or NaN."""
+    """Values (in `unit`, before conversion) of plausible magnitude for the channel's
+    dimension (`units.PLAUSIBLE_MAX`); finite or NaN."""
     dim = un.dimension(unit)
-    limit = un.PLAUSIBLE_MAX[dim]
+    limit = un.from_si(un.PLAUSIBLE_MAX[dim], unit)
     a = np.abs(v)
     peak = np.fmax.reduce(a) if len(a) else 0.0
     if peak > limit:  # False for NaN
         i = int(np.flatnonzero(a > limit)[0])
-        raise VtableError(f"{where}: {at(i)}, column {name!r}: {un.from_si(v[i], unit):.6g} "
-                          f"{unit} is not a plausible {un.noun(dim)} (the limit is "
-                          f"{un.from_si(limit, unit):.3g} {unit})")
+        raise VtableError(f"{where}: {at(i)}, column {name!r}: {v[i]:.6g} {unit} is not a "
+                          f"plausible {un.noun(dim)} (the limit is {limit:.3g} {unit})")
 
 
 def _channel_reports(name: str, v: np.ndarray, unit: str, where: Path | str,
@@ -418,8 +424,8 @@ def _assemble(name: str, header: list[str], data: np.ndarray, meta: dict[str, An
     plausibility, reports, the checks that need the sampling rate."""
     overrides = meta.get("units", {})
     t_unit = overrides.get("time", "s")
+    _check_channel("time", data[0], t_unit, data_where, at)
     t = data[0] * un.factor(t_unit) if t_unit != "s" else data[0]
-    _check_channel("time", t, "s", data_where, at)
     time, dev = check_time(t, data_where, first_line, what)
     if time is not t:
         dt = (time[-1] - time[0]) / (len(time) - 1)
@@ -435,11 +441,10 @@ def _assemble(name: str, header: list[str], data: np.ndarray, meta: dict[str, An
             extra.append(h)
         units[h] = unit or "1"
         v = data[j]
-        if units[h] != "1":
-            f = un.factor(units[h])
-            if f != 1.0:
-                v *= f  # in place: the array is the reader's own
         _check_channel(h, v, units[h], data_where, at)
+        f = un.factor(units[h])
+        if f != 1.0:
+            v *= f  # in place: the array is the reader's own
         channels[h] = v
         reports += _channel_reports(h, v, units[h], data_where, at)
     if extra:
@@ -482,7 +487,8 @@ def read_run(path: str | Path) -> Run:
     """
     toml_path, csv_path = _paths(path)
     meta, reports = read_meta(toml_path)
-    header, data = read_csv(csv_path)
+    header, data, notes = read_csv(csv_path)
+    reports += notes
     return _assemble(str(_stem(toml_path)), header, data, meta, reports, str(toml_path),
                      csv_path, toml_path, _locate(2, "line"), 2, "line")
 
