@@ -920,3 +920,18 @@ def test_any_run_file_is_a_run_or_one_line(tmp_path, case):
         assert run.fs == pytest.approx(fs, rel=1e-5)
     for key in unknown:
         assert any(repr(key) in m for m in run.reports), (key, run.reports)
+
+
+def test_hdf5_time_unit_and_units_of_no_channel(tmp_path):
+    import h5py
+
+    r = _sample(tmp_path)
+    p = write_hdf5(r, tmp_path / "u.h5")
+    with h5py.File(p, "a") as f:
+        f.attrs["toml"] = f.attrs["toml"].replace("[units]", '[units]\ntime = "ms"\n'
+                                                  'ghost = "in"')
+        f["time"][...] = f["time"][...] * 1000.0
+    back = read_hdf5(p)
+    np.testing.assert_allclose(back.time, r.time, rtol=1e-15)
+    assert back.fs == pytest.approx(200.0)
+    assert any("[units] names 'ghost', which is not a column" in m for m in back.reports)

@@ -154,6 +154,9 @@ def _header(first: bytes, where: Path) -> list[str]:
         raise VtableError(f"{where}: line 1 is not UTF-8 text (byte {e.start})") from None
     if not text.strip():
         raise VtableError(f"{where}: empty file; expected a header line starting with 'time'")
+    if "\r" in text:
+        raise VtableError(f"{where}: line 1 holds a lone carriage return (old Mac line ends?); "
+                          "expected lines ending in LF or CRLF")
     try:
         header = [h.strip() for h in next(csv.reader([text]))]
     except csv.Error as e:
@@ -602,11 +605,15 @@ def read_hdf5(path: str | Path) -> Run:
             group = f["channels"]
             order = [str(x) for x in f.attrs.get("order", [])]
             members = list(group.keys())
-            if sorted(order) != sorted(members):
+            if sorted(order) != sorted(members) or "time" in order:
                 raise VtableError(f"{p}: attribute 'order' does not list the datasets of "
                                   "/channels")
-            t = _dataset(f["time"], "time", p, None)
-            cols = [t] + [_dataset(group[h], h, p, len(t)) for h in order]
+            n = _dataset(f["time"], "time", p, None)
+            data = np.empty((len(order) + 1, n))
+            f["time"].read_direct(data[0])
+            for j, h in enumerate(order, start=1):
+                _dataset(group[h], h, p, n)
+                group[h].read_direct(data[j])  # straight into the array: no copies
     except VtableError:
         raise
     except (OSError, KeyError, ValueError, TypeError, RuntimeError, UnicodeDecodeError) as e:
@@ -618,10 +625,9 @@ def read_hdf5(path: str | Path) -> Run:
     override = {h: u for h, u in units.items() if FORMAT_UNITS.get(h) != u and u != "1"}
     if override:
         meta["units"] = override
-    if len(t) < 2:
-        raise VtableError(f"{p}: needs at least two samples, got {len(t)}")
-    data = np.vstack(cols)
-    run_meta = {**meta, "units": {h: units.get(h, "1") for h in order}}
+    if n < 2:
+        raise VtableError(f"{p}: needs at least two samples, got {n}")
+    run_meta = {**meta, "units": {**units, **{h: units.get(h, "1") for h in order}}}
     run = _assemble(str(_stem_h5(p)), ["time", *order], data, run_meta, reports, str(p), p, p,
                     _locate(0, "sample"), 0, "sample")
     run.meta = meta
@@ -632,14 +638,15 @@ def _stem_h5(p: Path) -> Path:
     return p.with_name(p.name[: -len(p.suffix)]) if p.suffix else p
 
 
-def _dataset(ds: Any, name: str, p: Path, n: int | None) -> np.ndarray:
+def _dataset(ds: Any, name: str, p: Path, n: int | None) -> int:
+    """Check a dataset is 1-D, numeric and (for a channel) as long as /time; its length."""
     import h5py
 
     if not isinstance(ds, h5py.Dataset) or ds.ndim != 1 or ds.dtype.kind not in "fiu":
         raise VtableError(f"{p}: {name!r} must be a one-dimensional numeric dataset")
     if n is not None and ds.shape[0] != n:
         raise VtableError(f"{p}: channel {name!r} has {ds.shape[0]} samples, /time {n}")
-    return np.asarray(ds, dtype=float)
+    return int(ds.shape[0])
 
 
 def read_any(path: str | Path) -> Run:
