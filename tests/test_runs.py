@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from vtable import units
@@ -780,7 +780,7 @@ def _toml(meta: dict) -> str:
 
 @st.composite
 def run_files(draw):
-    """A valid run at an odd rate, then 0-3 mutations; returns the files, whether the
+    """A valid run at an odd rate, then 1-3 mutations; returns the files, whether the
     reader must refuse them (None: it may), and the unknown keys it must report."""
     from vtable.runs.model import channel_dimension
 
@@ -803,9 +803,11 @@ def run_files(draw):
                          "frequency_hz": 2.87, "damping": 0.01},
             "command": {"kind": "random", "band_hz": [0.0, 25.0], "span": 400},
             "units": {}}
-    muts = draw(st.lists(st.sampled_from(VALID + INVALID + ("truncate",)), max_size=3,
-                         unique=True))
+    k = draw(st.integers(1, 3))
+    muts = draw(st.permutations(VALID + INVALID + ("truncate",)))[:k]
+    muts += ["unknown_key"] * draw(st.integers(0, 2))  # unknown keys at random levels
     # drop tables first, then valid changes, then invalid ones (which nothing undoes)
+    muts = [m for i, m in enumerate(muts) if m == "unknown_key" or m not in muts[:i]]
     muts.sort(key=lambda m: 0 if m.startswith("drop_") else 1 if m in VALID else 2)
     must_fail, may, unknown = False, False, []
     mid = draw(st.integers(1, n - 3))
@@ -896,20 +898,24 @@ def run_files(draw):
     return data, _toml(meta), (None if may else must_fail), unknown, (fs, n, names, muts)
 
 
-@settings(max_examples=350, deadline=None, suppress_health_check=[
+@settings(max_examples=400, deadline=None, suppress_health_check=[
     HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.data_too_large])
 @given(case=run_files())
 def test_any_run_file_is_a_run_or_one_line(tmp_path, case):
-    data, toml, must_fail, unknown, (fs, n, names, _mutations) = case
+    data, toml, must_fail, unknown, (fs, n, names, mutations) = case
+    for m in mutations:
+        event(m)
     (tmp_path / "h.csv").write_bytes(data)
     (tmp_path / "h.toml").write_text(toml)
     try:
         run = read_run(tmp_path / "h.toml")
     except VtableError as e:
+        event("refused")
         msg = str(e)
         assert "\n" not in msg and ("h.csv" in msg or "h.toml" in msg), msg
         assert must_fail is not False, f"a valid run was refused: {msg}"
         return
+    event("accepted")
     assert must_fail is not True, "an invalid run was accepted"
     assert np.all(np.diff(run.time) > 0)
     for h in run.channels:
