@@ -941,3 +941,17 @@ def test_hdf5_time_unit_and_units_of_no_channel(tmp_path):
     np.testing.assert_allclose(back.time, r.time, rtol=1e-15)
     assert back.fs == pytest.approx(200.0)
     assert any("[units] names 'ghost', which is not a column" in m for m in back.reports)
+
+
+@pytest.mark.parametrize("toml, msg", [
+    (b'format = "vtable-run/1"\ntitle = "\xe9"\n', "not UTF-8 text (byte 33)"),
+    (b"\x00\x01\x02binary", "binary data (NUL bytes), not a text file"),
+    (b'format = "vtable-run/1"\ntitle = 5\n', "key 'title' must be a string, got 5"),
+    (b'format = "vtable-run/1"\ncontrol = 5\n', "[control] must be a table, got int"),
+])
+def test_bad_toml_files_are_one_line(tmp_path, toml, msg):
+    (tmp_path / "b.csv").write_text(CSV_OK)
+    (tmp_path / "b.toml").write_bytes(toml)
+    with pytest.raises(VtableError) as e:
+        read_run(tmp_path / "b.toml")
+    assert msg in str(e.value) and "b.toml" in str(e.value) and "\n" not in str(e.value)
