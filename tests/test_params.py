@@ -1,5 +1,6 @@
 import dataclasses
 
+import numpy as np
 import pytest
 
 from vtable import units
@@ -138,3 +139,138 @@ def test_shear_building_from_stiffnesses():
     b = ShearBuilding.from_dict({"weights_kip": [20, 20, 10], "heights_in": [80, 160, 240],
                                  "damping": 0.02, "stiffnesses_kip_per_in": [60, 50, 40]})
     assert b.n == 3 and units.from_si(b.mass * units.G, "kip") == pytest.approx(50.0)
+
+
+SDOF = {"kind": "sdof", "weight_kip": 68.4, "height_in": 219.0, "frequency_hz": 2.87,
+        "damping": 0.01}
+
+
+@pytest.mark.parametrize("key, value, msg", [
+    ("damping", 2, r"damping is a fraction of critical damping, at most 1; got 2 \(2 means "
+                   r"200 %\)"),
+    ("damping", 60.6, r"got 60.6 \(60.6 means 6060 %\)"),
+    ("weight_kip", [68.4], r"\[specimen\].weight_kip: expected a number in kip, got \[68.4\]"),
+    ("weight_kip", "68.4", "expected a number in kip, got '68.4'"),
+    ("weight_kip", True, "expected a number in kip, got True"),
+    ("weight_kip", 1e308, "1e\\+308 kip is not a plausible force"),
+    pytest.param("weight_kip", 10**400, "is not a plausible force", id="int-beyond-float"),
+    ("frequency_hz", float("nan"), "frequency_hz: expected a finite number in Hz, got nan"),
+    ("frequency_hz", float("inf"), "expected a finite number in Hz, got inf"),
+    ("frequency_hz", 2e4, r"20000 Hz is not a plausible frequency \(the limit is 10000 Hz\)"),
+    ("title", ["a"], r"title: expected a string, got \['a'\]"),
+])
+def test_specimen_values_must_be_finite_physical_numbers(key, value, msg):
+    with pytest.raises(VtableError, match=msg) as e:
+        specimen_from_dict({**SDOF, key: value}, "run.toml [specimen]")
+    assert "\n" not in str(e.value) and str(e.value).startswith("run.toml [specimen]")
+
+
+def test_shear_building_limits_are_one_line_errors_without_delay():
+    import time
+
+    n = 300
+    d = {"kind": "shear_building", "weights_kip": [10.0] * n, "heights_in": list(range(1, n + 1)),
+         "frequencies_hz": [1.0 + i for i in range(n)], "damping": 0.02}
+    t0 = time.perf_counter()
+    with pytest.raises(VtableError, match="300 storeys; vtable models at most 50"):
+        specimen_from_dict(d, "run.toml [specimen]")
+    assert time.perf_counter() - t0 < 0.5
+    with pytest.raises(VtableError, match="heights_in: 2 heights for 3 weights"):
+        specimen_from_dict({**d, "weights_kip": [10, 10, 10], "heights_in": [50, 100],
+                            "frequencies_hz": [1, 2, 3]}, "run.toml [specimen]")
+    with pytest.raises(VtableError, match=r"weights_kip\[1\]: expected a number in kip"):
+        specimen_from_dict({**d, "weights_kip": [10, "x"], "heights_in": [50, 100],
+                            "frequencies_hz": [1, 2]}, "run.toml [specimen]")
+    with pytest.raises(VtableError, match="stiffness_kip_per_in: expected a number in kip/in"):
+        specimen_from_dict({**SDOF, "stiffness_kip_per_in": "stiff", "damping_lb_s_per_in": 1},
+                           "run.toml [specimen]")
+
+
+def test_specimen_frequencies_of_a_building_by_stiffness():
+    from vtable.params.specimen import specimen_frequencies
+
+    # two equal storeys m, k: ω² = (3 ∓ √5)/2 · k/m
+    b = specimen_from_dict({"kind": "shear_building", "weights_kip": [386.08858, 386.08858],
+                            "heights_in": [100, 200], "stiffnesses_kip_per_in": [10, 10],
+                            "damping": 0.02})
+    k_over_m = units.to_si(10, "kip/in") / b.masses[0]
+    expect = [np.sqrt((3 - np.sqrt(5)) / 2 * k_over_m) / (2 * np.pi),
+              np.sqrt((3 + np.sqrt(5)) / 2 * k_over_m) / (2 * np.pi)]
+    assert specimen_frequencies(b) == pytest.approx(expect, rel=1e-9)
+    assert specimen_frequencies(specimen_from_dict(SDOF)) == [2.87]
+
+
+def test_binary_or_non_utf8_toml_is_one_line(tmp_path):
+    p = tmp_path / "bin.toml"
+    p.write_bytes(b"\xff\xfe\x00\x01binary")
+    with pytest.raises(VtableError, match=r"bin.toml: not UTF-8 text"):
+        read_toml(p)
+    with pytest.raises(VtableError, match=r"folder.toml: cannot read"):
+        (tmp_path / "folder.toml").mkdir()
+        read_toml(tmp_path / "folder.toml")
+
+
+# ---- model files (vtable modes|margins|tf FILE.toml) -------------------------------------
+OPEN_LOOP = "f_o_hz = 9.6, xi_o = 0.606, k_o_per_s = 29.5"
+ROCK = "[rocking]\nk_theta_lb_in_per_rad = 3.1e10\nc_theta_lb_in_s_per_rad = 2.1e8\n"
+
+
+def _building(n: int, **over) -> str:
+    b = {"weights_kip": [20.0] * n, "heights_in": [100.0 * (i + 1) for i in range(n)],
+         "frequencies_hz": [2.0 + 3 * i for i in range(n)], "damping": 0.02, **over}
+    body = "\n".join(f"{k} = {v!r}".replace("'", '"') for k, v in b.items())
+    return (f'model = "mdof_hybrid"\n[building]\n{body}\n[open_loop]\n'
+            f'{OPEN_LOOP.replace(", ", chr(10))}\n{ROCK}')
+
+
+@pytest.mark.parametrize("text, msg", [
+    (f'model = "servo"\n[parameters]\n{OPEN_LOOP.replace("9.6", "1e300")}'
+     .replace(", ", "\n"), "f_o_hz: 1e\\+300 Hz is not a plausible frequency"),
+    (f'model = "servo"\n[parameters]\n{OPEN_LOOP.replace("29.5", "1e300")}'
+     .replace(", ", "\n"), "k_o_per_s: 1e\\+300 1/s is not a plausible frequency"),
+    (f'model = "servo"\n[parameters]\n{OPEN_LOOP.replace("0.606", "60.6")}'
+     .replace(", ", "\n"), r"xi_o: a loop damping ratio is a fraction of critical, at most 3; "
+                           r"got 60.6 \(60.6 means 6060 %\)"),
+    (f'model = "servo"\n[parameters]\n{OPEN_LOOP.replace("9.6", "nan")}'
+     .replace(", ", "\n"), "f_o_hz: expected a finite number in Hz, got nan"),
+    (f'model = "servo"\n[parameters]\n{OPEN_LOOP.replace("9.6", "-inf")}'
+     .replace(", ", "\n"), "f_o_hz: expected a finite number in Hz, got -inf"),
+    ('model = "table_sdof"\npreset = "table7.2:standard"\n[parameters]\n'
+     'structure = { xi_s = 2.0 }\n', "xi_s: a structural damping ratio is a fraction of "
+                                     "critical, at most 1; got 2"),
+    ('model = "table_sdof"\npreset = "table7.2:standard"\n[parameters]\n'
+     'structure = { mass_ratio = 1e9 }\n', "mass_ratio: 1e\\+09 is not a plausible ratio"),
+    ('model = "servo"\npreset = 5\n', "preset must be a string, got 5"),
+    ('model = "servo"\ntitle = [1]\npreset = "table6.1:standard"\n',
+     r"title must be a string, got \[1\]"),
+    ('model = "hybrid"\nheight_in = 1e300\npreset = "table9.1"\n',
+     "height_in: 1e\\+300 in is not a plausible displacement"),
+    (_building(300), "300 storeys; vtable models at most 50"),
+    (_building(2, weights_kip="heavy"), r"\[building\].weights_kip: expected a non-empty list "
+                                        "of numbers in kip, got 'heavy'"),
+    (_building(2, damping=[0.02]), r"\[building\].damping: expected a number, got \[0.02\]"),
+    (_building(2, heights_in=[100.0]), "heights_in: 1 heights for 2 weights"),
+    (_building(2, kind="sdof"), r'\[building\].kind: expected "shear_building", got .sdof.'),
+    ('model = "mdof_hybrid"\nbuilding = 3\n', r"\[building\] must be a table, got int"),
+])
+def test_model_files_are_bounded_one_line_errors(tmp_path, text, msg):
+    import time
+
+    from vtable.analytic import configs
+
+    p = tmp_path / "m.toml"
+    p.write_text(text)
+    t0 = time.perf_counter()
+    with pytest.raises(VtableError, match=msg) as e:
+        configs.load(str(p))
+    assert "\n" not in str(e.value) and "m.toml" in str(e.value)
+    assert time.perf_counter() - t0 < 5
+
+
+def test_model_file_binary_is_one_line(tmp_path):
+    from vtable.analytic import configs
+
+    p = tmp_path / "m.toml"
+    p.write_bytes(b"\x00\x01\x02\xff\xfe")
+    with pytest.raises(VtableError, match=r"m\.toml: not UTF-8 text"):
+        configs.load(str(p))

@@ -91,9 +91,11 @@ def test_bandpass_removes_out_of_band():
 AT2 = """PEER NGA STRONG MOTION DATABASE RECORD
 IMPERIAL VALLEY 5/19/40, EL CENTRO ARRAY #9, 180
 ACCELERATION TIME SERIES IN UNITS OF G
-NPTS=    7, DT=   .0100 SEC
+NPTS=   17, DT=   .0100 SEC
   .0010000  .0020000 -.0030000  .0040000  .0050000
- -.0060000  .0070000
+ -.0060000  .0070000 -.0080000  .0090000  .0100000
+  .0110000 -.1200000  .0130000  .0140000  .0150000
+  .0160000  .0170000
 """
 
 
@@ -101,7 +103,7 @@ def test_at2_reader(tmp_path):
     p = tmp_path / "ELC180.AT2"
     p.write_text(AT2)
     r = read_at2(p)
-    assert r.dt == 0.01 and len(r.acc) == 7
+    assert r.dt == 0.01 and len(r.acc) == 17 and r.notes == ()
     assert r.acc[2] == pytest.approx(-0.003 * units.G)
     assert "EL CENTRO" in r.name
     (tmp_path / "B.AT2").write_text(AT2)
@@ -109,13 +111,93 @@ def test_at2_reader(tmp_path):
 
 
 @pytest.mark.parametrize("text, msg", [
-    (AT2.replace("NPTS=    7", "NPTS=    8"), "header says NPTS=8 but the file has 7 values"),
-    (AT2.replace("NPTS=    7, DT=   .0100 SEC", "nothing here"), "line 4 must give NPTS= and DT="),
-    (AT2.replace(".0050000", "abc"), "non-numeric acceleration value"),
+    (AT2.replace("NPTS=   17", "NPTS=   18"), "header says NPTS=18 but the file has 17 values"),
+    (AT2.replace("NPTS=   17, DT=   .0100 SEC", "nothing here"), "line 4 must give NPTS= and DT="),
+    (AT2.replace(".0050000", "abc"), "line 5: non-numeric acceleration value: 'abc' is not a"),
+    (AT2.replace(".0050000", "1_0"), "'1_0' is not a number"),
     ("short\n", "too short"),
+    ("\n".join(AT2.splitlines()[:5]).replace("NPTS=   17", "NPTS=    5") + "\n",
+     "5 samples; a record needs at least 16"),
+    (AT2.replace(".0050000", "1e300"), r"sample 5: 1e\+300 g is not a plausible acceleration"),
+    (AT2.replace("DT=   .0100", "DT=   100.0"), "time step 100 s is not an accelerogram's"),
 ])
 def test_at2_errors(tmp_path, text, msg):
     p = tmp_path / "bad.AT2"
     p.write_text(text)
     with pytest.raises(VtableError, match=msg):
         read_at2(p)
+
+
+def _csv_record(tmp_path, header, acc, dt=0.01, digits=None):
+    t = np.arange(len(acc)) * dt
+    fmt = (lambda x: f"{x:.{digits}g}") if digits else repr
+    p = tmp_path / "rec.csv"
+    p.write_text(header + "\n" + "".join(f"{fmt(float(a))},{float(b)!r}\n"
+                                          for a, b in zip(t, acc, strict=True)))
+    return p
+
+
+def test_csv_record_header_states_the_unit(tmp_path):
+    from vtable.signals import read_csv_record
+
+    acc = el_centro().acc[:400] / units.G  # in g
+    g = read_csv_record(_csv_record(tmp_path, "time_s,accel_g", acc))
+    assert g.pga == pytest.approx(np.max(np.abs(acc)) * units.G) and g.notes == ()
+    gal = read_csv_record(_csv_record(tmp_path, "time_s, accel_cm_s2", acc * 980.665))
+    np.testing.assert_allclose(gal.acc, g.acc, rtol=1e-12)
+    ms2 = read_csv_record(_csv_record(tmp_path, "time_s,accel_m_s2", acc * units.G))
+    np.testing.assert_allclose(ms2.acc, g.acc, rtol=1e-12)
+    # a time column printed with 4 significant digits (steps within 1e-3 of the median)
+    four = read_csv_record(_csv_record(tmp_path, "time_s,accel_g", acc, digits=4))
+    assert four.dt == pytest.approx(0.01, rel=1e-9)
+
+
+@pytest.mark.parametrize("header", ["time,accel_g", "time_s,accel", "time_s,accel_in_s2",
+                                    "time_s;accel_g", "time_s,accel_g,extra"])
+def test_csv_record_unknown_header_is_an_error(tmp_path, header):
+    from vtable.signals import read_csv_record
+
+    p = _csv_record(tmp_path, header, np.zeros(20))
+    with pytest.raises(VtableError, match=r"header .*expected time_s and one of accel_g, "
+                                          r"accel_cm_s2, accel_m_s2") as e:
+        read_csv_record(p)
+    assert "\n" not in str(e.value) and "rec.csv" in str(e.value)
+
+
+@pytest.mark.parametrize("rows, msg", [
+    ("0,0.1\n0.01,0.2\n", "2 samples; a record needs at least 16"),   # vtable assess crashed
+    ("".join(f"{0.01 * i!r},0.1\n" for i in range(20)).replace("0.05,", "0.07,"),
+     "time stamps must increase"),
+    ("".join(f"{0.01 * i!r},0.1\n" for i in range(20)).replace("0.1\n", "nan\n", 1),
+     "'nan' is not a number"),
+    ("".join(f"{0.01 * i!r},0.1\n" for i in range(20)).replace("0.1\n", "0.1,3\n", 1),
+     "has 3 fields; expected 2"),
+])
+def test_bad_csv_records_are_one_line_errors(tmp_path, rows, msg):
+    from vtable.signals import read_csv_record
+
+    p = tmp_path / "bad.csv"
+    p.write_text("time_s,accel_g\n" + rows)
+    with pytest.raises(VtableError, match=msg) as e:
+        read_csv_record(p)
+    assert "\n" not in str(e.value) and "bad.csv" in str(e.value)
+
+
+def test_implausible_record_unit_is_warned_with_the_likely_unit(tmp_path):
+    from vtable.signals import read_csv_record
+
+    # El Centro in cm/s² (PGA 0.313 g = 307 gal) written under a g header
+    acc_gal = el_centro().acc[:1000] / units.G * 980.665
+    r = read_csv_record(_csv_record(tmp_path, "time_s,accel_g", acc_gal))
+    assert len(r.notes) == 2
+    assert "PGA 307 g is implausible for g; is the record in cm/s² (gal)?" in r.notes[0]
+    assert "PGV" in r.notes[1] and "implausible" in r.notes[1]
+    # the same numbers in g under a cm/s² header: 0.3 gal, implausibly small
+    r = read_csv_record(_csv_record(tmp_path, "time_s,accel_cm_s2", acc_gal / 980.665))
+    assert r.notes == (f"{tmp_path / 'rec.csv'}: PGA 0.313 cm/s2 is implausibly small for "
+                       "cm/s² (gal); is the record in g?",)
+    # AT2 files are in g: one in m/s² has PGA 3 "g" (plausible) - no note; in cm/s², a note
+    at2 = tmp_path / "GAL.AT2"
+    vals = " ".join(f"{v:.6f}" for v in acc_gal[:400])
+    at2.write_text(f"PEER\nEL CENTRO\nUNITS OF G\nNPTS= 400, DT= .0100 SEC\n{vals}\n")
+    assert "is the record in cm/s² (gal)?" in read_at2(at2).notes[0]

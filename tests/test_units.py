@@ -33,3 +33,33 @@ def test_round_trip(unit):
 def test_unknown_unit_is_a_clear_error():
     with pytest.raises(VtableError, match="unknown unit 'furlong'"):
         units.to_si(1.0, "furlong")
+
+
+def test_every_unit_has_a_dimension_and_a_plausible_bound():
+    assert set(units.DIMENSIONS) == set(units.UNITS)
+    assert set(units.DIMENSIONS.values()) <= set(units.PLAUSIBLE_MAX)
+    assert units.dimension("kip") == "force" and units.dimension("g") == "acceleration"
+    assert units.dimension("in/s2") == units.dimension("cm/s2") == "acceleration"
+    assert units.dimension("Hz") == "frequency" and units.dimension("%") == "dimensionless"
+    assert units.to_si(250.0, "ms") == pytest.approx(0.25)
+    assert units.to_si(980.665, "cm/s2") == pytest.approx(units.G)
+    assert units.units_of("time") == ["s", "ms"]
+    # a bound in SI: 1e4 Hz, 1e9 kg (the model-file limits of issue 9)
+    assert units.PLAUSIBLE_MAX["frequency"] == 1e4 and units.PLAUSIBLE_MAX["mass"] == 1e9
+
+
+@pytest.mark.parametrize("unit, dim, msg", [
+    ("g", "length", "avg_hdisp is a displacement; 'g' is an acceleration unit"),
+    ("kip", "length", "avg_hdisp is a displacement; 'kip' is a force unit"),
+    ("Hz", "length", "avg_hdisp is a displacement; 'Hz' is a frequency unit"),
+    ("psi", "length", "avg_hdisp is a displacement; 'psi' is a pressure unit"),
+    ("%", "length", "avg_hdisp is a displacement; '%' is a dimensionless unit"),
+    ("rad", "force", "avg_hdisp is a force; 'rad' is an angle unit"),
+    ("s", "force", "avg_hdisp is a force; 's' is a time unit"),
+])
+def test_dimension_mismatch_is_named(unit, dim, msg):
+    with pytest.raises(VtableError, match=msg):
+        units.check_dimension(unit, dim, "avg_hdisp")
+    units.check_dimension("mm", "length", "avg_hdisp")  # the same dimension passes
+    with pytest.raises(VtableError, match="unknown unit 'furlong'"):
+        units.check_dimension("furlong", "length", "avg_hdisp")

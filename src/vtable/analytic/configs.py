@@ -11,6 +11,14 @@ A model file::
 
 or, for `hybrid`, physical values on the EERC table: ``[specimen]`` (run-format keys),
 ``[open_loop]`` and ``[rocking]`` (k_theta_lb_in_per_rad, c_theta_lb_in_s_per_rad).
+
+What a model file may say is bounded to what is physical, so that a typo is one line and
+never an overflow or a hang: every number finite and of plausible magnitude
+(`vtable.units.PLAUSIBLE_MAX`: frequencies and gains below 10 kHz or 1e4 1/s, masses
+below 1e9 kg, ...), structural damping ratios (ξ_s, a specimen's damping) at most 1,
+the damping ratios of servo loops and equivalent springs (ξ_o, ξ_θ, ξ_h, ξ_p) at most
+`XI_LOOP_MAX` = 3 (Table 9.1's ξ_θ is 1.115), mass ratios u at most `MAX_MASS_RATIO`,
+inertia ratios v at most `MAX_INERTIA_RATIO`, shear buildings at most 50 storeys.
 """
 
 from __future__ import annotations
@@ -18,6 +26,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from vtable import units
 from vtable.analytic.base import LinearModel
@@ -27,9 +37,9 @@ from vtable.analytic.pitch import HybridModel, TwoDirectionalTable
 from vtable.analytic.rcfilter import RCFilterServo
 from vtable.analytic.sdof import TableSDOF
 from vtable.analytic.servo import ServoLoop
-from vtable.errors import VtableError
+from vtable.errors import UnstableError, VtableError
 from vtable.params import presets
-from vtable.params.base import read_toml
+from vtable.params.base import Params, check_number, read_toml
 from vtable.params.loops import (
     HybridParams,
     MechanicalParams,
@@ -38,7 +48,7 @@ from vtable.params.loops import (
     TableSDOFParams,
     TwoDirectionalParams,
 )
-from vtable.params.specimen import SDOFSpecimen, ShearBuilding, specimen_from_dict
+from vtable.params.specimen import SDOFSpecimen, specimen_from_dict
 from vtable.params.table import ServoConstants
 
 #: the built-in EERC configuration: the SDOF frame on the table, hybrid model (Table 9.1)
@@ -102,6 +112,13 @@ _PRESET_PARAMS: dict[str, Callable[[str], Any]] = {
     "rc_filter": lambda name: presets.eerc_table().servo if name == "table-b.5" else
     (_ for _ in ()).throw(VtableError(f"unknown rc_filter preset {name!r}; expected table-b.5")),
 }
+#: the largest damping ratio of a servo loop or an equivalent spring (fraction of critical)
+XI_LOOP_MAX = 3.0
+#: the largest specimen-to-table mass ratio u = m_s/m_t (Table 7.2 goes to 2)
+MAX_MASS_RATIO = 100.0
+#: the largest inertia ratio v = m_s h²/I (Table 9.1: 6.8)
+MAX_INERTIA_RATIO = 1e4
+_RATIO_MAX = {"mass_ratio": MAX_MASS_RATIO, "inertia_ratio": MAX_INERTIA_RATIO}
 _TOP = {"model", "preset", "title", "height_in", "parameters", "specimen", "open_loop",
         "rocking", "building"}
 
@@ -110,7 +127,7 @@ def from_file(path: str | Path) -> LinearModel:
     """Build the model a TOML model file describes (see the module docstring)."""
     d = read_toml(path)
     where = str(path)
-    unknown = sorted(set(d) - _TOP)
+    unknown = sorted(set(d) - _TOP, key=str)
     if unknown:
         raise VtableError(f"{where}: unknown key {unknown[0]!r}; "
                           f"expected {', '.join(sorted(_TOP))}")
@@ -120,12 +137,26 @@ def from_file(path: str | Path) -> LinearModel:
         raise VtableError(f"{where}: model must be one of {', '.join(kinds)}, got {kind!r}")
     height = d.get("height_in")
     if height is not None:
-        if not isinstance(height, int | float) or not height > 0:
+        height = check_number(height, f"{where}: height_in", "in")
+        if not height > 0:
             raise VtableError(f"{where}: height_in must be a positive number")
-        height = units.to_si(float(height), "in")
     title = d.get("title", "")
+    if not isinstance(title, str):
+        raise VtableError(f"{where}: title must be a string, got {title!r:.40}")
+    for k in ("parameters", "specimen", "open_loop", "rocking", "building"):
+        if k in d and not isinstance(d[k], dict):
+            raise VtableError(f"{where}: [{k}] must be a table, got {type(d[k]).__name__}")
     if kind == "mdof_hybrid":
-        model = _mdof_from(d, where)
+        # the eq 4.5 inverse problem tries stiffnesses whose modes may be complex; it
+        # checks its result and says so, so numpy's warnings would only add noise
+        with np.errstate(invalid="ignore"):
+            try:
+                model = _mdof_from(d, where)
+            except UnstableError:
+                raise
+            except VtableError as e:
+                raise VtableError(str(e) if str(e).startswith(where) else f"{where}: {e}") \
+                    from None
     elif kind == "hybrid" and "parameters" not in d and "preset" not in d:
         model = _hybrid_physical(d, where)
     else:
@@ -134,14 +165,40 @@ def from_file(path: str | Path) -> LinearModel:
         if "preset" in d:
             if kind not in _PRESET_PARAMS:
                 raise VtableError(f"{where}: model {kind!r} has no presets")
+            if not isinstance(d["preset"], str):
+                raise VtableError(f"{where}: preset must be a string, got {d['preset']!r:.40}")
             base = _PRESET_PARAMS[kind](d["preset"]).to_dict()
         params = cls.from_dict(_merge(base, d.get("parameters", {}), where),
                                f"{where} [parameters]")
+        check_physical(params, f"{where} [parameters]")
         model = make(params, height)
     if title:
         model.title = title
     model.check_stable()
     return model
+
+
+def check_physical(p: Params, where: str) -> None:
+    """Bounds the parameter classes leave open: damping ratios (structural ξ_s <= 1, loop
+    and equivalent-spring ξ <= `XI_LOOP_MAX`) and the mass and inertia ratios."""
+    import dataclasses
+
+    for f in dataclasses.fields(p):  # type: ignore[arg-type]
+        v = getattr(p, f.name)
+        key = f.metadata.get("key") or f.name
+        if isinstance(v, Params):
+            check_physical(v, f"{where}.{key}")
+        elif isinstance(v, float) and f.metadata.get("unit") == "1":
+            if key.startswith("xi"):
+                hi = 1.0 if key == "xi_s" else XI_LOOP_MAX
+                if v > hi:
+                    kind = "structural" if key == "xi_s" else "loop"
+                    raise VtableError(f"{where}.{key}: a {kind} damping ratio is a fraction of "
+                                      f"critical, at most {hi:g}; got {v:g} ({v:g} means "
+                                      f"{100 * v:g} %)")
+            elif key in _RATIO_MAX and v > _RATIO_MAX[key]:
+                raise VtableError(f"{where}.{key}: {v:g} is not a plausible ratio (at most "
+                                  f"{_RATIO_MAX[key]:g})")
 
 
 def _merge(base: dict[str, Any], over: Any, where: str) -> dict[str, Any]:
@@ -163,10 +220,12 @@ def _hybrid_physical(d: dict[str, Any], where: str) -> HybridModel:
         raise VtableError(f"{where} [specimen]: the hybrid model carries a sdof specimen; "
                           "use model = \"mdof_hybrid\" for a shear building")
     geo = presets.eerc_table().geometry
-    p = HybridParams.from_physical(spec, geo.mass, geo.pitch_inertia,
-                                   OpenLoop.from_dict(d["open_loop"], f"{where} [open_loop]"),
+    ol = OpenLoop.from_dict(d["open_loop"], f"{where} [open_loop]")
+    check_physical(ol, f"{where} [open_loop]")
+    p = HybridParams.from_physical(spec, geo.mass, geo.pitch_inertia, ol,
                                    RockingSpring.from_dict(d["rocking"], f"{where} [rocking]"),
                                    title=spec.title)
+    check_physical(p, f"{where} (derived from [specimen], [open_loop], [rocking])")
     return HybridModel(p, height=spec.height)
 
 
@@ -176,8 +235,12 @@ def _mdof_from(d: dict[str, Any], where: str) -> MDOFHybrid:
             raise VtableError(f"{where}: model mdof_hybrid needs [{k}]")
     b = dict(d["building"])
     b.setdefault("kind", "shear_building")
-    building = ShearBuilding.from_dict(b, f"{where} [building]")
+    if b["kind"] != "shear_building":
+        raise VtableError(f"{where} [building].kind: expected \"shear_building\", got "
+                          f"{b['kind']!r:.40}")
+    building = specimen_from_dict(b, f"{where} [building]")
     geo = presets.eerc_table().geometry
-    return MDOFHybrid(OpenLoop.from_dict(d["open_loop"], f"{where} [open_loop]"), geo.mass,
-                      geo.pitch_inertia,
+    ol = OpenLoop.from_dict(d["open_loop"], f"{where} [open_loop]")
+    check_physical(ol, f"{where} [open_loop]")
+    return MDOFHybrid(ol, geo.mass, geo.pitch_inertia,
                       RockingSpring.from_dict(d["rocking"], f"{where} [rocking]"), building)

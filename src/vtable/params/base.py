@@ -3,7 +3,9 @@
 Every physical field is declared with `quantity(unit, key=...)`: the object stores SI,
 the TOML key names the unit (``weight_kip``, ``area_in2``), and conversion happens only
 in `from_dict` / `to_dict`. Unknown keys, missing keys and out-of-range values are
-one-line `VtableError`s naming the key.
+one-line `VtableError`s naming the key. Every number must be finite (TOML allows nan and
+inf) and below the plausible magnitude of its dimension (`vtable.units.PLAUSIBLE_MAX`:
+10 kHz, 1e9 kg, ...), so an absurd value (1e300) is refused before a model uses it.
 """
 
 from __future__ import annotations
@@ -21,14 +23,17 @@ _MISSING = dataclasses.MISSING
 
 
 def quantity(unit: str, key: str, *, default: Any = _MISSING, minimum: float | None = None,
-             exclusive: bool = True, source: str = "", doc: str = "",
-             vector: bool = False) -> Any:
+             exclusive: bool = True, maximum: float | None = None, fraction: bool = False,
+             source: str = "", doc: str = "", vector: bool = False) -> Any:
     """Declare a physical field stored in SI and written in TOML as `key` in `unit`.
 
-    `minimum` bounds the SI value (strictly when `exclusive`); `source` names the report
-    table or equation the default comes from; `vector` fields take a list of numbers.
+    `minimum` bounds the SI value (strictly when `exclusive`), `maximum` bounds it from
+    above (inclusive); `fraction` marks a damping ratio (a fraction of critical, so the
+    error says "2 means 200 %"); `source` names the report table or equation the default
+    comes from; `vector` fields take a list of numbers.
     """
     meta = {"unit": unit, "key": key, "minimum": minimum, "exclusive": exclusive,
+            "maximum": maximum, "fraction": fraction,
             "source": source, "doc": doc, "vector": vector}
     if default is _MISSING:
         return dataclasses.field(metadata=meta)
@@ -54,19 +59,14 @@ class Params:
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):  # type: ignore[arg-type]
-            lo = f.metadata.get("minimum")
-            if lo is None:
-                continue
+            lo, hi = f.metadata.get("minimum"), f.metadata.get("maximum")
             v = getattr(self, f.name)
-            if v is None:
+            if v is None or (lo is None and hi is None):
                 continue
-            bad = not math.isfinite(v) or (v <= lo if f.metadata["exclusive"] else v < lo)
-            if bad:
-                rel = ">" if f.metadata["exclusive"] else ">="
-                shown = units.from_si(v, f.metadata["unit"]) if math.isfinite(v) else v
-                lo_shown = units.from_si(lo, f.metadata["unit"])
-                raise VtableError(f"{type(self).__name__}.{_key(f)} must be {rel} {lo_shown:g},"
-                                  f" got {shown:g}")
+            unit = f.metadata["unit"]
+            for x in (v if isinstance(v, tuple) else (v,)):
+                _check_bounds(x, lo, f.metadata["exclusive"], hi, unit,
+                              f"{type(self).__name__}.{_key(f)}", f.metadata.get("fraction"))
 
     # -- TOML edge -------------------------------------------------------------------
     @classmethod
@@ -129,6 +129,65 @@ class Params:
                 for f in dataclasses.fields(cls) if "unit" in f.metadata}  # type: ignore[arg-type]
 
 
+def _check_bounds(v: float, lo: float | None, exclusive: bool, hi: float | None, unit: str,
+                  what: str, fraction: bool) -> None:
+    shown = units.from_si(v, unit) if math.isfinite(v) else v
+    if lo is not None and (not math.isfinite(v) or (v <= lo if exclusive else v < lo)):
+        rel = ">" if exclusive else ">="
+        raise VtableError(f"{what} must be {rel} {units.from_si(lo, unit):g}, got {shown:g}")
+    if hi is not None and not v <= hi:
+        if fraction:
+            raise VtableError(f"{what} is a fraction of critical damping, at most "
+                              f"{units.from_si(hi, unit):g}; got {shown:g} ({shown:g} means "
+                              f"{100 * shown:g} %)")
+        raise VtableError(f"{what} must be <= {units.from_si(hi, unit):g}, got {shown:g}")
+
+
+def check_number(v: Any, where: str, unit: str = "1") -> float:
+    """A TOML value that must be a finite number in `unit` (not a bool, a string or a
+    list), of plausible magnitude for its dimension (`units.PLAUSIBLE_MAX`) -> SI.
+
+    Raises
+    ------
+    VtableError
+        One line naming `where` and what was expected.
+    """
+    in_unit = f" in {unit}" if unit != "1" else ""
+    if not _is_number(v):
+        raise VtableError(f"{where}: expected a number{in_unit}, got {_show(v)}")
+    try:
+        x = float(v)
+    except OverflowError:  # a TOML integer beyond any float
+        x = math.inf
+    if not math.isfinite(x) and not isinstance(v, int):
+        raise VtableError(f"{where}: expected a finite number{in_unit}, got {v!r}")
+    si = units.to_si(x, unit)
+    dim = units.dimension(unit)
+    limit = units.PLAUSIBLE_MAX[dim]
+    if not abs(si) <= limit:
+        shown = f"{x:.6g}" if math.isfinite(x) else _show(v)
+        raise VtableError(f"{where}: {shown} {unit} is not a plausible {units.noun(dim)} (the "
+                          f"limit is {units.from_si(limit, unit):g} {unit})")
+    return si
+
+
+def _show(v: Any) -> str:
+    s = repr(v)
+    return s if len(s) <= 40 else s[:37] + "..."
+
+
+def _check_plain(v: Any, f: dataclasses.Field, where: str) -> Any:
+    """Plain fields declared `str`, `int` or `float` take only that kind of TOML value."""
+    t = str(f.type).replace(" ", "")
+    if t in ("str", "str|None") and not isinstance(v, str):
+        raise VtableError(f"{where}: expected a string, got {_show(v)}")
+    if t == "int" and (not isinstance(v, int) or isinstance(v, bool)):
+        raise VtableError(f"{where}: expected a whole number, got {_show(v)}")
+    if t == "float":
+        return check_number(v, where)
+    return v
+
+
 def _to_plain(v: Any) -> Any:
     if hasattr(v, "tolist"):
         return v.tolist()
@@ -138,14 +197,13 @@ def _to_plain(v: Any) -> Any:
 def _convert_in(v: Any, f: dataclasses.Field, where: str) -> Any:
     unit = f.metadata.get("unit")
     if unit is None:
-        return v
+        return _check_plain(v, f, where)
     if f.metadata.get("vector"):
-        if not isinstance(v, list) or not v or not all(_is_number(x) for x in v):
-            raise VtableError(f"{where}: expected a non-empty list of numbers in {unit}")
-        return tuple(units.to_si(float(x), unit) for x in v)
-    if not _is_number(v):
-        raise VtableError(f"{where}: expected a number in {unit}, got {v!r}")
-    return units.to_si(float(v), unit)
+        if not isinstance(v, list) or not v:
+            raise VtableError(f"{where}: expected a non-empty list of numbers in {unit}, got "
+                              f"{_show(v)}")
+        return tuple(check_number(x, f"{where}[{i}]", unit) for i, x in enumerate(v))
+    return check_number(v, where, unit)
 
 
 def _is_number(v: Any) -> bool:
@@ -162,5 +220,7 @@ def read_toml(path: str | Path) -> dict[str, Any]:
         raise VtableError(f"{p}: no such file") from None
     except tomllib.TOMLDecodeError as e:
         raise VtableError(f"{p}: malformed TOML: {e}") from None
+    except UnicodeDecodeError:
+        raise VtableError(f"{p}: not UTF-8 text (a TOML file is expected)") from None
     except OSError as e:
-        raise VtableError(f"{p}: cannot read: {e.strerror}") from None
+        raise VtableError(f"{p}: cannot read: {e.strerror or type(e).__name__}") from None

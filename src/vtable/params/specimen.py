@@ -2,6 +2,10 @@
 
 Heights are measured from the horizontal actuator line (29.7 in below the table top,
 §4.2.1), as in the run format; `from_table_top` converts.
+
+Damping ratios are fractions of critical (0.02, not 2 %): a ratio above 1 (an
+overdamped structure, or a percentage written as a fraction) is refused. A shear
+building has at most `MAX_STOREYS` storeys.
 """
 
 from __future__ import annotations
@@ -17,6 +21,10 @@ from vtable.params.base import Params, plain, quantity
 from vtable.units import G
 
 KINDS = ("none", "rigid", "sdof", "shear_building")
+#: the most storeys a shear building may have (eq 4.5 models; a lab specimen has a few)
+MAX_STOREYS = 50
+#: structural damping ratios are fractions of critical, at most 1 (critically damped)
+MAX_DAMPING = 1.0
 
 
 @dataclass(frozen=True)
@@ -60,7 +68,7 @@ class SDOFSpecimen(Params):
                              doc="top mass above the actuator line")
     frequency: float = quantity("Hz", "frequency_hz", minimum=0, doc="fixed-base f_s")
     damping: float = quantity("1", "damping", minimum=0, exclusive=False,
-                              doc="fixed-base ξ_s")
+                              maximum=MAX_DAMPING, fraction=True, doc="fixed-base ξ_s")
     kind: str = plain(default="sdof")
     title: str = plain(default="SDOF structure")
     source: str = plain(default="")
@@ -103,7 +111,8 @@ class ShearBuilding(Params):
     weights: tuple[float, ...] = quantity("kip", "weights_kip", vector=True)
     heights: tuple[float, ...] = quantity("in", "heights_in", vector=True,
                                           doc="floor heights above the actuator line")
-    damping: float = quantity("1", "damping", minimum=0, exclusive=False)
+    damping: float = quantity("1", "damping", minimum=0, exclusive=False,
+                              maximum=MAX_DAMPING, fraction=True)
     stiffnesses: tuple[float, ...] | None = quantity("kip/in", "stiffnesses_kip_per_in",
                                                      default=None, vector=True)
     frequencies: tuple[float, ...] | None = quantity("Hz", "frequencies_hz", default=None,
@@ -113,11 +122,14 @@ class ShearBuilding(Params):
     source: str = plain(default="")
 
     def __post_init__(self) -> None:
-        super().__post_init__()
         n = len(self.weights)
         name = "ShearBuilding"
         if n == 0:
             raise VtableError(f"{name}.weights_kip: needs at least one storey")
+        if n > MAX_STOREYS:
+            raise VtableError(f"{name}.weights_kip: {n} storeys; vtable models at most "
+                              f"{MAX_STOREYS}")
+        super().__post_init__()
         if len(self.heights) != n:
             raise VtableError(f"{name}.heights_in: {len(self.heights)} heights for {n} weights")
         if any(not w > 0 for w in self.weights):
@@ -160,20 +172,40 @@ def specimen_from_dict(d: dict[str, Any], where: str = "specimen") -> Specimen:
     if not isinstance(kind, str) or kind not in _BY_KIND:
         raise VtableError(f"{where}.kind: expected one of {', '.join(KINDS)}, got {kind!r}")
     d = dict(d)
+    if kind == "shear_building":
+        for k in ("weights_kip", "heights_in", "stiffnesses_kip_per_in", "frequencies_hz"):
+            if isinstance(d.get(k), list) and len(d[k]) > MAX_STOREYS:
+                raise VtableError(f"{where}.{k}: {len(d[k])} storeys; vtable models at most "
+                                  f"{MAX_STOREYS}")
     if kind == "sdof" and "stiffness_kip_per_in" in d:
         return _sdof_from_stiffness(d, where)
     return _BY_KIND[kind].from_dict(d, where)
 
 
+def specimen_frequencies(spec: Specimen) -> list[float]:
+    """The fixed-base natural frequencies (Hz) a specimen declares or implies (a shear
+    building given by stiffnesses: its eq 4.5 modes); none for a bare table or a block."""
+    if isinstance(spec, SDOFSpecimen):
+        return [spec.frequency]
+    if isinstance(spec, ShearBuilding):
+        if spec.frequencies is not None:
+            return list(spec.frequencies)
+        from vtable.analytic.structure import building_matrices, fixed_base_modes
+
+        M, K, _ = building_matrices(spec)
+        w, _ = fixed_base_modes(M, K)
+        return [float(x) for x in w / (2 * np.pi)]
+    return []
+
+
 def _sdof_from_stiffness(d: dict[str, Any], where: str) -> SDOFSpecimen:
     """Table 5.1 style: weight, height, k_s (kip/in) and c_s (lb-s/in)."""
-    from vtable import units
+    from vtable.params.base import check_number
 
-    try:
-        k_s = units.to_si(float(d.pop("stiffness_kip_per_in")), "kip/in")
-        c_s = units.to_si(float(d.pop("damping_lb_s_per_in")), "lb-s/in")
-    except KeyError:
-        raise VtableError(f"{where}: stiffness_kip_per_in needs damping_lb_s_per_in") from None
+    if "damping_lb_s_per_in" not in d:
+        raise VtableError(f"{where}: stiffness_kip_per_in needs damping_lb_s_per_in")
+    k_s = check_number(d.pop("stiffness_kip_per_in"), f"{where}.stiffness_kip_per_in", "kip/in")
+    c_s = check_number(d.pop("damping_lb_s_per_in"), f"{where}.damping_lb_s_per_in", "lb-s/in")
     d.setdefault("frequency_hz", 1.0)
     d.setdefault("damping", 0.0)
     base = SDOFSpecimen.from_dict(d, where)

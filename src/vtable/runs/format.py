@@ -4,9 +4,13 @@ RUN.csv (time + channels) and RUN.toml (what was tested)."""
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from vtable.errors import VtableError
 
 FORMAT = "vtable-run/1"
 SPECIMEN_KEYS = {"none": (), "rigid": ("weight_kip", "height_in"),
@@ -41,15 +45,189 @@ def _toml_value(v: Any) -> str:
     if isinstance(v, list | tuple):
         return "[" + ", ".join(_toml_value(x) for x in v) + "]"
     if isinstance(v, dict):
-        return "{ " + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()) + " }"
-    raise TypeError(type(v))
+        return "{ " + ", ".join(f"{_toml_key(k)} = {_toml_value(x)}" for k, x in v.items()) \
+            + " }"
+    raise VtableError(f"a run's metadata cannot hold a {type(v).__name__} ({v!r:.40})")
+
+
+def _toml_key(k: str) -> str:
+    """A bare key when TOML allows one, else a quoted key."""
+    import re
+
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else json.dumps(k)
 
 
 def dumps_toml(d: dict[str, Any]) -> str:
     """Minimal TOML writer for run metadata (top-level scalars, then tables)."""
-    lines = [f"{k} = {_toml_value(v)}" for k, v in d.items() if not isinstance(v, dict)]
+    lines = [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in d.items()
+             if not isinstance(v, dict)]
     for k, v in d.items():
         if isinstance(v, dict):
-            lines.append(f"\n[{k}]")
-            lines += [f"{kk} = {_toml_value(vv)}" for kk, vv in v.items()]
+            lines.append(f"\n[{_toml_key(k)}]")
+            lines += [f"{_toml_key(kk)} = {_toml_value(vv)}" for kk, vv in v.items()]
     return "\n".join(lines) + "\n"
+
+
+# ---- [control] ------------------------------------------------------------------------
+def check_control(d: Any, where: str) -> list[str]:
+    """Check a [control] table (report Table 3.2 knob positions per direction): every knob
+    a finite number >= 0; unknown directions and knobs are returned as notes."""
+    from vtable.params.base import check_number
+    from vtable.params.table import DIRECTIONS, KNOBS
+
+    notes: list[str] = []
+    for direction, knobs in d.items():
+        w = f"{where[:-1]}.{direction}]" if where.endswith("]") else f"{where}.{direction}"
+        if direction not in DIRECTIONS:
+            notes.append(f"{where}: unknown direction {direction!r} (kept, not used; "
+                         f"expected {', '.join(DIRECTIONS)})")
+            continue
+        if not isinstance(knobs, dict):
+            raise VtableError(f"{w}: expected a table of knobs {', '.join(KNOBS)}, got "
+                              f"{type(knobs).__name__}")
+        for knob, v in knobs.items():
+            if knob not in KNOBS:
+                notes.append(f"{w}: unknown knob {knob!r} (kept, not used; expected "
+                             f"{', '.join(KNOBS)})")
+                continue
+            if check_number(v, f"{w}.{knob}") < 0:
+                raise VtableError(f"{w}.{knob}: a knob position is >= 0, got {v!r}")
+    return notes
+
+
+# ---- [command] ------------------------------------------------------------------------
+COMMAND_KINDS = ("random", "sine", "pulse", "earthquake")
+#: [command] keys of the format, and those vtable writes for its own commands
+COMMAND_KEYS = ("kind", "band_hz", "span", "drive_file", "drive_unit", "drive_scale",
+                "drive_offset_s", "peak_in", "seed", "frequency_hz", "record", "length_scale",
+                "time_scale")
+
+
+@dataclass(frozen=True)
+class CommandDescription:
+    """What a run's [command] says (SI): the command's kind and band, and the drive file
+    the controller played when the run has no h_span column."""
+
+    kind: str | None = None
+    band: tuple[float, float] | None = None     # Hz
+    span: float | None = None                   # the operator's span setting
+    drive_file: Path | None = None
+    drive_unit: str | None = None               # a length unit
+    drive_scale: float | None = None            # > 0
+    drive_offset: float | str | None = None     # s the drive leads, or "auto"
+    peak: float | None = None                   # m (peak_in)
+    seed: int | None = None
+    frequency: float | None = None              # Hz (sine)
+    record: str | None = None
+    length_scale: float | None = None
+    time_scale: float | None = None
+    notes: tuple[str, ...] = field(default=(), compare=False)
+
+    def check_rate(self, fs: float, where: str) -> None:
+        """Frequencies the command names must be below the run's Nyquist frequency."""
+        nyq = fs / 2
+        if self.band is not None and self.band[1] > nyq * (1 + 1e-9):
+            raise VtableError(f"{where}.band_hz: {self.band[1]:g} Hz is above the run's "
+                              f"Nyquist frequency {nyq:.6g} Hz (sampled at {fs:.6g} Hz)")
+        if self.frequency is not None and self.frequency >= nyq:
+            raise VtableError(f"{where}.frequency_hz: {self.frequency:g} Hz is at or above the "
+                              f"run's Nyquist frequency {nyq:.6g} Hz (sampled at {fs:.6g} Hz)")
+
+
+def _positive(d: dict[str, Any], key: str, where: str, unit: str = "1") -> float | None:
+    from vtable.params.base import check_number
+
+    if key not in d:
+        return None
+    x = check_number(d[key], f"{where}.{key}", unit)
+    if not x > 0:
+        raise VtableError(f"{where}.{key}: must be > 0, got {d[key]!r}")
+    return x
+
+
+def _text(d: dict[str, Any], key: str, where: str) -> str | None:
+    if key not in d:
+        return None
+    if not isinstance(d[key], str) or not d[key].strip():
+        raise VtableError(f"{where}.{key}: expected a non-empty string, got {d[key]!r}")
+    return d[key]
+
+
+def command_from_dict(d: Any, where: str, folder: Path | None = None) -> CommandDescription:
+    """Parse and check a [command] table; `folder` resolves a relative drive_file (the
+    folder of RUN.toml). Unknown keys are returned in `notes`."""
+    from vtable import units
+    from vtable.params.base import check_number
+
+    if not isinstance(d, dict):
+        raise VtableError(f"{where}: expected a table, got {type(d).__name__}")
+    notes = [f"{where}: unknown key {k!r} (kept, not used)" for k in d if k not in COMMAND_KEYS]
+    kind = _text(d, "kind", where)
+    if kind is not None and kind not in COMMAND_KINDS:
+        raise VtableError(f"{where}.kind: expected one of {', '.join(COMMAND_KINDS)}, got "
+                          f"{kind!r}")
+    band = None
+    if "band_hz" in d:
+        b = d["band_hz"]
+        if not isinstance(b, list) or len(b) != 2:
+            raise VtableError(f"{where}.band_hz: expected [low, high] in Hz, got {b!r}")
+        lo = check_number(b[0], f"{where}.band_hz", "Hz")
+        hi = check_number(b[1], f"{where}.band_hz", "Hz")
+        if not 0 <= lo < hi:
+            raise VtableError(f"{where}.band_hz: expected 0 <= low < high, got "
+                              f"[{lo:g}, {hi:g}]")
+        band = (lo, hi)
+    drive = None
+    name = _text(d, "drive_file", where)
+    if name is not None:
+        drive = Path(name) if folder is None or Path(name).is_absolute() else folder / name
+        if not drive.is_file():
+            raise VtableError(f"{where}.drive_file: {str(drive)!r} is not a file")
+    unit = _text(d, "drive_unit", where)
+    if unit is not None:
+        if unit not in units.UNITS:
+            raise VtableError(f"{where}.drive_unit: {unit!r} is not a known unit; expected a "
+                              f"length unit ({', '.join(units.units_of('length'))})")
+        units.check_dimension(unit, "length", f"{where}.drive_unit")
+    offset: float | str | None = None
+    if "drive_offset_s" in d:
+        v = d["drive_offset_s"]
+        offset = v if v == "auto" else check_number(v, f"{where}.drive_offset_s", "s")
+    for k in ("drive_unit", "drive_scale", "drive_offset_s"):
+        if k in d and name is None:
+            notes.append(f"{where}: {k} without a drive_file (kept, not used)")
+    if name is not None and unit is None:
+        notes.append(f"{where}: drive_file without drive_unit: the drive is taken in inches "
+                     "(the format's displacement unit)")
+    seed = None
+    if "seed" in d:
+        seed = d["seed"]
+        if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+            raise VtableError(f"{where}.seed: expected a whole number >= 0, got {seed!r}")
+    return CommandDescription(
+        kind=kind, band=band, span=_positive(d, "span", where), drive_file=drive,
+        drive_unit=unit, drive_scale=_positive(d, "drive_scale", where), drive_offset=offset,
+        peak=_positive(d, "peak_in", where, "in"), seed=seed,
+        frequency=_positive(d, "frequency_hz", where, "Hz"), record=_text(d, "record", where),
+        length_scale=_positive(d, "length_scale", where),
+        time_scale=_positive(d, "time_scale", where), notes=tuple(notes))
+
+
+# ---- [units] --------------------------------------------------------------------------
+def check_units(d: Any, where: str) -> None:
+    """Every [units] value is a known unit whose dimension is the channel's: a format
+    channel takes units of its own dimension, `time` a time unit, other (extra) channels
+    any known unit."""
+    from vtable import units
+    from vtable.runs.model import channel_dimension
+
+    for ch, u in d.items():
+        if not isinstance(u, str) or u not in units.UNITS:
+            raise VtableError(f"{where} {ch} = {u!r} is not a known unit (e.g. in, mm, m, g, "
+                              "m/s2, kip, N, rad)")
+        dim = "time" if ch == "time" else channel_dimension(ch)
+        if dim is not None:
+            try:
+                units.check_dimension(u, dim, "the time column" if ch == "time" else ch)
+            except VtableError as e:
+                raise VtableError(f"{where} {e}") from None
