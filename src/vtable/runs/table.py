@@ -217,8 +217,18 @@ def _eerc() -> dict[str, Any]:
     }
 
 
-#: table presets by name (a run's [table] preset); "lnec-st1d" will join "eerc"
-TABLE_PRESETS: dict[str, Callable[[], dict[str, Any]]] = {"eerc": _eerc}
+def _data(name: str) -> Callable[[], dict[str, Any]]:
+    """A preset written as a [table] description in params/data/NAME.toml."""
+    def load() -> dict[str, Any]:
+        from vtable.params import presets
+
+        return {k: v for k, v in presets._file(name).items() if k != "source"}
+    return load
+
+
+#: table presets by name (a run's [table] preset)
+TABLE_PRESETS: dict[str, Callable[[], dict[str, Any]]] = {"eerc": _eerc,
+                                                          "lnec-st1d": _data("lnec_st1d")}
 
 
 def table_presets() -> list[str]:
