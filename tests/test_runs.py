@@ -974,5 +974,5 @@ def test_lab_export_stamps_with_few_digits_read(tmp_path, digits):
     lost = stamps[:3000] + stamps[3001:]
     (tmp_path / "r.csv").write_text("time,h_span\n" + "".join(
         f"{s},0.5\n" for s in lost))
-    with pytest.raises(VtableError, match=r"not uniform: step .* at line 3001"):
+    with pytest.raises(VtableError, match=r"not uniform: step .* at line 3002"):
         read_run(tmp_path / "r.toml")

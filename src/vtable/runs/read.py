@@ -347,11 +347,11 @@ def check_time(t: np.ndarray, where: Path | str, first_line: int = 2,
     stamps from it.
 
     Stamps must increase; a step counts as uniform within `UNIFORM_TOL` of the median
-    step (relative, the spec's rule) plus what the stamps' printed precision explains (a
-    stamp written with d decimals is off by up to half of 10⁻ᵈ: 7 significant digits at
-    t = 12.34567 s can shift a 256 Hz step by 2.6e-3 of itself, and lab exports print
-    so); a larger irregularity (a lost sample, a restart) is an error naming the line. The time base is the least-squares grid t0 + k·dt through the stamps, or
-    the stamps themselves when they are that grid to `GRID_TOL` of a step (float
+    step (relative, the spec's rule) plus what the stamps' printed precision explains
+    (`printed_quantum`: 7 significant digits at t = 12.34567 s can shift a 256 Hz step by
+    2.6e-3 of itself, and lab exports print so); a larger irregularity (a lost sample, a
+    restart) is an error naming the line. The time base is the least-squares grid
+    t0 + k·dt through the stamps, or the stamps themselves when they are that grid to `GRID_TOL` of a step (float
     rounding), so runs round-trip exactly.
     """
     def at(i: int) -> str:
