@@ -376,7 +376,8 @@ def check_time(t: np.ndarray, where: Path | str, first_line: int = 2,
     grid = t_mean + kc * dt
     off = np.flatnonzero(np.abs(steps - med) > UNIFORM_TOL * med)
     if len(off) and not _rounded_grid(t, grid, dt):
-        i = int(off[np.argmax(np.abs(steps[off] - med))])  # the largest irregularity
+        dev = np.abs(steps[off] - med)
+        i = int(off[np.argmax(dev >= 0.5 * dev.max())])  # the first large irregularity
         raise VtableError(f"{where}: column 'time' is not uniform: step {steps[i]:.9g} s at "
                           f"{at(i + 1)} vs median {med:.9g} s (a lost sample or a restart?)")
     dev = float(np.max(np.abs(t - grid)))
