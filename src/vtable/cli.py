@@ -204,8 +204,10 @@ def _is_run(path: str) -> bool:
     p = Path(path)
     if p.suffix in (".h5", ".hdf5"):
         return True
-    return p.suffix == ".toml" and p.is_file() and \
-        read_toml(p).get("format", "").startswith("vtable-run/")
+    if p.suffix != ".toml" or not p.is_file():
+        return False
+    fmt = read_toml(p).get("format", "")
+    return isinstance(fmt, str) and fmt.startswith("vtable-run/")
 
 
 def cmd_tf_run(a: argparse.Namespace) -> dict[str, Any]:
@@ -255,7 +257,7 @@ def cmd_tf_run(a: argparse.Namespace) -> dict[str, Any]:
          "phase_deg": np.degrees(np.angle(tf.H[sel])).tolist(),
          "coherence": tf.coherence[sel].tolist(), "averages": tf.averages, "nperseg": n,
          "resolution_hz": run.fs / n, "frame": why, "coherence_meaningful": nd > 1,
-         "warnings": warnings}
+         "warnings": warnings, "notes": list(run.reports)}
     if a.png:
         from vtable.viz.figures import transfer_function_png
 
@@ -295,6 +297,8 @@ def _print_tf(d: dict[str, Any]) -> None:
           + (f" (H1, {d['averages']} average{'s' * (d['averages'] != 1)} of "
              f"{d['nperseg']}-point frames, Δf "
              f"{d['resolution_hz']:.3g} Hz: {d['frame']})" if run else ""))
+    for n in d.get("notes", []):
+        print(f"  note: {n}")
     for w in d.get("warnings", []):
         print(f"  ⚠ {w}")
     coh = d.get("coherence")
@@ -604,10 +608,13 @@ def cmd_assess(a: argparse.Namespace) -> dict[str, Any]:
             "modes": {k: {"f_hz": f, "damping": z} for k, (f, z) in res.modes.items()},
             "psv_at_specimen_period_m_s": res.psv_at_specimen,
             "rocking_share": res.rocking_share, "time_elongation": res.elongation,
-            "compensated_error": res.compensated_error, "files": [str(f) for f in files]}
+            "compensated_error": res.compensated_error, "files": [str(f) for f in files],
+            "notes": list(getattr(rec, "notes", ()))}
 
 
 def _print_assess(d: dict[str, Any]) -> None:
+    for n in d["notes"]:
+        print(f"note: {n}")
     print(d["verdict"])
     print("wrote " + ", ".join(d["files"]))
 
