@@ -206,8 +206,7 @@ def _is_run(path: str) -> bool:
         return True
     if p.suffix != ".toml" or not p.is_file():
         return False
-    fmt = read_toml(p).get("format", "")
-    return isinstance(fmt, str) and fmt.startswith("vtable-run/")
+    return "format" in read_toml(p)  # a run file (model files have no format key)
 
 
 def cmd_tf_run(a: argparse.Namespace) -> dict[str, Any]:

@@ -211,11 +211,12 @@ def _is_number(v: Any) -> bool:
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:
-    """Parse a TOML file; a missing or malformed file is a one-line error naming it."""
+    """Parse a TOML file (a UTF-8 byte-order mark, as some editors write, is allowed); a
+    missing or malformed file is a one-line error naming it."""
     p = Path(path)
     try:
-        with p.open("rb") as fh:
-            return tomllib.load(fh)
+        text = p.read_bytes().decode("utf-8").removeprefix("\ufeff")
+        return tomllib.loads(text)
     except FileNotFoundError:
         raise VtableError(f"{p}: no such file") from None
     except tomllib.TOMLDecodeError as e:

@@ -82,7 +82,7 @@ def _read_text(p: Path) -> str:
 # ---- RUN.toml -------------------------------------------------------------------------
 def read_meta(toml_path: Path) -> tuple[dict[str, Any], list[str]]:
     """Parse and check RUN.toml; returns the table and the reports (unknown keys, ...)."""
-    text = _read_text(toml_path)
+    text = _read_text(toml_path).removeprefix("\ufeff")
     try:
         meta = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
@@ -132,9 +132,12 @@ def _check_against_rate(meta: dict[str, Any], fs: float, where: str,
     nyq = fs / 2
     if "specimen" in meta:
         spec = specimen_from_dict(meta["specimen"], f"{where} [specimen]")
+        given = meta["specimen"] if isinstance(meta["specimen"], dict) else {}
+        key = next((k for k in ("frequency_hz", "frequencies_hz", "stiffness_kip_per_in",
+                                "stiffnesses_kip_per_in") if k in given), "frequency")
         for f in specimen_frequencies(spec):
             if f >= nyq:
-                raise VtableError(f"{where} [specimen]: frequency {f:.6g} Hz is at or above "
+                raise VtableError(f"{where} [specimen].{key}: {f:.6g} Hz is at or above "
                                   f"the run's Nyquist frequency {nyq:.6g} Hz (sampled at "
                                   f"{fs:.6g} Hz)")
     if "command" in meta:
