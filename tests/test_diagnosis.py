@@ -375,3 +375,27 @@ def test_report_axes_have_units():
     assert tf_overlay(d, diag, "pitch").axes[0].get_ylabel() == "amplitude (rad/s²/in)"
     ax = waterfall(d).axes[0]
     assert "%" in ax.get_ylabel() and ax.get_xlabel()
+
+
+def test_resampling_keeps_missing_samples_out():
+    import numpy as np
+
+    from vtable.diagnose.compare import analysis_run, excluded_channels
+
+    _, runs = rate_campaign(("force_feedback_filter",), 256.0)
+    r = runs[0]
+    ch = {**r.channels, "acc_n_nw": r.channels["acc_n_nw"].copy()}
+    ch["acc_n_nw"][7] = np.nan
+    holed = type(r)(**{**r.__dict__, "channels": ch, "missing": {"acc_n_nw": 1}})
+    a = analysis_run(holed)
+    assert len(a.time) == 2201 and a.fs == pytest.approx(200.0)
+    assert np.isnan(a.channels["acc_n_nw"]).all() and a.missing == {"acc_n_nw": 1}
+    assert np.isfinite(a.channels["acc_n_ne"]).all()
+    # a band-limited channel survives the 256 -> 200 Hz resampling (0-25 Hz content)
+    t = a.time
+    ref = np.interp(t, r.time, r.channels["avg_hdisp"])
+    rel = np.sqrt(np.mean((a.channels["avg_hdisp"] - ref) ** 2) / np.mean(ref**2))
+    assert rel < 0.01, rel
+    assert excluded_channels(a) == [
+        "run0: pitch is not scored (its channels are zero throughout)",  # pitch locked
+        "run0: channel 'acc_n_nw' has 1 missing samples; left out of structure acceleration"]

@@ -87,16 +87,18 @@ def analysis_run(run: Run) -> Run:
     fs_a = fs * up / down
     n = len(run.time)
     m = int(np.floor((n - 1) * up / down + 1e-9)) + 1
-    channels = {}
+    channels, missing = {}, dict(run.missing)
     for c, v in run.channels.items():
-        if run.missing.get(c) or not np.all(np.isfinite(v)):
-            channels[c] = np.full(m, np.nan)  # excluded anyway; never filled in
+        bad = int(np.count_nonzero(~np.isfinite(v)))
+        if missing.get(c) or bad:
+            missing[c] = missing.get(c) or bad
+            channels[c] = np.full(m, np.nan)  # left out of its group; never filled in
         else:
             channels[c] = scipy.signal.resample_poly(v, up, down, padtype="line")[:m]
     note = (f"{run.name}: sampled at {fs:.6g} Hz, analysed at {fs_a:.6g} Hz (anti-alias "
             f"filtered and resampled by {up}/{down})")
     return dataclasses.replace(run, time=run.time[0] + np.arange(m) / fs_a, channels=channels,
-                               reports=[*run.reports, note])
+                               missing=missing, reports=[*run.reports, note])
 
 
 def excluded_channels(run: Run) -> list[str]:

@@ -398,6 +398,11 @@ class Diagnoser:
             worker.join()
             self._stop.clear()
             raise DiagnosisInterrupted(self._partial(st)) from None
+        except BaseException:  # a failing progress callback: stop the fits, then report it
+            self._stop.set()
+            worker.join()
+            self._stop.clear()
+            raise
         worker.join()
         if st.error is not None:
             raise st.error
