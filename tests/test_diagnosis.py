@@ -70,6 +70,9 @@ def test_cli_diagnose_writes_json_rrd_and_report(tmp_path, capsys):
     from vtable.viz.rerun_scene import read_rrd
 
     _, runs = effect_campaign(("pitch_flexibility",))
+    r0 = runs[0]  # a lab's own column: the reader reports it, the diagnosis shows that note
+    runs = [type(r0)(**{**r0.__dict__, "channels": {**r0.channels, "lab_temp": 0 * r0.time},
+                        "units": {**r0.units, "lab_temp": "1"}}), *runs[1:]]
     paths = []
     for i, r in enumerate(runs):
         write_run(r, tmp_path / f"run{i}")
@@ -108,8 +111,11 @@ def test_cli_diagnose_writes_json_rrd_and_report(tmp_path, capsys):
     bars = rrd["/history"][0].column("BarChart:values").to_pylist()[0][0]["buffer"]
     assert bars == pytest.approx([100 * j["start_error"], 100 * j["final_error"]])
     # the honest verdict and the notes are in the JSON and the report
-    assert j["unexplained"] is None and j["interrupted"] is False and j["notes"]
-    assert "<b>Unexplained:</b>" in html and "<h2>Notes</h2>" in html
+    assert j["unexplained"] is None and j["interrupted"] is False
+    assert [n for n in j["notes"] if "not in the format, kept: lab_temp" in n], j["notes"]
+    assert "notes:\n" in out and "lab_temp" in out
+    assert "<b>Unexplained:</b> none" in html and "<h2>Notes</h2>" in html
+    assert "lab_temp" in html
 
 
 def test_cli_compare(tmp_path, capsys):
