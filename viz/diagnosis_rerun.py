@@ -1,55 +1,155 @@
 """A diagnosis in Rerun: measured and model channels and residuals before and after each
-added effect (bulk, columnar), and the error history on a 'round' timeline."""
+added effect (bulk, columnar), in the run format's units, and the error history.
+
+Layout (blueprint): one tab per run holding one TimeSeriesView per channel group, named
+with its unit ("table displacement (in)", "structure acceleration (g)", ...), each showing
+the measured signal, the model of every stage and its residual; beside it the error
+history and a text with the verdict, what remains unexplained and the notes.
+
+Timelines: the channels are on "time" (s from the run's start, at the analysis rate), the
+error history on "round" (0 = the fitted starting model, k = after the k-th added effect).
+A Rerun 0.41 view plots the timeline selected in the time panel (a view cannot choose its
+own), so the history is also logged as a static bar chart, which every timeline shows;
+the time panel starts on "time".
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from vtable.diagnose.compare import GROUPS, group_prediction, group_signal
+from vtable import units
+from vtable.diagnose.compare import GROUP_UNITS, GROUPS, group_prediction, group_signal, short
+from vtable.fileio import atomic_path
+
+#: how a unit is written in view and series names
+PRETTY = {"rad/s2": "rad/s²", "in/s2": "in/s²", "m/s2": "m/s²"}
+COLORS = {"measured": [20, 20, 20], "model": [40, 110, 230], "residual": [220, 50, 40]}
+
+
+def group_key(group: str) -> str:
+    return group.replace(" ", "_")
+
+
+def _series(rec: rr.RecordingStream, path: str, times, values: np.ndarray, label: str,
+            kind: str) -> None:
+    rr.send_columns(path, indexes=times, columns=rr.Scalars.columns(scalars=values),
+                    recording=rec)
+    rec.log(path, rr.SeriesLines(names=label, colors=[COLORS[kind]]), static=True)
+
+
+def _text(d) -> str:
+    lines = [f"**Verdict:** {d.verdict}", ""]
+    u = d.unexplained
+    lines.append("**Unexplained:** " + ("none (the final error is consistent with the noise "
+                                        "floor)" if u is None else
+                                        f"{u['ratio_to_floor']:.1f} x the noise floor; "
+                                        f"{u['where']}"))
+    lines += ["", "Measured = each run at the analysis rate (see the notes).", ""]
+    if d.notes:
+        lines += ["**Notes:**", *[f"- {n}" for n in d.notes]]
+    return "\n".join(lines)
 
 
 def log_diagnosis(d, diag, path: str | Path, application_id: str = "vtable-diagnosis") -> Path:
+    """Write the .rrd of diagnosis `d` made by `diag` (a `Diagnoser`) to `path`."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    rec = rr.RecordingStream(application_id)
-    rec.save(str(path))
     stages = [("start", diag.start_fitted)]
-    stages += [(f"{i}_{r.added}", r_ph) for i, (r, r_ph) in
-               enumerate(((r, c.physics) for r in d.rounds for c in r.ranking[:1]
-                          if r.added), 1)]
-    for stage, ph in stages:
-        pred = diag.predict(ph)
+    stages += [(f"{i}_{r.added}", c.physics) for i, (r, c) in
+               enumerate(((r, r.ranking[0]) for r in d.rounds if r.added), 1)]
+    tabs = []
+    with atomic_path(path) as tmp:
+        rec = rr.RecordingStream(application_id)
+        rec.save(str(tmp))
+        preds = [(stage, diag.predict(ph)) for stage, ph in stages]
         for run in diag.runs:
-            short = Path(run.name).name
+            name = short(run.name)
             times = [rr.TimeColumn("time", duration=run.time - run.time[0])]
+            views = []
             for g in GROUPS:
                 y = group_signal(run, g)
-                yhat = group_prediction(pred[run.name], run, g)
-                if y is None or yhat is None:
+                if y is None:
                     continue
-                key = g.replace(" ", "_")
-                if stage == "start":
-                    rr.send_columns(f"runs/{short}/{key}/measured", indexes=times,
-                                    columns=rr.Scalars.columns(scalars=y), recording=rec)
-                rr.send_columns(f"runs/{short}/{key}/model_{stage}", indexes=times,
-                                columns=rr.Scalars.columns(scalars=yhat), recording=rec)
-                rr.send_columns(f"runs/{short}/{key}/residual_{stage}", indexes=times,
-                                columns=rr.Scalars.columns(scalars=yhat - y), recording=rec)
-    hist = d.history()
-    idx = [rr.TimeColumn("round", sequence=np.arange(len(hist)))]
-    rr.send_columns("diagnosis/error", indexes=idx, recording=rec,
-                    columns=rr.Scalars.columns(scalars=[e for _, e in hist]))
-    rr.send_columns("diagnosis/noise_floor", indexes=idx, recording=rec,
-                    columns=rr.Scalars.columns(scalars=[d.noise_floor] * len(hist)))
-    rec.log("diagnosis/verdict", rr.TextDocument(d.verdict), static=True)
-    rec.send_blueprint(rrb.Blueprint(rrb.Horizontal(
-        rrb.Vertical(*[rrb.TimeSeriesView(name=f"{Path(r.name).name}", origin=f"runs/"
-                                          f"{Path(r.name).name}") for r in diag.runs]),
-        rrb.Vertical(rrb.TimeSeriesView(name="error history", origin="diagnosis"),
-                     rrb.TextDocumentView(origin="diagnosis/verdict")))))
-    rec.flush()
+                unit = GROUP_UNITS[g]
+                shown = PRETTY.get(unit, unit)
+                base = f"runs/{name}/{group_key(g)}"
+                _series(rec, f"{base}/measured", times, units.from_si(y, unit),
+                        f"measured ({shown})", "measured")
+                for stage, pred in preds:
+                    yhat = group_prediction(pred[run.name], run, g)
+                    if yhat is None:
+                        continue
+                    label = stage.replace("_", " ", 1)
+                    _series(rec, f"{base}/model_{stage}", times, units.from_si(yhat, unit),
+                            f"model {label} ({shown})", "model")
+                    _series(rec, f"{base}/residual_{stage}", times,
+                            units.from_si(yhat - y, unit), f"residual {label} ({shown})",
+                            "residual")
+                views.append(rrb.TimeSeriesView(name=f"{g} ({shown})", origin=base))
+            if views:
+                tabs.append(rrb.Vertical(*views, name=name))
+        hist = d.history()
+        errs = [100 * e for _, e in hist]
+        if hist:
+            idx = [rr.TimeColumn("round", sequence=np.arange(len(hist)))]
+            rr.send_columns("diagnosis/error", indexes=idx, recording=rec,
+                            columns=rr.Scalars.columns(scalars=[e for _, e in hist]))
+            rec.log("diagnosis/error", rr.SeriesLines(names="held-out error (NRMS, 1 = 100 %)"),
+                    static=True)
+            rr.send_columns("diagnosis/noise_floor", indexes=idx, recording=rec,
+                            columns=rr.Scalars.columns(scalars=[d.noise_floor] * len(hist)))
+            rec.log("diagnosis/noise_floor", rr.SeriesLines(names="noise floor (NRMS)"),
+                    static=True)
+            rec.log("history", rr.BarChart(errs), static=True)
+        rec.log("diagnosis/verdict", rr.TextDocument(_text(d), media_type="text/markdown"),
+                static=True)
+        labels = " | ".join(f"{k}: {lab}" for k, (lab, _) in enumerate(hist))
+        side = rrb.Vertical(
+            rrb.BarChartView(name=f"held-out error (%) by round: {labels}", origin="history"),
+            rrb.TimeSeriesView(name="error history (NRMS) on the 'round' timeline",
+                               origin="diagnosis", contents=["diagnosis/error",
+                                                             "diagnosis/noise_floor"],
+                               time_ranges=rrb.VisibleTimeRange(
+                                   "round", start=rrb.TimeRangeBoundary.infinite(),
+                                   end=rrb.TimeRangeBoundary.infinite())),
+            rrb.TextDocumentView(name="verdict and notes", origin="diagnosis/verdict"))
+        main = rrb.Tabs(*tabs) if tabs else rrb.TextDocumentView(origin="diagnosis/verdict")
+        rec.send_blueprint(rrb.Blueprint(rrb.Horizontal(main, side, column_shares=[3, 2]),
+                                         rrb.TimePanel(timeline="time")))
+        rec.flush()
+        rec.disconnect()
     return path
+
+
+def read_blueprint_views(path: str | Path) -> list[dict[str, Any]]:
+    """The views of an .rrd's blueprint: class ("TimeSeries", "BarChart", ...), name,
+    origin ("/runs/run0/pitch") and the timelines of its visible time ranges (for tests and
+    checks)."""
+    from rerun.chunk import RrdReader
+
+    reader = RrdReader(str(path))
+    views: dict[str, dict[str, Any]] = {}
+    for bp in reader.blueprints():
+        for ch in reader.stream(store=bp).to_chunks():
+            ent = str(ch.entity_path).lstrip("/")
+            if not ent.startswith("view/"):
+                continue
+            key = "/".join(ent.split("/")[:2])
+            rb = ch.to_record_batch()
+            v = views.setdefault(key, {})
+            for col in rb.schema.names:
+                val = rb.column(col).to_pylist()[-1]
+                one = val[0] if isinstance(val, list) and len(val) == 1 else val
+                if col == "ViewBlueprint:class_identifier":
+                    v["class"] = one
+                elif col == "ViewBlueprint:display_name":
+                    v["name"] = one
+                elif col == "ViewBlueprint:space_origin":
+                    v["origin"] = "/" + str(one).lstrip("/")
+                elif col == "VisibleTimeRanges:ranges":
+                    v["time_ranges"] = [r["timeline"] for r in val]
+    return list(views.values())

@@ -340,19 +340,31 @@ class _Progress:
 
 
 def cmd_diagnose(a: argparse.Namespace) -> dict[str, Any]:
-    from vtable.diagnose.engine import Diagnoser, localise
+    from vtable.diagnose.engine import Diagnoser, DiagnosisInterrupted, localise
+    from vtable.fileio import write_text
     from vtable.runs import campaign
 
     runs = campaign(a.runs)
     diag = Diagnoser(runs, _effects_list(a.with_), catalog=_effects_list(a.effects) or None,
                      progress=_Progress())
-    d = diag.diagnose()
+    try:
+        d = diag.diagnose()
+    except DiagnosisInterrupted as e:
+        # Ctrl-C: keep the rounds that finished, one line, exit code 130 (main)
+        part = e.partial.to_json()
+        part["localisation"] = localise(e.partial)
+        wrote = "nothing written (no --json)"
+        if a.json:
+            write_text(a.json, json.dumps(jsonable(part), indent=2))
+            wrote = f"wrote {a.json}"
+        print(("\n" if sys.stderr.isatty() else "")
+              + f"vtable: interrupted after round {len(e.partial.rounds)}; {wrote}",
+              file=sys.stderr)
+        raise
     out = d.to_json()
     out["localisation"] = localise(d)
     if a.json:
-        from pathlib import Path
-
-        Path(a.json).write_text(json.dumps(jsonable(out), indent=2))
+        write_text(a.json, json.dumps(jsonable(out), indent=2))
         out["_wrote"] = [a.json]
     if a.rerun:
         from vtable.viz.diagnosis_rerun import log_diagnosis
@@ -368,6 +380,8 @@ def cmd_diagnose(a: argparse.Namespace) -> dict[str, Any]:
 
 
 def _print_diagnose(d: dict[str, Any]) -> None:
+    for i, n in enumerate(d.get("notes", [])):
+        print(("notes:\n" if i == 0 else "") + f"  {n}")
     print("starting model: servo loop + specimen"
           + (f" + {', '.join(d['start_effects'])}" if d["start_effects"] else ""))
     print(f"  held-out error {d['start_error']:.2%} (noise floor {d['noise_floor']:.2%})")
@@ -378,16 +392,27 @@ def _print_diagnose(d: dict[str, Any]) -> None:
         for k, c in enumerate(r["ranking"], 1):
             print(f"  {k:>4}  {c['effect']:<28} {c['error_after']:9.2%}  "
                   + (c["evidence"] if k <= 3 else ""))
+            if c.get("flags"):
+                print(f"  {'':>4}  {'':<28} {'':>9}  fit at a bound: " + "; ".join(c["flags"]))
     print("\nerror history: " + " -> ".join(
         [f"{d['start_error']:.2%}"] + [f"{r['error']:.2%} (+{r['added']})"
                                         for r in d["rounds"] if r["added"]]))
+    base = d.get("base", {})
+    if base:
+        print("base: " + "; ".join(f"{k} {v['fitted']:.4g} (declared {v['declared']:.4g}, "
+                                   f"bounds {v['bounds'][0]:g}-{v['bounds'][1]:g})"
+                                   for k, v in base.items()))
+    u = d.get("unexplained")
+    print("unexplained: " + ("none (the final error is consistent with the noise floor)"
+                             if u is None else f"{u['ratio_to_floor']:.1f} x the noise floor, "
+                                               f"{u['where']}"))
     print(f"verdict: {d['verdict']}")
     for f in d.get("_wrote", []):
         print(f"wrote {f}")
 
 
 def cmd_compare(a: argparse.Namespace) -> dict[str, Any]:
-    from vtable.diagnose.compare import localisation_text
+    from vtable.diagnose.compare import UNEXPLAINED_RULE, localisation_text, unexplained
     from vtable.diagnose.model import TableModel
     from vtable.runs import campaign
 
@@ -397,21 +422,32 @@ def cmd_compare(a: argparse.Namespace) -> dict[str, Any]:
     ol = m.physics_.open_loop
     return {"effects": list(m.effects), "params": m.physics_.effects,
             "base": {"f_o_hz": ol.f_o, "xi_o": ol.xi_o, "k_o_per_s": ol.k_o},
+            "base_fit": m.base_, "flags": m.flags_,
             "error": c.error, "noise_floor": c.noise_floor, "per_run": c.per_run,
-            "bands": c.bands, "localisation": localisation_text(c)}
+            "bands": c.bands, "localisation": localisation_text(c),
+            "unexplained": unexplained(c), "unexplained_rule": UNEXPLAINED_RULE,
+            "notes": m.notes_}
 
 
 def _print_compare(d: dict[str, Any]) -> None:
+    for i, n in enumerate(d.get("notes", [])):
+        print(("notes:\n" if i == 0 else "") + f"  {n}")
     print("model: servo loop + specimen" + (f" + {', '.join(d['effects'])}" if d["effects"]
                                            else ""))
     b = d["base"]
     print(f"  base loop: f_o {b['f_o_hz']:.2f} Hz, ξ_o {b['xi_o']:.3f}, k_o {b['k_o_per_s']:.2f}")
     for e, p in d["params"].items():
         print(f"  {e}: " + ", ".join(f"{k} = {v:.4g}" for k, v in p.items()))
+    for f in d.get("flags", []):
+        print(f"  fit at a bound: {f}")
     print(f"  held-out error {d['error']:.2%}, noise floor {d['noise_floor']:.2%}")
     for run, errs in d["per_run"].items():
         print(f"  {run}: " + ", ".join(f"{g} {e:.1%}" for g, e in errs.items()))
     print(f"  where: {d['localisation']}")
+    u = d.get("unexplained")
+    print("  unexplained: " + ("none (the error is consistent with the noise floor)"
+                               if u is None else f"{u['ratio_to_floor']:.1f} x the noise floor, "
+                                                 f"{u['where']}"))
 
 
 def cmd_identify(a: argparse.Namespace) -> dict[str, Any]:

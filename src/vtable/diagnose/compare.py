@@ -6,17 +6,41 @@ over runs and the groups the run has (a group averages duplicate sensors: H1-H3,
 top accelerometers, ...). Frequency-band errors compare H1 transfer functions from the
 command, weighted by coherence; amplitude errors are per run (runs of different spans);
 time windows locate where the residual concentrates. The noise floor is the NRMS the
-sensors' noise alone would cost, estimated from the spectrum above the response band.
+sensors' noise alone would cost, estimated from redundant sensors or from the spectrum
+above the response band.
+
+Sample rates. Runs sampled faster than `ANALYSIS_FS` (200 Hz) are analysed at 200 Hz: every
+channel is anti-alias filtered and resampled by the rational factor p/q = 200/f_s
+(`scipy.signal.resample_poly`: a Kaiser-windowed FIR low-pass at the new Nyquist frequency,
+zero phase, linear trend removed at the ends), so a 256 Hz run is analysed at 256·25/32 =
+200 Hz and a 1 kHz run at 1000/5. Errors, the noise floor and the model's predictions are
+all taken at that rate, so they stay consistent (white sensor noise loses the share above
+100 Hz in both). Runs at or below 200 Hz are analysed at their own rate (the reduced model
+integrates at a step dividing theirs). Below `MIN_FS` (100 Hz) a run is refused: the
+analysis bands reach 30 Hz and the noise floor is read above 50 Hz.
+
+Whether a final error is "consistent with the noise floor" (`unexplained`): sensor noise
+and a systematic model error are independent, so their squared NRMS add,
+err² ≈ floor² + sys². The error is called consistent with the noise when
+err ≤ NOISE_FACTOR × floor (2×), i.e. when the systematic part is at most √3 ≈ 1.7 times
+the noise; above that a residual remains unexplained and is localised.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
 
 import numpy as np
+import scipy.signal
 
+from vtable import units
+from vtable.errors import VtableError
 from vtable.ident.tf import transfer_function
-from vtable.runs.model import Run
+from vtable.runs.model import FORMAT_UNITS, Run
 
 #: channel groups: name -> the format channels averaged into it
 GROUPS: dict[str, tuple[str, ...]] = {
@@ -28,8 +52,80 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "structure acceleration": ("acc_n_ne", "acc_n_nw"),
     "structure displacement": ("pot_n_sw", "pot_n_se"),
 }
+#: the unit each group is shown in (the run format's unit of its channels)
+GROUP_UNITS: dict[str, str] = {g: FORMAT_UNITS[c[0]] for g, c in GROUPS.items()}
 BANDS = ((0.0, 2.0), (2.0, 5.0), (5.0, 10.0), (10.0, 20.0), (20.0, 30.0))
 HELD_OUT = 0.4  # the last 40 % of every run is held out from fitting
+ANALYSIS_FS = 200.0  # Hz: faster runs are anti-alias filtered and resampled to this rate
+MIN_FS = 100.0  # Hz: slower runs cannot resolve the bands and the noise floor
+NOISE_FACTOR = 2.0  # a final error <= 2 x the noise floor is consistent with the noise
+UNEXPLAINED_RULE = (f"unexplained is null when the final error <= {NOISE_FACTOR:g} x the noise "
+                    "floor: noise and a systematic error add in quadrature, err^2 = floor^2 + "
+                    f"sys^2, so this admits a systematic part up to "
+                    f"{np.sqrt(NOISE_FACTOR**2 - 1):.2f} x the noise; otherwise it gives the "
+                    "ratio final error / noise floor and where the final model's residual "
+                    "lives (worst channel group, its worst band, the amplitude trend, the worst "
+                    "2 s window)")
+
+
+def short(name: str) -> str:
+    return Path(name).name
+
+
+def analysis_run(run: Run) -> Run:
+    """The run at its analysis rate (see the module docstring): unchanged at or below
+    `ANALYSIS_FS`, else anti-alias filtered and resampled to it, with a note in `reports`."""
+    fs = run.fs
+    if fs < MIN_FS * (1 - 1e-9):
+        raise VtableError(f"{run.name}: sampled at {fs:.4g} Hz; compare and diagnose need at "
+                          f"least {MIN_FS:g} Hz (the analysis bands reach {BANDS[-1][1]:g} Hz "
+                          "and the noise floor is read above 50 Hz)")
+    ratio = Fraction(ANALYSIS_FS / fs).limit_denominator(1000)
+    up, down = ratio.numerator, ratio.denominator
+    if up >= down:
+        return run
+    fs_a = fs * up / down
+    n = len(run.time)
+    m = int(np.floor((n - 1) * up / down + 1e-9)) + 1
+    channels, missing = {}, dict(run.missing)
+    for c, v in run.channels.items():
+        bad = int(np.count_nonzero(~np.isfinite(v)))
+        if missing.get(c) or bad:
+            missing[c] = missing.get(c) or bad
+            channels[c] = np.full(m, np.nan)  # left out of its group; never filled in
+        else:
+            channels[c] = scipy.signal.resample_poly(v, up, down, padtype="line")[:m]
+    note = (f"{run.name}: sampled at {fs:.6g} Hz, analysed at {fs_a:.6g} Hz (anti-alias "
+            f"filtered and resampled by {up}/{down})")
+    return dataclasses.replace(run, time=run.time[0] + np.arange(m) / fs_a, channels=channels,
+                               missing=missing, reports=[*run.reports, note])
+
+
+def excluded_channels(run: Run) -> list[str]:
+    """The group channels a run has that are left out of its groups (missing samples)."""
+    out = []
+    for g, chans in GROUPS.items():
+        for c in chans:
+            if run.has(c) and run.missing.get(c):
+                out.append(f"{run.name}: channel {c!r} has {run.missing[c]} missing samples; "
+                           f"left out of {g}")
+        present = [c for c in chans if run.has(c)]
+        if present and group_signal(run, g) is None:
+            why = ("every channel has missing samples" if all(run.missing.get(c) for c in present)
+                   else "its channels are zero throughout")
+            out.append(f"{run.name}: {g} is not scored ({why})")
+    return out
+
+
+def campaign_notes(runs: list[Run]) -> list[str]:
+    """What the readers reported (Run.reports), the resampling done and the channels left
+    out, each naming its run."""
+    notes = []
+    for r in runs:
+        for rep in r.reports:
+            notes.append(rep if short(r.name) in rep else f"{r.name}: {rep}")
+        notes += excluded_channels(r)
+    return list(dict.fromkeys(notes))
 
 
 def group_signal(run: Run, group: str) -> np.ndarray | None:
@@ -99,21 +195,21 @@ def noise_floor(runs: list[Run], f_min: float = 50.0) -> float:
 
     vals = []
     for r in runs:
-        rel = []
+        rel: dict[str, float] = {}  # first sensor of a pair -> its relative noise
         for a, b in PAIRS:
             if all(r.has(c) and not r.missing.get(c) for c in (a, b)):
                 ya, yb = r.channels[a], r.channels[b]
                 rms = np.sqrt(0.5 * (np.mean(ya**2) + np.mean(yb**2)))
                 if rms > 0:
-                    rel.append(np.std(ya - yb) / np.sqrt(2) / rms)
-        fallback = float(np.median(rel)) if rel else None
+                    rel[a] = float(np.std(ya - yb) / np.sqrt(2) / rms)
+        fallback = float(np.median(list(rel.values()))) if rel else None
         for g, chans in GROUPS.items():
             y = group_signal(r, g)
             if y is None:
                 continue
             m = sum(1 for c in chans if r.has(c) and not r.missing.get(c))
             if fallback is not None:
-                pair = [v for (a, b), v in zip(PAIRS, rel, strict=False) if a in chans]
+                pair = [v for a, v in rel.items() if a in chans]
                 vals.append((pair[0] if pair else fallback) / np.sqrt(m))
                 continue
             f, P = scipy.signal.welch(y, fs=r.fs, nperseg=min(512, len(y)))
@@ -195,6 +291,59 @@ def _localise(cmp: Comparison, pred, runs: list[Run]) -> None:
     cmp.bands = {g: {b: float(np.mean(v)) for b, v in d.items()} for g, d in bands.items()}
 
 
+def mils(x_m: float) -> str:
+    """A command amplitude in metres as mils (1 mil = 0.001 in = 25.4 µm)."""
+    v = 1000 * units.from_si(x_m, "in")
+    return f"{v:.0f}" if v >= 10 else f"{v:.2g}"
+
+
+def amplitude_trend(cmp: Comparison, group: str | None = None) -> str:
+    """How a group's (or the mean) error changes with the command's RMS span across runs."""
+    pts = []
+    for name, a, e in cmp.amplitude:
+        if group is not None:
+            e = cmp.per_run.get(name, {}).get(group)
+        if e is not None:
+            pts.append((a, e))
+    if len({round(a, 9) for a, _ in pts}) < 2:
+        return "one command amplitude only (no amplitude trend can be read)"
+    pts.sort()
+    (a0, e0), (a1, e1) = pts[0], pts[-1]
+    span = f"{e0:.1%} at {mils(a0)} mil rms, {e1:.1%} at {mils(a1)} mil rms"
+    if e1 > 1.25 * e0:
+        return f"largest at the largest spans ({span})"
+    if e0 > 1.25 * e1:
+        return f"largest at the smallest spans ({span})"
+    return f"no clear amplitude trend ({span})"
+
+
+def unexplained(cmp: Comparison) -> dict[str, Any] | None:
+    """None when cmp.error <= NOISE_FACTOR x the noise floor, else the ratio and where the
+    residual lives (UNEXPLAINED_RULE)."""
+    floor = cmp.noise_floor
+    if floor > 0 and cmp.error <= NOISE_FACTOR * floor:
+        return None
+    ratio = cmp.error / floor if floor > 0 else float("inf")
+    return {"ratio_to_floor": ratio, "where": residual_location(cmp)}
+
+
+def residual_location(cmp: Comparison) -> str:
+    """'<group>, <band>, <amplitude trend>, <time window>' of a comparison made with
+    detail=True; what could not be read is said."""
+    worst = cmp.worst_groups(1)
+    if not worst:
+        return "no channel group was scored"
+    g, e = worst[0]
+    wb = cmp.worst_band(g)
+    band = f"worst band {wb[0]} ({wb[1]:.1%})" if wb else "no band resolved (no coherent band)"
+    if cmp.windows:
+        name, t0, t1, ew = max(cmp.windows, key=lambda x: x[3])
+        window = f"worst 2 s window {t0:.1f}-{t1:.1f} s of {short(name)} ({ew:.1%})"
+    else:
+        window = "no time window located (runs shorter than 2 s)"
+    return f"{g} ({e:.1%}), {band}, {amplitude_trend(cmp, g)}, {window}"
+
+
 def localisation_text(cmp: Comparison) -> str:
     """Where the model fails, in words and numbers."""
     parts = []
@@ -207,9 +356,9 @@ def localisation_text(cmp: Comparison) -> str:
     if len(cmp.amplitude) > 1:
         amp = sorted(cmp.amplitude, key=lambda x: x[1])
         parts.append("by command amplitude: " + ", ".join(
-            f"{e:.1%} at {1000 * a / 25.4:.0f} mil rms" for _, a, e in amp))
+            f"{e:.1%} at {mils(a)} mil rms" for _, a, e in amp))
     if cmp.windows:
         name, t0, t1, e = max(cmp.windows, key=lambda x: x[3])
-        parts.append(f"worst 2 s window {t0:.1f}-{t1:.1f} s of {name.split('/')[-1]} ({e:.1%})")
+        parts.append(f"worst 2 s window {t0:.1f}-{t1:.1f} s of {short(name)} ({e:.1%})")
     parts.append(f"noise floor {cmp.noise_floor:.1%}")
     return "; ".join(parts)

@@ -23,9 +23,16 @@ class TableModel:
         self.physics_: Physics | None = None
 
     def fit(self, runs: Sequence[Run]) -> TableModel:
+        """Fit on the runs' training segments (at the analysis rate, see
+        `vtable.diagnose.compare.analysis_run`); `notes_` lists what the readers reported,
+        the resampling done and the channels left out, `flags_` the fitted parameters at a
+        bound."""
         d = Diagnoser(runs, self.effects, catalog=[])
         self._diagnoser = d
         self.physics_, self.train_error_ = d.fit(d.start)
+        self.notes_ = list(d.notes)
+        self.flags_ = d.at_bounds(self.physics_)
+        self.base_ = d.base_table(self.physics_)
         return self
 
     def score(self, runs: Sequence[Run] | None = None) -> float:
@@ -36,4 +43,5 @@ class TableModel:
         return d.score(self.physics_, detail=detail)
 
     def predict(self, run: Run) -> dict[str, np.ndarray]:
+        """The run's predictable channels (SI) at the run's own sample rate."""
         return ReducedModel(self.physics_).predict(run)

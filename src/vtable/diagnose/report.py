@@ -1,5 +1,7 @@
-"""The HTML report of a diagnosis: verdict, ranking tables with evidence, the error
-waterfall and transfer-function overlays (matplotlib, embedded PNGs)."""
+"""The HTML report of a diagnosis: verdict, what remains unexplained, the notes, the base
+calibration, ranking tables with evidence and fit flags, the error waterfall and
+transfer-function overlays (matplotlib, embedded PNGs). Every axis names its unit; transfer
+functions are shown in the run format's units per inch of command."""
 
 from __future__ import annotations
 
@@ -10,9 +12,13 @@ from pathlib import Path
 
 import numpy as np
 
-from vtable.diagnose.compare import GROUPS, group_prediction, group_signal
+from vtable import units
+from vtable.diagnose.compare import GROUP_UNITS, GROUPS, group_prediction, group_signal, short
 from vtable.diagnose.engine import Diagnoser, Diagnosis
+from vtable.fileio import write_text
 from vtable.ident.tf import transfer_function
+
+PRETTY = {"rad/s2": "rad/s²"}
 
 
 def _png(fig) -> str:
@@ -42,7 +48,8 @@ def waterfall(d: Diagnosis):
     ax.bar(len(vals), vals[-1], color="tab:blue")
     ax.axhline(100 * d.noise_floor, color="tab:red", ls="--", label="noise floor")
     ax.set_xticks(range(len(vals) + 1), [*labels, "final"], rotation=20, ha="right")
-    ax.set_ylabel("held-out error (%)")
+    ax.set_ylabel("held-out error (NRMS, %)")
+    ax.set_xlabel("model: fitted start, each added effect, final")
     ax.set_title("error waterfall")
     ax.legend()
     fig.tight_layout()
@@ -61,21 +68,23 @@ def tf_overlay(d: Diagnosis, diag: Diagnoser, group: str):
     if y is None:
         return None
     n = min(1024, 2 ** int(np.log2(len(x) / 2)))
+    unit = GROUP_UNITS[group]
+    scale = units.from_si(1.0, unit) / units.from_si(1.0, "in")  # SI ratio -> unit per inch
     fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(6.5, 4.5))
     tm = transfer_function(x, y, run.fs, n)
     sel = (tm.f > 0.2) & (tm.f <= 30)
-    a1.plot(tm.f[sel], np.abs(tm.H[sel]), "k-", lw=1.5, label="measured")
+    a1.plot(tm.f[sel], scale * np.abs(tm.H[sel]), "k-", lw=1.5, label="measured")
     a2.plot(tm.f[sel], np.degrees(np.angle(tm.H[sel])), "k-", lw=1.5)
     for label, ph, style in (("start model", diag.start_fitted, "tab:red"),
                              ("final model", d.final, "tab:blue")):
         yhat = group_prediction(diag.predict(ph)[run.name], run, group)
         tp = transfer_function(x, yhat, run.fs, n)
-        a1.plot(tp.f[sel], np.abs(tp.H[sel]), color=style, ls="--", label=label)
+        a1.plot(tp.f[sel], scale * np.abs(tp.H[sel]), color=style, ls="--", label=label)
         a2.plot(tp.f[sel], np.degrees(np.angle(tp.H[sel])), color=style, ls="--")
-    a1.set_ylabel("amplitude")
+    a1.set_ylabel(f"amplitude ({PRETTY.get(unit, unit)}/in)")
     a2.set_ylabel("phase (deg)")
     a2.set_xlabel("frequency (Hz)")
-    a1.set_title(f"{group} / command, {run.name.split('/')[-1]}")
+    a1.set_title(f"{group} / command h_span, {short(run.name)}")
     a1.legend()
     fig.tight_layout()
     return fig
@@ -86,42 +95,60 @@ def _plus(effects) -> str:
 
 
 def write_report(d: Diagnosis, diag: Diagnoser, path: str | Path) -> Path:
+    """Write the HTML report of `d` (made by `diag`) to `path`."""
     e = html.escape
+    start = "—" if d.start_error is None else f"{d.start_error:.2%}"
+    final = "—" if d.final_error is None else f"{d.final_error:.2%}"
+    u = d.unexplained
     parts = ["<html><head><meta charset='utf-8'><title>vtable diagnosis</title>"
              "<style>body{font-family:sans-serif;max-width:60em;margin:auto}"
              "td,th{padding:2px 8px;border-bottom:1px solid #ddd}</style></head><body>",
              "<h1>vtable diagnosis</h1>", f"<p><b>Verdict:</b> {e(d.verdict)}</p>",
+             "<p><b>Unexplained:</b> " + (e("none: the final error is consistent with the "
+                                             "noise floor") if u is None else
+                                           e(f"the final error is {u['ratio_to_floor']:.1f} x "
+                                             f"the noise floor; {u['where']}")) + "</p>",
              f"<p>Runs: {e(', '.join(r.name for r in diag.runs))}. Starting model: "
              f"linear servo loop + specimen{_plus(d.start_effects)}."
-             f" Held-out error {d.start_error:.2%} → {d.final_error:.2%}; noise floor "
-             f"{d.noise_floor:.2%}.</p>",
-             "<h2>Error waterfall</h2>",
-             f"<img src='data:image/png;base64,{_png(waterfall(d))}'>"]
+             f" Held-out error {start} → {final}; noise floor {d.noise_floor:.2%}.</p>"]
+    if d.notes:
+        parts.append("<h2>Notes</h2><ul>" + "".join(f"<li>{e(n)}</li>" for n in d.notes)
+                     + "</ul>")
+    if d.base:
+        parts.append("<h2>Base parameters (calibrated)</h2><table><tr><th>parameter</th>"
+                     "<th>declared</th><th>fitted</th><th>bounds</th><th>unit</th></tr>")
+        for k, v in d.base.items():
+            parts.append(f"<tr><td>{e(k)}</td><td>{v['declared']:.4g}</td>"
+                         f"<td>{v['fitted']:.4g}</td><td>{v['bounds'][0]:g} – "
+                         f"{v['bounds'][1]:g}</td><td>{e(v.get('unit', ''))}</td></tr>")
+        parts.append("</table>")
+    if d.history():
+        parts += ["<h2>Error waterfall</h2>",
+                  f"<img src='data:image/png;base64,{_png(waterfall(d))}'>"]
     for i, r in enumerate(d.rounds, 1):
         parts.append(f"<h2>Round {i}: {'added ' + e(r.added) if r.added else 'nothing added'}"
                      "</h2><table><tr><th>rank</th><th>effect</th><th>held-out error</th>"
-                     "<th>evidence</th></tr>")
+                     "<th>evidence</th><th>fit at a bound</th></tr>")
         for k, c in enumerate(r.ranking, 1):
             parts.append(f"<tr><td>{k}</td><td>{e(c.effect)}</td><td>{c.error_after:.2%}</td>"
-                         f"<td>{e(c.evidence)}</td></tr>")
+                         f"<td>{e(c.evidence)}</td><td>{e('; '.join(c.flags))}</td></tr>")
         parts.append("</table>")
-    parts.append("<h2>Transfer functions: measured, start and final models</h2>")
-    for g in ("table displacement", "pitch", "structure acceleration"):
-        fig = tf_overlay(d, diag, g)
-        if fig is not None:
-            parts.append(f"<img src='data:image/png;base64,{_png(fig)}'>")
-    parts.append("<h2>Error per channel group (held out)</h2><table><tr><th>run</th>"
-                 "<th>group</th><th>start</th><th>final</th></tr>")
-    for run, errs in d.comparison_start.per_run.items():
-        for g, v in errs.items():
-            f = d.comparison_final.per_run[run].get(g, float("nan"))
-            parts.append(f"<tr><td>{e(run.split('/')[-1])}</td><td>{e(g)}</td>"
-                         f"<td>{v:.2%}</td><td>{f:.2%}</td></tr>")
-    parts.append("</table></body></html>")
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    p.write_text("\n".join(parts), encoding="utf-8")
-    return p
+    if d.comparison_start is not None and d.comparison_final is not None:
+        parts.append("<h2>Transfer functions: measured, start and final models</h2>")
+        for g in ("table displacement", "pitch", "structure acceleration"):
+            fig = tf_overlay(d, diag, g)
+            if fig is not None:
+                parts.append(f"<img src='data:image/png;base64,{_png(fig)}'>")
+        parts.append("<h2>Error per channel group (held out, NRMS)</h2><table><tr><th>run</th>"
+                     "<th>group</th><th>start</th><th>final</th></tr>")
+        for run, errs in d.comparison_start.per_run.items():
+            for g, v in errs.items():
+                f = d.comparison_final.per_run[run].get(g, float("nan"))
+                parts.append(f"<tr><td>{e(short(run))}</td><td>{e(g)}</td>"
+                             f"<td>{v:.2%}</td><td>{f:.2%}</td></tr>")
+        parts.append("</table>")
+    parts.append("</body></html>")
+    return write_text(path, "\n".join(parts))
 
 
 GROUP_NAMES = tuple(GROUPS)
