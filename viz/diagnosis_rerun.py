@@ -24,7 +24,7 @@ import rerun.blueprint as rrb
 
 from vtable import units
 from vtable.diagnose.compare import GROUP_UNITS, GROUPS, group_prediction, group_signal, short
-from vtable.fileio import atomic_path
+from vtable.viz.recording import rrd_file
 
 #: how a unit is written in view and series names
 PRETTY = {"rad/s2": "rad/s²", "in/s2": "in/s²", "m/s2": "m/s²"}
@@ -62,9 +62,7 @@ def log_diagnosis(d, diag, path: str | Path, application_id: str = "vtable-diagn
     stages += [(f"{i}_{r.added}", c.physics) for i, (r, c) in
                enumerate(((r, r.ranking[0]) for r in d.rounds if r.added), 1)]
     tabs = []
-    with atomic_path(path) as tmp:
-        rec = rr.RecordingStream(application_id)
-        rec.save(str(tmp))
+    with rrd_file(path, application_id) as rec:
         preds = [(stage, diag.predict(ph)) for stage, ph in stages]
         for run in diag.runs:
             name = short(run.name)
@@ -120,8 +118,6 @@ def log_diagnosis(d, diag, path: str | Path, application_id: str = "vtable-diagn
         main = rrb.Tabs(*tabs) if tabs else rrb.TextDocumentView(origin="diagnosis/verdict")
         rec.send_blueprint(rrb.Blueprint(rrb.Horizontal(main, side, column_shares=[3, 2]),
                                          rrb.TimePanel(timeline="time")))
-        rec.flush()
-        rec.disconnect()
     return path
 
 

@@ -107,6 +107,8 @@ def _parser() -> argparse.ArgumentParser:
     dg.add_argument("--with", dest="with_", default="",
                     help="effects already in the starting model, comma separated")
     dg.add_argument("--effects", default="", help="catalog subset to try [all]")
+    dg.add_argument("--max-rounds", type=_integer, default=4,
+                    help="stop after this many rounds of adding an effect [4]")
     dg.add_argument("--json", default=None, help="write the diagnosis JSON here")
     dg.add_argument("--rerun", default=None, help="write a Rerun recording (.rrd)")
     dg.add_argument("--report", default=None, help="write an HTML report")
@@ -345,8 +347,10 @@ def cmd_diagnose(a: argparse.Namespace) -> dict[str, Any]:
     from vtable.runs import campaign
 
     runs = campaign(a.runs)
+    if a.max_rounds < 1:
+        raise VtableError(f"--max-rounds must be at least 1, got {a.max_rounds}")
     diag = Diagnoser(runs, _effects_list(a.with_), catalog=_effects_list(a.effects) or None,
-                     progress=_Progress())
+                     progress=_Progress(), max_rounds=a.max_rounds)
     try:
         d = diag.diagnose()
     except DiagnosisInterrupted as e:
