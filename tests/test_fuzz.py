@@ -19,7 +19,6 @@ import signal
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import pytest
 import truth
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st

@@ -364,6 +364,7 @@ def cmd_diagnose(a: argparse.Namespace) -> dict[str, Any]:
         print(("\n" if sys.stderr.isatty() else "")
               + f"vtable: interrupted after round {len(e.partial.rounds)}; {wrote}",
               file=sys.stderr)
+        e.reported = True  # main() exits 130 without a second line
         raise
     out = d.to_json()
     out["localisation"] = localise(d)
@@ -764,8 +765,9 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:
         _quiet_stdout()
         return 141
-    except KeyboardInterrupt:
-        print("vtable: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as e:
+        if not getattr(e, "reported", False):
+            print("vtable: interrupted", file=sys.stderr)
         return 130
     except Exception as e:
         if _interrupted(e):
