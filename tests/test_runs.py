@@ -549,8 +549,8 @@ def test_bad_control_settings_are_one_line(tmp_path, control, msg):
 @pytest.mark.parametrize("old, new, msg", [
     ("damping = 0.01", "damping = 2", "fraction of critical damping, at most 1; got 2 (2 means "
                                       "200 %)"),
-    ("frequency_hz = 2.87", "frequency_hz = 100.0", "[specimen]: frequency 100 Hz is at or "
-                                                    "above the run's Nyquist frequency 100 Hz"),
+    ("frequency_hz = 2.87", "frequency_hz = 100.0", "[specimen].frequency_hz: 100 Hz is at "
+                                                    "or above the run's Nyquist frequency 100 Hz"),
     ("weight_kip = 68.4", "weight_kip = [68.4]", "weight_kip: expected a number in kip"),
     ("weight_kip = 68.4", "weight_kip = true", "weight_kip: expected a number in kip, got True"),
     ("weight_kip = 68.4", "weight_kip = 1e308", "1e+308 kip is not a plausible force"),
