@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from conftest import HIDDEN, campaign_commands
 
-from vtable.effects.catalog import CATALOG
 from vtable.effects.physics import Physics, nominal_open_loop
 from vtable.effects.reduced import ReducedModel
+from vtable.effects.registry import get, names
 from vtable.effects.virtual import virtual_run
 from vtable.errors import VtableError
 from vtable.params import presets
@@ -19,8 +19,8 @@ def test_catalog_has_the_spec_names():
     spec = ("pitch_flexibility force_feedback_filter valve_flow_nonlinearity actuator_friction "
             "flow_saturation valve_dynamics oil_column_air amplitude_dependent_damping "
             "foundation_compliance sensor_filter").split()
-    assert set(spec) <= set(CATALOG)
-    for e in CATALOG.values():
+    assert set(spec) <= set(names())
+    for e in map(get, names()):
         assert e.physics and e.section and e.signature and e.params
         for p in e.params:
             assert p.lower <= p.default <= p.upper and p.unit

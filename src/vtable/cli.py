@@ -313,7 +313,7 @@ def _print_tf(d: dict[str, Any]) -> None:
 
 
 def _effects_list(text: str) -> list[str]:
-    from vtable.effects.catalog import effect
+    from vtable.effects.registry import get as effect
 
     names = [e.strip() for e in text.split(",") if e.strip()]
     for e in names:

@@ -74,6 +74,8 @@ _TABLE: dict[str, tuple[float, str]] = {
     "s": (1.0, "time"), "ms": (1e-3, "time"), "s2": (1.0, "time squared"),
     "1/s": (1.0, "frequency"), "Hz": (1.0, "frequency"),
     "1": (1.0, "dimensionless"), "%": (0.01, "dimensionless"),
+    # per unit length (e.g. a damping ratio rising per inch of drift)
+    "1/m": (1.0, "inverse length"), "1/in": (1 / INCH, "inverse length"),
 }
 
 #: factor that converts a value in the named unit to SI
@@ -95,7 +97,7 @@ PLAUSIBLE_MAX: dict[str, float] = {
     "flow gain": 1e3, "pressure-feedback gain": 1.0, "valve flow gain": 1e3,
     "displacement gain": 1e9, "velocity gain": 1e9, "acceleration gain": 1e9,
     "pressure gain": 1.0, "time squared": 1e6, "time": 1e11, "frequency": 1e4,
-    "dimensionless": 1e15,
+    "dimensionless": 1e15, "inverse length": 1e6,
 }
 
 #: how a quantity of each dimension is called in messages ("avg_hdisp is a displacement")

@@ -53,9 +53,10 @@ from vtable.diagnose.compare import (
     segments,
     unexplained,
 )
-from vtable.effects.catalog import CATALOG, effect
 from vtable.effects.physics import Physics, nominal_open_loop
 from vtable.effects.reduced import ReducedModel
+from vtable.effects.registry import get as effect
+from vtable.effects.registry import names as registered
 from vtable.errors import VtableError
 from vtable.params.loops import OpenLoop
 from vtable.params.virtual import virtual_table
@@ -242,7 +243,7 @@ class Diagnoser:
         self.specimen = self.runs[0].specimen()
         self.start = Physics(nominal_open_loop(self.vt), self.specimen,
                              {e: {} for e in start_effects})
-        self.catalog = list(catalog or CATALOG)
+        self.catalog = list(catalog or registered())
         for e in self.catalog:
             effect(e)
         self.progress = progress or (lambda i, n, s: None)
@@ -261,7 +262,7 @@ class Diagnoser:
     def _layout(self, ph: Physics) -> list[tuple[str, str, float, float, bool]]:
         lay = [("base", n, lo, hi, True) for n, (_, _, lo, hi) in BASE_PARAMS.items()]
         for name in ph.effects:
-            for p in CATALOG[name].params:
+            for p in effect(name).params:
                 lay.append((name, p.name, p.lower, p.upper, p.log))
         return lay
 
@@ -293,7 +294,7 @@ class Diagnoser:
                 key, unit = BASE_PARAMS[name][:2]
             else:
                 key = f"{owner}.{name}"
-                unit = next(p.unit for p in CATALOG[owner].params if p.name == name)
+                unit = next(p.unit for p in effect(owner).params if p.name == name)
             f = (lambda z: math.log(z)) if log else (lambda z: z)
             pos = (f(v) - f(lo)) / (f(hi) - f(lo))
             for side, bound, near in (("lower", lo, pos <= AT_BOUND),
@@ -444,7 +445,7 @@ class Diagnoser:
             def trial(name: str, base: Physics = current) -> Candidate:
                 cand, train = self.fit(base.with_effect(name), multistart=name)
                 return Candidate(name, dict(cand.effects[name]), self.score(cand).error, train,
-                                 "", len(CATALOG[name].params), cand, self.at_bounds(cand))
+                                 "", len(effect(name).params), cand, self.at_bounds(cand))
 
             # candidates are independent: fit them on both cores (the kernel releases the
             # GIL); on a stop, pending fits are cancelled and running ones end at their next
@@ -533,7 +534,7 @@ def _evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
     band = cmp.worst_band(worst[0][0]) if worst else None
     removed = (err - c.error_after) / max(err - floor, 1e-12)
     params = ", ".join(f"{k} = {v:.3g} {p.unit}" for (k, v), p in
-                       zip(c.params.items(), CATALOG[c.effect].params, strict=True))
+                       zip(c.params.items(), effect(c.effect).params, strict=True))
     return (f"residual concentrated in {where}" + (f" at {band[0]}" if band else "")
             + f"; adding {c.effect} removes {removed:.0%} of it (held-out error {err:.2%} -> "
               f"{c.error_after:.2%}); fitted {params}")

@@ -1,29 +1,39 @@
-"""The fast reduced model the diagnosis fits: the planar table (x, and θ with
-pitch_flexibility) with its specimen, one equivalent horizontal actuator carrying the
-servo effects (compiled kernel), and the foundation and sensor effects.
+"""The fast reduced model the diagnosis fits, composed from a small assembly.
 
-Mechanics come from the same assembly as the virtual table's linear model
-(`analytic.virtual_table.mechanics`); the servo from the same kernel as the virtual
-table's controller; effect parameters from the same `Physics`.
+`ReducedAssembly` starts from the planar table of report chapter 7 — the platen in x
+carrying the specimen's storeys, one equivalent horizontal actuator under the DOF servo
+law (`vtable.hydraulics`), mechanics from the same assembly as the virtual table's linear
+model (`analytic.virtual_table.mechanics`: the platen cannot pitch until an effect frees
+it) — and offers effects the vocabulary of `vtable.effects.base.Assembly`: degrees of
+freedom, springs, linear control loops, the hydraulic element's named options, force
+elements (a law of a relative motion, compiled with numba when it can be, else run as
+Python) and output filters. `ReducedModel` integrates what they made
+(`reduced_kernel.simulate_reduced`) and predicts a run's channels from its command.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.signal
 
 from vtable.analytic.virtual_table import mechanics
 from vtable.effects import physics as phys
-from vtable.effects.kernel import simulate_reduced
-from vtable.effects.sensor import sensor_filter
+from vtable.effects.reduced_kernel import (
+    no_element,
+    simulate_reduced,
+    simulate_reduced_python,
+)
 from vtable.errors import VtableError
+from vtable.hydraulics import group_law
 from vtable.params.virtual import VirtualTable, split_rocking, virtual_table
 from vtable.runs.model import Run
 
-#: the largest integration step (RK4); a run of step dt is integrated at dt / ceil(dt / SIM_DT)
-SIM_DT = 0.0025
+SIM_DT = 0.0025  # s: the largest integration step (a run step is divided until below it)
 
 #: the channels the reduced model predicts (format names)
 PREDICTED = ("avg_hdisp", "h1_disp", "h2_disp", "h3_disp", "h_vel", "avg_hacc", "h1_force",
@@ -31,23 +41,164 @@ PREDICTED = ("avg_hdisp", "h1_disp", "h2_disp", "h3_disp", "h_vel", "avg_hacc", 
              "pot_n_sw", "pot_n_se")
 
 
-def pitch_loop_state(vt: VirtualTable, nq: int):
-    """The pitch DOF loop of the vertical actuators (servo.py's law with θ_c = 0, no RC)
-    as one state p, the DOF pressure: ṗ = (4β/V)(-k_t g (θ + k_p p) - k_ct p - A θ̇),
-    moment on θ: -A ΣT² p (T_i = lever arms). Coordinate 1 is θ."""
-    s = vt.vertical_servo
-    g, p_scale, _ = vt.gain_scales("pitch")
-    lever = vt.table.geometry.vertical_square / 2
-    sum_t2 = 4 * lever**2
-    c0 = 4 * s.beta / s.volume
-    Aw = np.array([[-c0 * (s.k_t * g * s.k_p * p_scale + s.k_ct)]])
-    Wq = np.zeros((1, nq))
-    Wv = np.zeros((1, nq))
-    Wq[0, 1] = -c0 * s.k_t * g
-    Wv[0, 1] = -c0 * s.area
-    Fw = np.zeros((nq, 1))
-    Fw[1, 0] = s.area * sum_t2
-    return Aw, Wq, Wv, Fw
+@dataclass
+class ForceElement:
+    law: Callable
+    a: str
+    b: str | None
+    params: np.ndarray
+    states: int
+
+
+class ReducedAssembly:
+    """The reduced model under construction (see the module docstring). Coordinates are
+    named: "x" (the platen at the actuator line), "pitch" once freed, the specimen's
+    slides ("x_s", "x_s1", ...), and what effects add."""
+
+    def __init__(self, ph: phys.Physics, vt: VirtualTable) -> None:
+        self.vt, self.specimen = vt, ph.specimen
+        M, K, C, _, names, slides, pos = mechanics(vt, ph.specimen)
+        self._full = (M, K, C, list(names))
+        self.storeys = [names[5 + i] for i in range(len(slides))]
+        self.active = ["x", *self.storeys]
+        self.h_top = float(pos[slides[-1].name][2]) if slides else 0.0
+        self.extra: dict[str, float] = {}  # added DOFs: name -> mass
+        self.springs: list[tuple[str, str | None, float, float]] = []
+        self.loops: list[tuple[str, float, float, float, float]] = []
+        self.quadratic: list[tuple[str, float]] = []
+        self.elements: list[ForceElement] = []
+        self.filters: list[Callable] = []
+        self.moving, self.reaction = "x", None
+        self.servo = phys.base_hydraulics(ph, vt)
+        self.n_actuators = len(vt.group("horizontal"))
+
+    # -- the vocabulary ----------------------------------------------------------------
+    def set_servo(self, *, rc: float | None = None, supply_pressure: float | None = None,
+                  friction: float | None = None, max_velocity: float | None = None,
+                  spool_lag: float | None = None, air_ratio: float | None = None) -> None:
+        ch = {k: v for k, v in (("rc", rc), ("supply_pressure", supply_pressure),
+                                ("spool_lag", spool_lag), ("air_ratio", air_ratio))
+              if v is not None}
+        n = self.n_actuators
+        if friction is not None:
+            ch["friction"] = friction / n
+        if max_velocity is not None:
+            ch["max_flow"] = max_velocity * self.servo.area
+        self.servo = self.servo.replace(**ch)
+
+    def unlock(self, dof: str) -> None:
+        if dof not in self._full[3][:5]:
+            raise ValueError(f"the platen has no DOF {dof!r}")
+        if dof not in self.active:
+            self.active.insert(1, dof)
+
+    def set_rocking(self, k_theta: float, c_theta: float) -> None:
+        """The virtual table's own pitch system: stabilizers retuned to (k_θ, c_θ) plus the
+        vertical actuators' pitch DOF loop (one state)."""
+        vt = self.vt
+        k_s, c_s = split_rocking(k_theta, c_theta, vt)
+        d_p = vt.table.geometry.stabilizer_square
+        self.add_spring("pitch", None, k_s * d_p**2, c_s * d_p**2)
+        a, b_q, b_v, f = group_law(vt, "vertical").dof_loop("pitch")
+        self.loops.append(("pitch", a, b_q, b_v, f))
+
+    def add_dof(self, name: str, mass: float) -> None:
+        self.extra[name] = float(mass)
+        self.active.append(name)
+
+    def add_spring(self, a: str, b: str | None, stiffness: float, damping: float) -> None:
+        self.springs.append((a, b, stiffness, damping))
+
+    def set_actuator(self, moving: str | None = None, reaction: str | None = None) -> None:
+        """What the equivalent actuator pushes (and reacts on): its extension is
+        q[moving] - q[reaction]."""
+        self.moving = moving or self.moving
+        self.reaction = reaction or self.reaction
+
+    def add_reaction_mass(self, name: str, mass: float, stiffness: float,
+                          damping: float) -> None:
+        self.add_dof(name, mass)
+        self.add_spring(name, None, stiffness, damping)
+        self.set_actuator(reaction=name)
+
+    def add_force(self, law: Callable, a: str, b: str | None = None,
+                  params: Sequence[float] = (), states: int = 0) -> None:
+        self.elements.append(ForceElement(law, a, b, np.asarray(params, dtype=float), states))
+
+    def insert_at_actuators(self, name: str, mass: float, law: Callable,
+                            params: Sequence[float], states: int = 0) -> None:
+        self.add_dof(name, mass)
+        self.set_actuator(moving=name)
+        self.add_force(law, name, "x", params, states)
+
+    def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0) -> None:
+        for s in self.storeys:
+            self.add_force(law, s, None, params, states)
+
+    def add_storey_quadratic_damper(self, c2: float) -> None:
+        for s in self.storeys:
+            self.quadratic.append((s, c2))
+
+    def add_output_filter(self, fn: Callable) -> None:
+        self.filters.append(fn)
+
+    # -- the matrices ------------------------------------------------------------------
+    def matrices(self):
+        M0, K0, C0, names = self._full
+        coords = [c for c in self.active if c not in self.extra]
+        keep = [names.index(c) for c in coords]
+        n0, n = len(keep), len(self.active)
+        order = coords + list(self.extra)
+        M, K, C = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+        for X, X0 in ((M, M0), (K, K0), (C, C0)):
+            X[:n0, :n0] = X0[np.ix_(keep, keep)]
+        for k, mass in enumerate(self.extra.values()):
+            M[n0 + k, n0 + k] = mass
+        ix = {c: i for i, c in enumerate(order)}
+        for a, b, k, c in self.springs:
+            for X, v in ((K, k), (C, c)):
+                i = ix[a]
+                X[i, i] += v
+                if b is not None:
+                    j = ix[b]
+                    X[j, j] += v
+                    X[i, j] -= v
+                    X[j, i] -= v
+        return order, ix, M, K, C
+
+
+def _combined(elements: list[ForceElement], ix: dict[str, int], jit: bool):
+    """One element function for the kernel: every force element's law on its relative
+    motion, its force added to its coordinate (and subtracted from the other)."""
+    ns: dict = {}
+    lines = ["def combined(q, qd, z, p, f, dz):"]
+    s = o = 0
+    for k, e in enumerate(elements):
+        law = e.law
+        if jit:
+            from numba import njit
+
+            law = njit(cache=False)(law)
+        ns[f"law{k}"] = law
+        i = ix[e.a]
+        j = ix[e.b] if e.b is not None else None
+        d = f"q[{i}]" + (f" - q[{j}]" if j is not None else "")
+        v = f"qd[{i}]" + (f" - qd[{j}]" if j is not None else "")
+        m, ps = e.states, len(e.params)
+        lines.append(f"    r = law{k}({d}, {v}, z[{s}:{s + m}], p[{o}:{o + ps}], dz[{s}:{s + m}])")
+        lines.append(f"    f[{i}] += r")
+        if j is not None:
+            lines.append(f"    f[{j}] -= r")
+        s, o = s + m, o + ps
+    lines.append("    return")
+    exec("\n".join(lines), ns)
+    fn = ns["combined"]
+    if jit:
+        from numba import njit
+
+        fn = njit(cache=False)(fn)
+    params = np.concatenate([e.params for e in elements]) if elements else np.zeros(0)
+    return fn, s, params
 
 
 class ReducedModel:
@@ -55,61 +206,54 @@ class ReducedModel:
 
     def __init__(self, physics: phys.Physics, vt: VirtualTable | None = None) -> None:
         self.physics, self.vt = physics, vt or virtual_table()
-        ph, vt = self.physics, self.vt
-        M, K, C, _, names, slides, pos = mechanics(vt, ph.specimen)
-        keep = [0] + ([3] if ph.has("pitch_flexibility") else []) + \
-            list(range(5, 5 + len(slides)))
-        M, K, C = (X[np.ix_(keep, keep)] for X in (M, K, C))
-        self.coords = [names[i] for i in keep]
-        n = len(keep)
-        na = 0
-        self.Aw = np.zeros((0, 0))
-        if ph.has("pitch_flexibility"):
-            # the virtual table's own pitch system: stabilizers retuned to (k_θ, c_θ) plus
-            # the vertical actuators' pitch DOF loop as one auxiliary state
-            k_s, c_s = split_rocking(*phys.rocking_spring(ph), vt)
-            d_p = vt.table.geometry.stabilizer_square
-            K[1, 1] += k_s * d_p**2
-            C[1, 1] += c_s * d_p**2
-            na = 1
-            self.Aw, Wq, Wv, Fw = pitch_loop_state(vt, n)
-        if na == 0:
-            Wq = Wv = np.zeros((0, n))
-            Fw = np.zeros((n, 0))
+        m = ReducedAssembly(physics, self.vt)
+        physics.apply(m, "reduced")
+        self.assembly = m
+        order, ix, M, K, C = m.matrices()
+        self.coords, self.ix = order, ix
+        n = len(order)
+        na = len(m.loops)
+        Aw, Wq, Wv, Fw = np.zeros((na, na)), np.zeros((na, n)), np.zeros((na, n)), \
+            np.zeros((n, na))
+        for k, (c, a, b_q, b_v, f) in enumerate(m.loops):
+            Aw[k, k], Wq[k, ix[c]], Wv[k, ix[c]], Fw[ix[c], k] = a, b_q, b_v, f
         c2 = np.zeros(n)
-        if slides:
-            c2[n - len(slides):] = phys.quadratic_damping(ph, ph.specimen)
-        bF = np.zeros(n)
-        bF[0] = 1.0
+        for c, v in m.quadratic:
+            c2[ix[c]] += v
         ax = np.zeros(n)
-        ax[0] = 1.0
-        if ph.has("foundation_compliance"):
-            m_f, k_f, c_f = phys.foundation(ph, vt)
-            M, K, C = (np.pad(X, ((0, 1), (0, 1))) for X in (M, K, C))
-            M[-1, -1], K[-1, -1], C[-1, -1] = m_f, k_f, c_f
-            c2, bF, ax = np.append(c2, 0.0), np.append(bF, -1.0), np.append(ax, -1.0)
-            Wq, Wv = np.pad(Wq, ((0, 0), (0, 1))), np.pad(Wv, ((0, 0), (0, 1)))
-            Fw = np.pad(Fw, ((0, 1), (0, 0)))
-            self.coords.append("x_f")
-        self.Wq, self.Wv, self.Fw = Wq, Wv, Fw
-        self.M, self.K, self.C, self.c2, self.bF, self.ax = M, K, C, c2, bF, ax
+        ax[ix[m.moving]] = 1.0
+        if m.reaction is not None:
+            ax[ix[m.reaction]] = -1.0
+        self.M, self.K, self.C, self.c2, self.ax, self.bF = M, K, C, c2, ax, ax.copy()
+        self.Aw, self.Wq, self.Wv, self.Fw = Aw, Wq, Wv, Fw
         self.Minv = np.linalg.inv(M)
-        self.sp = phys.servo_vector(ph, vt, phys.N_HORIZONTAL)
-        gx, px, vx = vt.gain_scales("horizontal")
-        self.g = np.array([gx])
-        self.kp = np.array([self.sp[5] * px])
-        self.kv = np.array([self.sp[6] * vx])
-        self.T = np.ones((1, 1))
-        self.slides = slides
-        self.h_top = float(pos[slides[-1].name][2]) if slides else 0.0
+        law = group_law(self.vt, "horizontal", m.servo).lumped("x")
+        self.T, self.Tp, self.g, self.kp, self.kv = law.kernel()
+        self.sp = law.hydraulics.vector()
+        self.storeys, self.h_top = m.storeys, m.h_top
+        self._element(m.elements)
+
+    def _element(self, elements: list[ForceElement]) -> None:
+        self.python = False
+        if not elements:
+            self.elem, self.ne, self.pe = no_element, 0, np.zeros(0)
+            return
+        fn, ne, pe = _combined(elements, self.ix, jit=True)
+        try:  # compile now: a law numba cannot type runs as Python instead (slower)
+            fn(np.zeros(len(self.ix)), np.zeros(len(self.ix)), np.zeros(ne), pe,
+               np.zeros(len(self.ix)), np.zeros(ne))
+        except Exception:  # numba's typing errors have many classes
+            fn, ne, pe = _combined(elements, self.ix, jit=False)
+            self.python = True
+            warnings.warn("a force law numba cannot compile runs as Python (slower)",
+                          RuntimeWarning, stacklevel=3)
+        self.elem, self.ne, self.pe = fn, ne, pe
 
     def simulate(self, t: np.ndarray, x_c: np.ndarray) -> dict[str, np.ndarray]:
-        """Channels (SI) on the uniform time grid `t` of a command x_c sampled on it.
-
-        Any uniform step dt works: the model integrates at h = dt/m, m = ⌈dt/SIM_DT⌉ (the
-        largest step ≤ 2.5 ms that divides dt: 2.5 ms at 200 Hz, 1/512 s at 256 Hz, 1 ms at
-        1 kHz), the command interpolated to that grid by a polyphase FIR
-        (`scipy.signal.resample_poly`), and returns every m-th sample."""
+        """Channels (SI) on the uniform time grid `t` of a command x_c sampled on it. The
+        model integrates at the run step divided by the smallest integer that brings it to
+        `SIM_DT` or below (any sample rate); the command is interpolated band-limited
+        (`resample_poly`) in between."""
         t = np.asarray(t, dtype=float)
         if len(t) < 2:
             raise VtableError("the model needs a command of at least two samples")
@@ -121,30 +265,32 @@ class ReducedModel:
         xc = scipy.signal.resample_poly(x_c, up, 1)[: (len(t) - 1) * up + 1] if up > 1 \
             else np.ascontiguousarray(x_c, dtype=float)
         nq = self.M.shape[0]
-        Q, Qd, Qdd, F = simulate_reduced(xc, h, nq, self.Minv, self.K, self.C, self.c2,
-                                         self.bF, self.ax, self.sp, self.T, self.T, self.g,
-                                         self.kp, self.kv, self.Aw, self.Wq, self.Wv, self.Fw)
-        ip = self.coords.index("pitch") if "pitch" in self.coords else None
-        ns = len(self.slides)
-        s0 = 1 + (ip is not None)
-        drift = Q[:, s0:s0 + ns].sum(axis=1) if ns else np.zeros(len(xc))
-        drift_a = Qdd[:, s0:s0 + ns].sum(axis=1) if ns else np.zeros(len(xc))
-        th = Q[:, ip] if ip is not None else np.zeros(len(xc))
-        th_a = Qdd[:, ip] if ip is not None else np.zeros(len(xc))
-        x_a = Q @ self.ax
-        out = {"avg_hdisp": x_a, "h_vel": Qd[:, 0], "avg_hacc": Qdd[:, 0], "pitch_disp": th,
-               "pitch_acc": th_a, "h1_force": F / phys.N_HORIZONTAL}
-        if ns:
-            out["acc_n_ne"] = Qdd[:, 0] + self.h_top * th_a + drift_a
-            out["pot_n_sw"] = Q[:, 0] + self.h_top * th + drift
-        if self.physics.has("sensor_filter"):
-            fc = self.physics.effects["sensor_filter"]["cutoff_hz"]
-            out = {k: sensor_filter(v, 1.0 / h, fc) for k, v in out.items()}
+        run = simulate_reduced_python if self.python else simulate_reduced
+        Q, Qd, Qdd, F = run(xc, h, nq, self.Minv, self.K, self.C, self.c2, self.bF, self.ax,
+                            self.sp, self.T, self.Tp, self.g, self.kp, self.kv, self.Aw,
+                            self.Wq, self.Wv, self.Fw, self.elem, self.ne, self.pe)
+        ix = self.ix
+        n = len(xc)
+        x = ix["x"]
+        slides = [ix[s] for s in self.storeys]
+        drift = Q[:, slides].sum(axis=1) if slides else np.zeros(n)
+        drift_a = Qdd[:, slides].sum(axis=1) if slides else np.zeros(n)
+        ip = ix.get("pitch")
+        th = Q[:, ip] if ip is not None else np.zeros(n)
+        th_a = Qdd[:, ip] if ip is not None else np.zeros(n)
+        na = self.assembly.n_actuators
+        out = {"avg_hdisp": Q @ self.ax, "h_vel": Qd[:, x], "avg_hacc": Qdd[:, x],
+               "pitch_disp": th, "pitch_acc": th_a, "h1_force": F / na}
+        if slides:
+            out["acc_n_ne"] = Qdd[:, x] + self.h_top * th_a + drift_a
+            out["pot_n_sw"] = Q[:, x] + self.h_top * th + drift
+        for fn in self.assembly.filters:
+            out = {k: fn(v, 1.0 / h) for k, v in out.items()}
         out = {k: v[::up] for k, v in out.items()}
         for i in (1, 2, 3):
             out[f"h{i}_disp"] = out["avg_hdisp"]
         out["h2_force"] = out["h3_force"] = out["h1_force"]
-        if ns:
+        if slides:
             out["acc_n_nw"] = out["acc_n_ne"]
             out["pot_n_se"] = out["pot_n_sw"]
         return out

@@ -1,20 +1,36 @@
-"""Runs of the virtual table (MuJoCo + controllers) built from a `Physics`: the data the
-diagnosis is proven on. Every effect present is switched on in the multibody model with
-the same parameters the reduced model reads."""
+"""The multibody virtual table realising a `Physics`, composed from the same vocabulary
+as the reduced model (`vtable.effects.base.Assembly`).
+
+`VirtualAssembly` starts from the chapter-7 base: the virtual table's MjSpec
+(`mjcf.table_spec`) with the pitch joint removed, the horizontal loop from the base's open
+loop (no RC filter) and the passive stabilizers; effects then edit the spec
+(`vtable.mjcf.edit`: free a joint, a reaction mass, pistons between actuators and platen,
+storey actuators), set the hydraulic element's options, add force-law controllers and
+output filters. `finalize` compiles and picks the controllers: the linear, fused
+`ServoController` while the horizontal loop is linear, the compiled `HydraulicServo` once
+an appendix C option is on.
+"""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
+from dataclasses import replace
 
 import numpy as np
 
-from vtable.controllers import PassiveStabilizers, ServoController
-from vtable.controllers.effect_servo import KernelServo, QuadraticDamper
+from vtable.controllers import (
+    ForceLawController,
+    HydraulicServo,
+    PassiveStabilizers,
+    ServoController,
+    quadratic_damper,
+)
 from vtable.effects import physics as phys
-from vtable.effects.catalog import SERVO_EFFECTS
-from vtable.effects.sensor import sensor_filter
 from vtable.errors import VtableError
-from vtable.mjcf import build
+from vtable.hydraulics.law import group_law
+from vtable.mjcf import edit
+from vtable.mjcf.builder import BuiltModel, compile_table, table_spec
 from vtable.params.virtual import VirtualTable, virtual_table, with_rocking
 from vtable.runs import specimen_table
 from vtable.runs.model import Run, with_noise
@@ -24,54 +40,118 @@ from vtable.sim.simulator import Simulator
 
 OUTPUT_FS = 200.0  # Hz: the rate of the runs the diagnosis tests are made of
 MAX_STEP = 1e-3  # s: the virtual table's largest MuJoCo/control step
+COMMANDS = ("h_span", "acc_cmd")  # channels the controller generates (never filtered)
 
 
-def virtual_setup(ph: phys.Physics, vt: VirtualTable | None = None, timestep: float = MAX_STEP):
+class VirtualAssembly:
+    """The virtual table under construction (see the module docstring)."""
+
+    def __init__(self, ph: phys.Physics, vt: VirtualTable, timestep: float = MAX_STEP) -> None:
+        base = phys.base_hydraulics(ph, vt)
+        servo = replace(vt.horizontal_servo, k_t=base.k_t, k_p=base.k_p, k_ct=base.k_ct,
+                        volume=base.volume, area=base.area, beta=base.beta, k_v=base.k_v)
+        self.vt = replace(vt, horizontal_servo=servo)
+        self.specimen = ph.specimen
+        self.ts = table_spec(self.vt, ph.specimen, timestep=timestep, with_meshes=False)
+        edit.lock_joint(self.ts, "pitch")
+        self.servo = base
+        self.controllers: list = []
+        self.filters: list[Callable] = []
+        self.n_actuators = len(self.vt.group("horizontal"))
+
+    # -- the vocabulary ----------------------------------------------------------------
+    def set_servo(self, *, rc: float | None = None, supply_pressure: float | None = None,
+                  friction: float | None = None, max_velocity: float | None = None,
+                  spool_lag: float | None = None, air_ratio: float | None = None) -> None:
+        ch = {k: v for k, v in (("rc", rc), ("supply_pressure", supply_pressure),
+                                ("spool_lag", spool_lag), ("air_ratio", air_ratio))
+              if v is not None}
+        if friction is not None:
+            ch["friction"] = friction / self.n_actuators
+        if max_velocity is not None:
+            ch["max_flow"] = max_velocity * self.servo.area
+        self.servo = self.servo.replace(**ch)
+
+    def unlock(self, dof: str) -> None:
+        edit.unlock_joint(self.ts, dof)
+
+    def set_rocking(self, k_theta: float, c_theta: float) -> None:
+        self.vt = with_rocking(self.vt, k_theta, c_theta)
+
+    def add_reaction_mass(self, name: str, mass: float, stiffness: float,
+                          damping: float) -> None:
+        edit.add_reaction_mass(self.ts, name, mass, stiffness, damping)
+
+    def insert_at_actuators(self, name: str, mass: float, law: Callable,
+                            params: Sequence[float], states: int = 0) -> None:
+        acts = edit.insert_at_actuators(self.ts, name, mass)
+        # each actuator carries its share of the lumped connection's force
+        self.controllers.append(ForceLawController(tuple(acts), law, params, states,
+                                                   scale=1.0 / len(acts)))
+
+    def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0) -> None:
+        acts = edit.add_storey_actuators(self.ts)
+        self.controllers.append(ForceLawController(tuple(acts), law, params, states))
+
+    def add_storey_quadratic_damper(self, c2: float) -> None:
+        self.add_storey_force(quadratic_damper, [c2])
+
+    def add_output_filter(self, fn: Callable) -> None:
+        self.filters.append(fn)
+
+    # -- the model ---------------------------------------------------------------------
+    def finalize(self) -> tuple[BuiltModel, list]:
+        """Compile the spec and return it with its controllers."""
+        built = compile_table(self.ts)
+        vt = self.vt
+        rc = ("x", "twist") if self.servo.rc else ()
+        if self.servo.nonlinear:
+            ctl = [HydraulicServo(vt, self.servo),
+                   ServoController(vt, rc_filter=(), groups=("vertical",))]
+        else:
+            law = group_law(vt, "horizontal", self.servo, rc_dofs=rc)
+            ctl = [ServoController(vt, rc_filter=rc, laws={"horizontal": law})]
+        ctl.append(PassiveStabilizers(vt))
+        built.vt = vt
+        return built, ctl + self.controllers
+
+
+def virtual_setup(ph: phys.Physics, vt: VirtualTable | None = None,
+                  timestep: float = MAX_STEP) -> tuple[BuiltModel, list]:
     """The built model and controllers that realise `ph` on the virtual table (MuJoCo and
-    control step `timestep`)."""
-    vt = vt or virtual_table()
-    vt = vt.__class__(**{**vt.__dict__, "horizontal_servo": phys.servo_constants(ph, vt)})
-    if ph.has("pitch_flexibility"):
-        vt = with_rocking(vt, *phys.rocking_spring(ph))
-    locked = () if ph.has("pitch_flexibility") else ("pitch",)
-    fnd = phys.foundation(ph, vt) if ph.has("foundation_compliance") else None
-    c2 = phys.quadratic_damping(ph, ph.specimen)
-    built = build(vt, ph.specimen, locked=locked, foundation=fnd,
-                  structure_actuators=c2 > 0, with_meshes=False, timestep=timestep)
-    if any(ph.has(e) for e in SERVO_EFFECTS):
-        ctl = [KernelServo(vt, phys.servo_vector(ph, vt, 1)),
-               ServoController(vt, rc_filter=(), groups=("vertical",))]
-    else:
-        ctl = [ServoController(vt, rc_filter=())]
-    ctl.append(PassiveStabilizers(vt))
-    if c2 > 0:
-        ctl.append(QuadraticDamper(c2, tuple(a for a in built.force_actuators
-                                             if a.startswith("S"))))
+    control step `timestep`), and the output filters of its effects."""
+    built, ctl, _ = _setup(ph, vt, timestep)
     return built, ctl
+
+
+def _setup(ph: phys.Physics, vt: VirtualTable | None, timestep: float):
+    va = VirtualAssembly(ph, vt or virtual_table(), timestep)
+    ph.apply(va, "virtual")
+    built, ctl = va.finalize()
+    return built, ctl, va.filters
 
 
 def virtual_run(ph: phys.Physics, command: Command, *, noise: float = 0.0, seed: int = 0,
                 name: str = "", vt: VirtualTable | None = None,
                 output_fs: float = OUTPUT_FS) -> Run:
     """Simulate `command` on the virtual table realising `ph`; channels sampled at
-    `output_fs` (Hz, 200 by default) through the sensor filter when present, plus `noise` x
+    `output_fs` (Hz, 200 by default) through the effects' output filters, plus `noise` x
     RMS white sensor noise.
 
     The table is simulated at the step 1/(k·output_fs), k = ⌈1 kHz/output_fs⌉ (1 ms at 200 Hz
-    and 1 kHz, 1/1024 s at 256 Hz), and every k-th sample is kept (the analog sensor filter,
-    when present, is applied at the simulation rate before that sampling)."""
+    and 1 kHz, 1/1024 s at 256 Hz), and every k-th sample is kept (output filters act at
+    the simulation rate, before that sampling)."""
     if not output_fs > 0:
         raise VtableError(f"output rate {output_fs:g} Hz: expected a positive rate")
     k = max(1, math.ceil(1.0 / (MAX_STEP * output_fs) - 1e-9))
     dt = 1.0 / (k * output_fs)
-    built, ctl = virtual_setup(ph, vt, timestep=dt)
+    built, ctl, filters = _setup(ph, vt, dt)
     res = Simulator(built, ctl).run(command.t, {"x": command.x}, output_dt=dt)
     meta = {"title": name or f"{command.name} ({ph.label})", "table": {"preset": "eerc"},
             "specimen": specimen_table(ph.specimen), "command": command.table}
     run = result_run(res, meta, name or command.name, full_state=False)
-    if ph.has("sensor_filter"):
-        fc = ph.effects["sensor_filter"]["cutoff_hz"]
-        run.channels = {c: (v if c in ("h_span", "acc_cmd") else sensor_filter(v, 1.0 / dt, fc))
+    for fn in filters:
+        run.channels = {c: (v if c in COMMANDS else fn(v, 1.0 / dt))
                         for c, v in run.channels.items()}
     run.time = np.arange(len(run.time[::k])) / output_fs
     run.channels = {c: v[::k] for c, v in run.channels.items()}

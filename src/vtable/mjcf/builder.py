@@ -39,7 +39,7 @@ class BuiltModel:
     model: mujoco.MjModel
     vt: VirtualTable
     specimen: Specimen
-    force_actuators: tuple[str, ...]  # ctrl[0:n] order: H1-H3, V1-V4, P1-P4
+    force_actuators: tuple[str, ...]  # ctrl[0:n] order: H1-H3, V1-V4, P1-P4, then added ones
     structure_joints: tuple[str, ...]
     structure_heights: tuple[float, ...]  # above the actuator line, m
     structure_masses: tuple[float, ...]
@@ -52,21 +52,35 @@ class BuiltModel:
         return self.pit_force
 
 
-def build(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: float = 1e-3,
-          with_meshes: bool = True, locked: tuple[str, ...] = (),
-          foundation: tuple[float, float, float] | None = None,
-          structure_actuators: bool = False) -> BuiltModel:
-    """Build and compile the virtual table carrying `specimen` (bare table by default).
+@dataclass
+class TableSpec:
+    """The virtual table as an `MjSpec` before compilation: bodies, joints, sites and the
+    actuators' tendons. Effects edit it (`vtable.mjcf.edit`); `compile_table` then adds
+    one force actuator per tendon in `force_actuators` (in that order: the simulator's
+    ctrl and sensor order), the pit pressure, the sensors, and compiles."""
 
-    `locked` slab joints are left out (e.g. ("pitch",): a table that cannot pitch);
-    `foundation` = (mass, stiffness, damping) puts the horizontal actuators' bases on a
-    reaction block sliding in x; `structure_actuators` adds a force actuator on each
-    storey slide (for controllers acting inside the specimen), after P4.
-    """
-    bad = set(locked) - set(SLAB_JOINTS)
-    if bad:
-        raise VtableError(f"cannot lock {sorted(bad)[0]!r}; slab joints are "
-                          f"{', '.join(SLAB_JOINTS)}")
+    spec: mujoco.MjSpec
+    vt: VirtualTable
+    specimen: Specimen
+    force_actuators: list[str]
+    structure_joints: tuple[str, ...]
+    structure_heights: tuple[float, ...]
+    structure_masses: tuple[float, ...]
+    slab_com: np.ndarray
+    weight: float  # N, balanced by the pit pressure
+    assets: dict[str, bytes]
+    top_body: str | None  # where the top-mass instruments are
+
+
+def build(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: float = 1e-3,
+          with_meshes: bool = True) -> BuiltModel:
+    """Build and compile the virtual table carrying `specimen` (bare table by default)."""
+    return compile_table(table_spec(vt, specimen, timestep=timestep, with_meshes=with_meshes))
+
+
+def table_spec(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: float = 1e-3,
+               with_meshes: bool = True) -> TableSpec:
+    """The virtual table's `MjSpec`, ready for edits (see `TableSpec`)."""
     specimen = specimen or NoSpecimen()
     check_specimen(vt, specimen)
     s = mujoco.MjSpec()
@@ -98,20 +112,8 @@ def build(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: float
     com = np.array(sb.com)
     slab.explicitinertial = True
     slab.mass, slab.ipos, slab.inertia = sb.mass, com, sb.inertia
-    for name, jtype, axis in (("x", _J.mjJNT_SLIDE, [1, 0, 0]), ("z", _J.mjJNT_SLIDE, [0, 0, 1]),
-                              ("roll", _J.mjJNT_HINGE, [1, 0, 0]),
-                              ("pitch", _J.mjJNT_HINGE, [0, 1, 0]),
-                              ("twist", _J.mjJNT_HINGE, [0, 0, 1])):
-        if name not in locked:
-            slab.add_joint(name=name, type=jtype, axis=axis)
-    base_body = world
-    if foundation is not None:
-        m_f, k_f, c_f = foundation
-        base_body = world.add_body(name="foundation")
-        base_body.explicitinertial = True
-        base_body.mass, base_body.inertia = m_f, [m_f, m_f, m_f]
-        fj = base_body.add_joint(name="foundation_x", type=_J.mjJNT_SLIDE, axis=[1, 0, 0])
-        fj.stiffness[0], fj.damping[0] = k_f, c_f
+    for name in SLAB_JOINTS:
+        slab.add_joint(name=name, **JOINT_KIND[name])
     if with_meshes:
         mesh = add_mesh("slab", meshes.slab_with_ribs(g.plan_width, g.thickness, lay.rib_width,
                                                       lay.rib_depth, lay.rib_offset, pivot))
@@ -126,37 +128,51 @@ def build(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: float
     for a in vt.actuators:
         sp = np.subtract(a.slab_point, [0, 0, -pivot])
         slab.add_site(name=f"{a.name}_slab", pos=sp, size=[0.04, 0, 0])
-        (base_body if a.kind == "horizontal" else world).add_site(
-            name=f"{a.name}_base", pos=a.foundation_point, size=[0.04, 0, 0])
+        world.add_site(name=f"{a.name}_base", pos=a.foundation_point, size=[0.04, 0, 0])
         t = s.add_tendon(name=a.name)
         t.wrap_site(f"{a.name}_base")
         t.wrap_site(f"{a.name}_slab")
         t.rgba = {"horizontal": [0.2, 0.4, 0.9, 1], "vertical": [0.9, 0.5, 0.1, 1],
                   "stabilizer": [0.3, 0.7, 0.3, 1]}[a.kind]
         t.width = 0.05 if a.kind == "horizontal" else 0.04
-        s.add_actuator(name=a.name, target=a.name, trntype=mujoco.mjtTrn.mjTRN_TENDON)
         names.append(a.name)
     joints, heights, masses = _add_specimen(s, slab, specimen, pivot, with_meshes, add_mesh)
     weight = (g.mass + sum(masses) + (specimen.mass if isinstance(specimen, RigidBlock) else 0.0)
               ) * G
-    if structure_actuators:
-        for j, jn in enumerate(joints, 1):
-            t = s.add_tendon(name=f"S{j}")
-            t.wrap_joint(jn, 1.0)  # fixed tendon: its length is the storey drift
-            s.add_actuator(name=f"S{j}", target=f"S{j}", trntype=mujoco.mjtTrn.mjTRN_TENDON)
-            names.append(f"S{j}")
+    top = None
+    if joints:
+        top = "top_mass" if joints[-1] == "x_s" else joints[-1].replace("x_s", "storey")
+    return TableSpec(s, vt, specimen, names, tuple(joints), tuple(heights), tuple(masses), com,
+                     weight, assets, top)
+
+
+#: the slab's joints at the horizontal actuator line (y is locked as on the EERC table)
+JOINT_KIND = {"x": {"type": _J.mjJNT_SLIDE, "axis": [1, 0, 0]},
+              "z": {"type": _J.mjJNT_SLIDE, "axis": [0, 0, 1]},
+              "roll": {"type": _J.mjJNT_HINGE, "axis": [1, 0, 0]},
+              "pitch": {"type": _J.mjJNT_HINGE, "axis": [0, 1, 0]},
+              "twist": {"type": _J.mjJNT_HINGE, "axis": [0, 0, 1]}}
+
+
+def compile_table(ts: TableSpec) -> BuiltModel:
+    """Add the force actuators (one per tendon of `ts.force_actuators`, in order), the pit
+    pressure after them, the sensors (every force actuator's length, then velocity, then
+    the top-mass instruments), and compile."""
+    s = ts.spec.copy()
+    s.assets = dict(ts.assets)
+    for a in ts.force_actuators:
+        s.add_actuator(name=a, target=a, trntype=mujoco.mjtTrn.mjTRN_TENDON)
     pit = s.add_actuator(name="pit_pressure", target="pit", trntype=mujoco.mjtTrn.mjTRN_SITE,
                          refsite="world_ref")
     pit.gear = [0, 0, 1, 0, 0, 0]
-    for a in names:
+    for a in ts.force_actuators:
         s.add_sensor(name=f"{a}_len", type=mujoco.mjtSensor.mjSENS_TENDONPOS, objname=a,
                      objtype=mujoco.mjtObj.mjOBJ_TENDON)
-    for a in names:
+    for a in ts.force_actuators:
         s.add_sensor(name=f"{a}_vel", type=mujoco.mjtSensor.mjSENS_TENDONVEL, objname=a,
                      objtype=mujoco.mjtObj.mjOBJ_TENDON)
-    s.assets = dict(assets)
-    if joints:  # accelerometers and potentiometers on the top mass (Table 2.3)
-        b = "top_mass" if joints[-1] == "x_s" else joints[-1].replace("x_s", "storey")
+    if ts.top_body:  # accelerometers and potentiometers on the top mass (Table 2.3)
+        b = ts.top_body
         for site in ("ne", "nw", "sw"):
             s.add_sensor(name=f"top_{site}_acc", type=mujoco.mjtSensor.mjSENS_FRAMELINACC,
                          objname=f"{b}_{site}", objtype=mujoco.mjtObj.mjOBJ_SITE)
@@ -167,10 +183,12 @@ def build(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: float
         model = s.compile()
     except ValueError as e:
         raise VtableError(f"MuJoCo could not compile the virtual table: {e}") from None
-    return BuiltModel(spec=s, model=model, vt=vt, specimen=specimen,
-                      force_actuators=tuple(names), structure_joints=tuple(joints),
-                      structure_heights=tuple(heights), structure_masses=tuple(masses),
-                      slab_com=com, pit_force=weight, assets=assets)
+    return BuiltModel(spec=s, model=model, vt=ts.vt, specimen=ts.specimen,
+                      force_actuators=tuple(ts.force_actuators),
+                      structure_joints=ts.structure_joints,
+                      structure_heights=ts.structure_heights,
+                      structure_masses=ts.structure_masses, slab_com=ts.slab_com,
+                      pit_force=ts.weight, assets=dict(ts.assets))
 
 
 def _add_specimen(s, slab, spec: Specimen, pivot: float, with_meshes: bool, add_mesh):

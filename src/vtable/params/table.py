@@ -222,7 +222,7 @@ class EERCTable:
         for k in need:
             if k not in d:
                 raise VtableError(f"{where}: missing table [{k}]")
-        extra = sorted(set(d) - set(need) - {"source", "preset", "multibody"})
+        extra = sorted(set(d) - set(need) - {"source", "preset", "multibody", "acquisition"})
         if extra:
             raise VtableError(f"{where}: unknown key {extra[0]!r}; expected {', '.join(need)}")
         return cls(

@@ -143,7 +143,7 @@ class Simulator:
         self.n = len(names)
         self.data = mujoco.MjData(self.model)
         mujoco.mj_forward(self.model, self.data)
-        self.rest_length = self.data.ten_length[: self.n].copy()
+        self.rest_length = self.data.actuator_length[: self.n].copy()
         self._fuse()
 
     def _fuse(self) -> None:
@@ -282,7 +282,7 @@ class Simulator:
         if bad or not np.all(np.isfinite(d.qpos)) or not np.all(np.isfinite(d.qvel)):
             raise SimulationDivergedError(f"simulation diverged at t = {t:.3f} s: non-finite "
                                      "state (unstable control settings?); nothing written")
-        ext = d.ten_length[: self.n] - self.rest_length
+        ext = d.actuator_length[: self.n] - self.rest_length
         i = int(np.argmax(np.abs(ext)))
         if abs(ext[i]) > limit_x:
             name = self.built.force_actuators[i]

@@ -1,0 +1,48 @@
+"""Force elements inside the virtual table, driven by a law of the relative motion: the
+virtual table's side of an effect's force elements (a dead band between piston and
+platen, a yielding storey, a quadratic damper). Each actuator it drives is a tendon whose
+length is the element's relative displacement; the law returns the force on it."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+
+class ForceLawController:
+    """F = law(d, v, z, p, dz) on each of `actuators` (its own state z, integrated by
+    explicit Euler at the control step), with the velocity at t_k estimated as
+    v̂ = 1.5 v_k - 0.5 v_{k-1} (see `LinearController.discrete`)."""
+
+    def __init__(self, actuators: tuple[str, ...], law: Callable, params,
+                 states: int = 0, scale: float = 1.0) -> None:
+        self.actuators = tuple(actuators)
+        self.law, self.p = law, np.asarray(params, dtype=float)
+        self.n_states, self.scale = states, scale
+
+    def bind(self, actuator_names: tuple[str, ...]) -> None:
+        self.idx = np.array([actuator_names.index(a) for a in self.actuators])
+        self.n_all = len(actuator_names)
+        self.reset()
+
+    def reset(self) -> None:
+        self.v_prev = None
+        self.z = np.zeros((len(self.actuators), self.n_states))
+
+    def step(self, dt: float, s: np.ndarray, c: np.ndarray) -> np.ndarray:
+        d, v = s[self.idx], s[self.n_all + self.idx]
+        vp = v if self.v_prev is None else self.v_prev
+        self.v_prev = v
+        vh = 1.5 * v - 0.5 * vp
+        out = np.empty(len(self.idx))
+        dz = np.zeros(self.n_states)
+        for k in range(len(self.idx)):
+            out[k] = self.scale * self.law(float(d[k]), float(vh[k]), self.z[k], self.p, dz)
+            self.z[k] += dt * dz
+        return out
+
+
+def quadratic_damper(d: float, v: float, z, p, dz) -> float:
+    """F = -c₂|v|v (p = [c₂])."""
+    return -p[0] * abs(v) * v

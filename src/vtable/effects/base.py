@@ -1,0 +1,170 @@
+"""What an effect is: a named piece of physics with typed parameters that knows how it
+enters each model of the table.
+
+An `Effect` says, in words, what it is (`physics`), where the report treats it
+(`section`) and how it shows in measured runs (`signature`); declares its parameters
+(`Param`: unit, bounds, default and where the default comes from, fitted on a log scale
+or not); and enters a model through `apply(m, p)`, where `m` is an assembly — the reduced
+model the diagnosis fits (`vtable.effects.reduced.ReducedAssembly`) or the multibody
+virtual table (`vtable.effects.virtual.VirtualAssembly`) — and `p` its parameters in SI.
+Both assemblies speak the same small vocabulary (`Assembly`), so an effect is usually
+written once; one that needs to differ overrides `reduced(m, p)` or `virtual(v, p)`.
+
+A user's effect is the same: a subclass in a file of theirs, registered with
+`vtable.effects.register` (see the README).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
+
+from vtable import units
+from vtable.errors import VtableError
+
+
+class Param:
+    """A parameter of an effect, in the unit its users think in (`unit`, a key of
+    `vtable.units.UNITS`). `default` may be a callable reading a preset (evaluated when
+    first needed); `source` says where the default comes from."""
+
+    def __init__(self, name: str, unit: str, default: float | Callable[[], float],
+                 lower: float, upper: float, log: bool = False, source: str = "",
+                 doc: str = "") -> None:
+        self.name, self.unit, self.lower, self.upper = name, unit, lower, upper
+        self.log, self.source, self.doc = log, source, doc
+        self._default = default
+
+    @property
+    def default(self) -> float:
+        if callable(self._default):
+            self._default = float(self._default())
+        return self._default
+
+    def check_declaration(self, where: str) -> None:
+        """The declaration itself is sound (a user's effect is checked on loading)."""
+        if not isinstance(self.name, str) or not self.name.isidentifier():
+            raise VtableError(f"{where}: parameter name {self.name!r} is not an identifier")
+        if self.unit not in units.UNITS:
+            raise VtableError(f"{where}: parameter {self.name!r} has unknown unit "
+                              f"{self.unit!r}")
+        for k in ("lower", "upper"):
+            v = getattr(self, k)
+            if not isinstance(v, int | float) or isinstance(v, bool) or not math.isfinite(v):
+                raise VtableError(f"{where}: parameter {self.name!r} needs a finite {k} "
+                                  f"bound, got {v!r}")
+        if not self.lower < self.upper:
+            raise VtableError(f"{where}: parameter {self.name!r}: lower bound {self.lower:g} is "
+                              f"not below the upper bound {self.upper:g}")
+        if self.log and self.lower <= 0:
+            raise VtableError(f"{where}: parameter {self.name!r} is fitted on a log scale, so "
+                              f"its lower bound must be > 0, got {self.lower:g}")
+        d = self.default
+        if not isinstance(d, int | float) or not math.isfinite(d) or \
+                not self.lower <= d <= self.upper:
+            raise VtableError(f"{where}: parameter {self.name!r} default {d!r} is outside its "
+                              f"bounds [{self.lower:g}, {self.upper:g}] {self.unit}")
+
+    def to_si(self, v: float) -> float:
+        return float(units.to_si(v, self.unit))
+
+    def __repr__(self) -> str:
+        return (f"Param({self.name!r}, {self.unit!r}, default={self.default:g}, "
+                f"[{self.lower:g}, {self.upper:g}]{', log' if self.log else ''})")
+
+
+class Assembly(Protocol):
+    """The vocabulary both models speak (see `ReducedAssembly`, `VirtualAssembly`).
+
+    Lengths, forces, masses in SI. Group quantities of the horizontal actuators (friction,
+    velocity cap) are totals over the group.
+    """
+
+    vt: Any  # the table's parameters (`VirtualTable`)
+    specimen: Any
+
+    def set_servo(self, **named: float) -> None:
+        """Horizontal servo-hydraulic options: rc, supply_pressure, friction (total),
+        max_velocity, spool_lag, air_ratio (see `vtable.hydraulics.HydraulicParams`)."""
+
+    def unlock(self, dof: str) -> None:
+        """Let the platen move in a DOF the base model holds fixed (e.g. "pitch")."""
+
+    def set_rocking(self, k_theta: float, c_theta: float) -> None:
+        """The platen's rocking spring and dashpot (N m/rad, N m s/rad): the passive
+        stabilizers and the vertical actuators' pitch loop together (eqs 8.32-8.33)."""
+
+    def add_reaction_mass(self, name: str, mass: float, stiffness: float,
+                          damping: float) -> None:
+        """The horizontal actuators react on a mass sprung to the ground."""
+
+    def insert_at_actuators(self, name: str, mass: float, law: Callable, params: Sequence[float],
+                            states: int = 0) -> None:
+        """A mass between the horizontal actuators and the platen, tied to the platen by
+        `law(d, v, z, p, dz) -> force on the mass` (d, v: its travel relative to the
+        platen, z its `states` state variables with rates written to dz)."""
+
+    def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0) -> None:
+        """A force `law(d, v, z, p, dz)` on every storey of the specimen (d, v: drift)."""
+
+    def add_storey_quadratic_damper(self, c2: float) -> None:
+        """F = -c₂|v|v on every storey's drift velocity."""
+
+    def add_output_filter(self, fn: Callable[[Any, float], Any]) -> None:
+        """`fn(x, fs) -> x` applied to every measured response channel (sampled at fs)."""
+
+
+class Effect:
+    """Base class of the catalog's and users' effects (see the module docstring)."""
+
+    name: str = ""
+    physics: str = ""
+    section: str = ""
+    signature: str = ""
+    params: tuple[Param, ...] = ()
+
+    def apply(self, m: Assembly, p: dict[str, float]) -> None:
+        raise NotImplementedError(f"{type(self).__name__} must define apply(m, p)")
+
+    def reduced(self, m: Assembly, p: dict[str, float]) -> None:
+        """How the effect enters the reduced model (default: `apply`)."""
+        self.apply(m, p)
+
+    def virtual(self, v: Assembly, p: dict[str, float]) -> None:
+        """How the effect enters the virtual table (default: `apply`)."""
+        self.apply(v, p)
+
+    # -- parameters ----------------------------------------------------------------------
+    def param(self, name: str) -> Param:
+        for q in self.params:
+            if q.name == name:
+                return q
+        raise VtableError(f"{self.name}: no parameter {name!r}; it has "
+                          f"{', '.join(q.name for q in self.params) or 'none'}")
+
+    def defaults(self) -> dict[str, float]:
+        return {q.name: q.default for q in self.params}
+
+    def check(self, values: dict[str, float], where: str = "") -> dict[str, float]:
+        """Fill defaults; an unknown name or a value outside its bounds is an error."""
+        where = where or self.name
+        known = {q.name: q for q in self.params}
+        for k in values:
+            if k not in known:
+                raise VtableError(f"{where}: unknown parameter {k!r}; expected "
+                                  f"{', '.join(known) or 'none'}")
+        out = self.defaults() | dict(values)
+        for k, v in out.items():
+            q = known[k]
+            if not (isinstance(v, int | float) and math.isfinite(v) and q.lower <= v <= q.upper):
+                raise VtableError(f"{where}: {k} = {v:g} {q.unit} is outside "
+                                  f"[{q.lower:g}, {q.upper:g}]")
+        return out
+
+    def si(self, values: dict[str, float]) -> dict[str, float]:
+        """Parameter values (the effect's units) in SI."""
+        return {k: self.param(k).to_si(v) for k, v in values.items()}
+
+    def __repr__(self) -> str:
+        return f"<effect {self.name}>"

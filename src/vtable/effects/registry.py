@@ -1,0 +1,128 @@
+"""The registry of effects: the catalog's (one module each, names from
+shared/spec/effects.md) and the ones users register from their own files."""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import sys
+from pathlib import Path
+
+from vtable.effects.base import Effect
+from vtable.errors import VtableError
+
+#: the catalog, in the spec's order (modules of vtable.effects)
+BUILT_IN = ("pitch_flexibility", "force_feedback_filter", "valve_flow_nonlinearity",
+            "actuator_friction", "flow_saturation", "valve_dynamics", "oil_column_air",
+            "amplitude_dependent_damping", "foundation_compliance", "sensor_filter")
+
+_REGISTRY: dict[str, Effect] = {}
+_USER: set[str] = set()
+_loaded = False
+
+
+def _load_built_in() -> None:
+    global _loaded
+    if _loaded:
+        return
+    _loaded = True
+    for name in BUILT_IN:
+        mod = importlib.import_module(f"vtable.effects.{name}")
+        _add(mod.EFFECT, f"vtable.effects.{name}")
+
+
+def _check(e: Effect, where: str) -> None:
+    if not isinstance(e, Effect):
+        raise VtableError(f"{where}: register() takes an Effect instance, got "
+                          f"{type(e).__name__}")
+    if not isinstance(e.name, str) or not e.name.isidentifier():
+        raise VtableError(f"{where}: effect name {e.name!r} must be an identifier")
+    for k in ("physics", "section", "signature"):
+        if not isinstance(getattr(e, k), str) or not getattr(e, k).strip():
+            raise VtableError(f"{where}: effect {e.name!r} needs a `{k}` text")
+    if not isinstance(e.params, tuple | list):
+        raise VtableError(f"{where}: effect {e.name!r}: params must be a tuple of Param")
+    seen = set()
+    for q in e.params:
+        if q.name in seen:
+            raise VtableError(f"{where}: effect {e.name!r} declares parameter {q.name!r} twice")
+        seen.add(q.name)
+        q.check_declaration(f"{where}: effect {e.name!r}")
+    if type(e).apply is Effect.apply and (type(e).reduced is Effect.reduced
+                                           or type(e).virtual is Effect.virtual):
+        raise VtableError(f"{where}: effect {e.name!r} defines neither apply(m, p) nor both "
+                          "reduced(m, p) and virtual(v, p)")
+
+
+def _add(e: Effect, where: str) -> None:
+    _check(e, where)
+    _REGISTRY[e.name] = e
+
+
+def register(effect: Effect) -> Effect:
+    """Add a user's effect to the registry (ranked with the catalog's, named in the JSON,
+    the report and the recording). A name the catalog has is refused; registering the
+    same user effect again replaces it."""
+    _load_built_in()
+    where = getattr(effect, "__module__", "") or "register()"
+    if getattr(effect, "name", None) in BUILT_IN:
+        raise VtableError(f"{_SOURCE.get('file', where)}: effect name {effect.name!r} clashes "
+                          "with a built-in effect; choose another name")
+    _add(effect, _SOURCE.get("file", where))
+    _USER.add(effect.name)
+    _SOURCE.setdefault("registered", []).append(effect.name)
+    return effect
+
+
+_SOURCE: dict = {}  # the user file being loaded (for messages)
+
+
+def get(name: str) -> Effect:
+    _load_built_in()
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise VtableError(f"unknown effect {name!r}; the registry has "
+                          f"{', '.join(_REGISTRY)}") from None
+
+
+def names() -> list[str]:
+    """Every registered effect: the catalog's, then users'."""
+    _load_built_in()
+    return list(_REGISTRY)
+
+
+def is_user(name: str) -> bool:
+    return name in _USER
+
+
+def load_file(path: str | Path) -> list[str]:
+    """Run a user's effects file (plain Python that calls `register`); returns the names it
+    registered. Any problem — a missing file, a syntax error, an exception while it runs,
+    a bad declaration, a name clash, registering nothing — is one line naming the file."""
+    p = Path(path)
+    if not p.is_file():
+        raise VtableError(f"{p}: no such file (--effects-from)")
+    _load_built_in()
+    modname = f"vtable_user_effects_{abs(hash(str(p.resolve())))}"
+    spec = importlib.util.spec_from_file_location(modname, p)
+    if spec is None or spec.loader is None:
+        raise VtableError(f"{p}: cannot be loaded as a Python file")
+    module = importlib.util.module_from_spec(spec)
+    _SOURCE.clear()
+    _SOURCE["file"] = str(p)
+    try:
+        sys.modules[modname] = module
+        spec.loader.exec_module(module)
+    except VtableError as e:
+        raise VtableError(str(e) if str(p) in str(e) else f"{p}: {e}") from None
+    except SyntaxError as e:
+        raise VtableError(f"{p}: line {e.lineno}: syntax error: {e.msg}") from None
+    except Exception as e:
+        raise VtableError(f"{p}: {type(e).__name__} while loading: {e}") from None
+    finally:
+        done = list(_SOURCE.get("registered", []))
+        _SOURCE.clear()
+    if not done:
+        raise VtableError(f"{p}: registers no effect (call vtable.effects.register(...))")
+    return done

@@ -1,0 +1,154 @@
+"""The DOF servo law of the table's controllers (eqs 6.1-6.4, B.4-B.6), written once.
+
+A group of n actuators (extension x_i along its own line) under d DOF controllers:
+T (n x d) is the extension of each actuator per unit DOF motion, q = T⁺x the DOF
+displacement, P̄ = T⁺P the DOF pressure, and per DOF j the gains g_j (loop gain), k_p,j
+(ΔP feedback, through the RC high-pass of eq B.4 where `filtered`) and k_v,j (velocity):
+
+    u_i = Σ_j T_ij g_j [ (q_c,j - q_j) - k_p,j P̄f_j - k_v,j q̇_j ]          (eqs 6.1, 6.4)
+    (V_i/4β) Ṗ_i = k_t u_i - k_ct P_i - A ẋ_i,   F_i = A P_i               (eqs 6.2-6.3)
+
+`linear_blocks` gives the matrices of the linear loop (the linear controllers), `kernel`
+the inputs of the compiled element (`element.servo_rates`), `lumped` one equivalent
+actuator for one DOF, and `dof_loop` the single-state loop of one DOF under symmetric
+pressures (the reduced model's pitch loop). For identical actuators and symmetric motion
+each DOF loop reduces to eq 6.5a with the mass per actuator M_d/ΣT_ij².
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from vtable.hydraulics.element import HydraulicParams
+
+GROUP_DOFS = {"horizontal": ("x", "twist"), "vertical": ("z", "pitch", "roll")}
+#: the knob direction (Table 3.2) of each DOF controller
+DIRECTION = {"x": "horizontal", "twist": "twist", "z": "vertical", "pitch": "pitch",
+             "roll": "roll"}
+
+
+@dataclass(frozen=True)
+class LinearBlocks:
+    """ż = A z + Bx x + Bv ẋ + Bc q_c, F = C z; z = [P (n), P̄f of the filtered DOFs]."""
+
+    A: np.ndarray
+    Bx: np.ndarray
+    Bv: np.ndarray
+    Bc: np.ndarray
+    C: np.ndarray
+
+
+@dataclass(frozen=True)
+class ServoLaw:
+    """eqs 6.1-6.4 for one actuator group (see the module docstring)."""
+
+    actuators: tuple[str, ...]
+    dofs: tuple[str, ...]
+    T: np.ndarray
+    g: np.ndarray
+    k_p: np.ndarray
+    k_v: np.ndarray
+    filtered: tuple[bool, ...]
+    hydraulics: HydraulicParams
+
+    @property
+    def Tp(self) -> np.ndarray:
+        return np.linalg.pinv(self.T)
+
+    def kernel(self) -> tuple[np.ndarray, ...]:
+        """(T, T⁺, g, k_p, k_v) for `element.servo_rates`."""
+        return (np.ascontiguousarray(self.T), np.ascontiguousarray(self.Tp), self.g.copy(),
+                self.k_p.copy(), self.k_v.copy())
+
+    def linear_blocks(self) -> LinearBlocks:
+        """The linear loop's matrices (no appendix C option may be on)."""
+        h = self.hydraulics
+        n, d = self.T.shape
+        filt = [j for j in range(d) if self.filtered[j]]
+        nz = n + len(filt)
+        A, Bx, Bv = np.zeros((nz, nz)), np.zeros((nz, n)), np.zeros((nz, n))
+        Bc, C = np.zeros((nz, d)), np.zeros((n, nz))
+        Tp = self.Tp
+        c0 = 4 * h.beta / h.volume
+        P = slice(0, n)
+        for j in range(d):
+            tj, gain = self.T[:, j], c0 * h.k_t * self.g[j]
+            Bc[P, j] += gain * tj
+            Bx[P] += -gain * np.outer(tj, Tp[j])
+            Bv[P] += -gain * self.k_v[j] * np.outer(tj, Tp[j])
+            if self.filtered[j]:
+                A[P, n + filt.index(j)] += -gain * self.k_p[j] * tj
+            else:
+                A[P, P] += -gain * self.k_p[j] * np.outer(tj, Tp[j])
+        A[P, P] += -c0 * h.k_ct * np.eye(n)
+        Bv[P] += -c0 * h.area * np.eye(n)
+        for k, j in enumerate(filt):  # Ṗf = -Pf/RC + d/dt(T⁺_j P), eq B.4
+            r = n + k
+            A[r] += Tp[j] @ A[P]
+            Bx[r] += Tp[j] @ Bx[P]
+            Bv[r] += Tp[j] @ Bv[P]
+            Bc[r] += Tp[j] @ Bc[P]
+            A[r, r] += -1.0 / h.rc
+        C[:, P] = h.area * np.eye(n)
+        return LinearBlocks(A, Bx, Bv, Bc, C)
+
+    def lumped(self, dof: str) -> ServoLaw:
+        """The actuators acting on `dof` alone as one equivalent actuator (T = 1): the
+        reduced model's horizontal actuator. Needs Σ_i T_ij² = n (unit levers)."""
+        j = self.dofs.index(dof)
+        n = len(self.actuators)
+        return ServoLaw((f"{dof} (lumped)",), (dof,), np.ones((1, 1)), self.g[[j]],
+                        self.k_p[[j]], self.k_v[[j]], (self.filtered[j],),
+                        self.hydraulics.lumped(n))
+
+    def dof_loop(self, dof: str) -> tuple[float, float, float, float]:
+        """One DOF under symmetric pressures P_i = T_ij p (no RC filter, zero command):
+        ṗ = a p + b_q q + b_v q̇, generalized force on q = f·p. Returns (a, b_q, b_v, f)."""
+        j = self.dofs.index(dof)
+        if self.filtered[j]:
+            raise ValueError(f"the {dof} loop has an RC filter: not a single-state loop")
+        h = self.hydraulics
+        c0 = 4 * h.beta / h.volume
+        gain = c0 * h.k_t * self.g[j]
+        a = -gain * self.k_p[j] - c0 * h.k_ct
+        return (float(a), float(-gain), float(-gain * self.k_v[j] - c0 * h.area),
+                float(h.area * np.sum(self.T[:, j] ** 2)))
+
+    def with_hydraulics(self, hydraulics: HydraulicParams) -> ServoLaw:
+        return replace(self, hydraulics=hydraulics)
+
+
+def dof_matrix(vt, kind: str) -> tuple[tuple[str, ...], np.ndarray]:
+    """Actuator names of a group and T (n_act x n_dof): extension per unit DOF motion.
+
+    Small rotations about the pivot: twist ψ moves H_i (at y_i) by -y_i ψ along x; pitch θ
+    moves V_i (at x_i) by -x_i θ up; roll φ moves V_i by +y_i φ up.
+    """
+    acts = vt.group(kind)
+    names = tuple(a.name for a in acts)
+    if kind == "horizontal":
+        T = np.array([[1.0, -a.slab_point[1]] for a in acts])
+    else:
+        T = np.array([[1.0, a.slab_point[1], -a.slab_point[0]] for a in acts])
+        T = T[:, [0, 2, 1]]  # columns z, pitch, roll
+    return names, T
+
+
+def group_law(vt, kind: str, hydraulics: HydraulicParams | None = None,
+              rc_dofs: tuple[str, ...] = ()) -> ServoLaw:
+    """The law of the table's `kind` group ("horizontal" or "vertical") at its knob
+    settings: g, k_p, k_v of each DOF = the knob scales (`VirtualTable.gain_scales`) times
+    the group's reference constants; `hydraulics` defaults to the table's."""
+    if hydraulics is None:
+        s = vt.horizontal_servo if kind == "horizontal" else vt.vertical_servo
+        hydraulics = HydraulicParams(area=s.area, volume=s.volume, beta=s.beta, k_t=s.k_t,
+                                     k_ct=s.k_ct, k_p=s.k_p, k_v=s.k_v, rc=s.rc,
+                                     mean_pressure=vt.table.geometry.supply_pressure)
+    names, T = dof_matrix(vt, kind)
+    dofs = GROUP_DOFS[kind]
+    scales = np.array([vt.gain_scales(DIRECTION[d]) for d in dofs])
+    return ServoLaw(names, dofs, T, scales[:, 0], hydraulics.k_p * scales[:, 1],
+                    hydraulics.k_v * scales[:, 2], tuple(d in rc_dofs for d in dofs),
+                    hydraulics)
