@@ -42,6 +42,9 @@ class _Parser(argparse.ArgumentParser):
                           if " " in self.prog else f"{message} (see vtable --help)")
 
 
+_EFFECTS_FROM = "a Python file of your own effects (it calls vtable.effects.register)"
+
+
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(prog="vtable", description="Virtual shaking table after UCB/EERC-91/13.")
     p.add_argument("--version", action="version", version=f"vtable {__version__}")
@@ -77,6 +80,11 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("--seed", type=_integer, default=0)
     sim.add_argument("--valve", choices=["linear", "nonlinear"], default="linear",
                      help="linear servovalves (eqs 6.1-6.5) or appendix C valves on H1-H3")
+    sim.add_argument("--effect", action="append", default=[], metavar="NAME[:P=V,...]",
+                     help="add an effect to the standard table, with parameters in its units "
+                          "(e.g. actuator_friction:friction=3); repeatable")
+    sim.add_argument("--effects-from", action="append", default=[], metavar="FILE",
+                     help=_EFFECTS_FROM)
     sim.add_argument("--out", default=None, help="run file stem (writes STEM.csv, STEM.toml)")
     sim.add_argument("--rerun", default=None, help="write a Rerun recording (.rrd)")
     sim.add_argument("--exaggerate", type=_number, default=50.0,
@@ -107,6 +115,8 @@ def _parser() -> argparse.ArgumentParser:
     dg.add_argument("--with", dest="with_", default="",
                     help="effects already in the starting model, comma separated")
     dg.add_argument("--effects", default="", help="catalog subset to try [all]")
+    dg.add_argument("--effects-from", action="append", default=[], metavar="FILE",
+                    help=_EFFECTS_FROM)
     dg.add_argument("--max-rounds", type=_integer, default=4,
                     help="stop after this many rounds of adding an effect [4]")
     dg.add_argument("--json", default=None, help="write the diagnosis JSON here")
@@ -114,7 +124,10 @@ def _parser() -> argparse.ArgumentParser:
     dg.add_argument("--report", default=None, help="write an HTML report")
     cp = sub.add_parser("compare", help="how a model with given effects fits the runs")
     cp.add_argument("runs", nargs="+")
-    cp.add_argument("--with", dest="with_", default="")
+    cp.add_argument("--with", dest="with_", default="",
+                    help="effects in the model, comma separated")
+    cp.add_argument("--effects-from", action="append", default=[], metavar="FILE",
+                    help=_EFFECTS_FROM)
     cp.add_argument("--json", action="store_true")
     ident = sub.add_parser("identify", help="identify the report's parameters from runs")
     ident.add_argument("runs", nargs="+", help="RUN.toml (or .h5) files of one configuration")
@@ -312,6 +325,13 @@ def _print_tf(d: dict[str, Any]) -> None:
         print(f"  wrote {d['png']}")
 
 
+def _load_effects(a: argparse.Namespace) -> list[str]:
+    """Register the effects of the user's files (--effects-from); their names."""
+    from vtable.effects import load_file
+
+    return [n for f in getattr(a, "effects_from", []) for n in load_file(f)]
+
+
 def _effects_list(text: str) -> list[str]:
     from vtable.effects.registry import get as effect
 
@@ -346,6 +366,7 @@ def cmd_diagnose(a: argparse.Namespace) -> dict[str, Any]:
     from vtable.fileio import write_text
     from vtable.runs import campaign
 
+    _load_effects(a)
     runs = campaign(a.runs)
     if a.max_rounds < 1:
         raise VtableError(f"--max-rounds must be at least 1, got {a.max_rounds}")
@@ -421,6 +442,7 @@ def cmd_compare(a: argparse.Namespace) -> dict[str, Any]:
     from vtable.diagnose.model import TableModel
     from vtable.runs import campaign
 
+    _load_effects(a)
     runs = campaign(a.runs)
     m = TableModel(_effects_list(a.with_)).fit(runs)
     c = m.comparison()
@@ -478,13 +500,16 @@ def cmd_demo(a: argparse.Namespace) -> dict[str, Any]:
 
 
 def cmd_simulate(a: argparse.Namespace) -> dict[str, Any]:
+    from vtable.effects.registry import parse_spec
     from vtable.sim.experiment import load_specimen, make_command, run_experiment
 
+    _load_effects(a)
+    effects = dict(parse_spec(e) for e in a.effect)
     spec = load_specimen(a.specimen)
     cmd = make_command(a.kind, duration=a.duration, band=tuple(a.band), peak_in=a.peak,
                        frequency=a.freq, seed=a.seed, record=a.record)
     exp = run_experiment(spec, cmd, valve=a.valve, out=a.out, rerun=a.rerun,
-                         exaggeration=a.exaggerate)
+                         exaggeration=a.exaggerate, effects=effects)
     summary = _sim_summary(exp)
     summary.update({"command": cmd.name, "specimen": spec.title,
                     "duration_s": float(exp.result.t[-1] - exp.result.t[0])})

@@ -100,12 +100,15 @@ class Assembly(Protocol):
         """The horizontal actuators react on a mass sprung to the ground."""
 
     def insert_at_actuators(self, name: str, mass: float, law: Callable, params: Sequence[float],
-                            states: int = 0) -> None:
+                            states: int = 0, stiffness: float = 0.0) -> None:
         """A mass between the horizontal actuators and the platen, tied to the platen by
         `law(d, v, z, p, dz) -> force on the mass` (d, v: its travel relative to the
-        platen, z its `states` state variables with rates written to dz)."""
+        platen, z its `states` state variables with rates written to dz). `stiffness` (N/m)
+        is the law's largest slope: both models step finely enough for the stiff mode it
+        makes with `mass`."""
 
-    def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0) -> None:
+    def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0,
+                         stiffness: float = 0.0) -> None:
         """A force `law(d, v, z, p, dz)` on every storey of the specimen (d, v: drift)."""
 
     def add_storey_quadratic_damper(self, c2: float) -> None:

@@ -26,6 +26,7 @@ from vtable.effects import physics as phys
 from vtable.effects.reduced_kernel import (
     no_element,
     simulate_reduced,
+    simulate_reduced_elements,
     simulate_reduced_python,
 )
 from vtable.errors import VtableError
@@ -69,6 +70,7 @@ class ReducedAssembly:
         self.elements: list[ForceElement] = []
         self.filters: list[Callable] = []
         self.moving, self.reaction = "x", None
+        self.max_step = SIM_DT
         self.servo = phys.base_hydraulics(ph, vt)
         self.n_actuators = len(vt.group("horizontal"))
 
@@ -122,18 +124,26 @@ class ReducedAssembly:
         self.set_actuator(reaction=name)
 
     def add_force(self, law: Callable, a: str, b: str | None = None,
-                  params: Sequence[float] = (), states: int = 0) -> None:
+                  params: Sequence[float] = (), states: int = 0, mass: float = 0.0,
+                  stiffness: float = 0.0) -> None:
+        """A force element; `stiffness` (N/m, the law's largest slope) on `mass` (kg) sets
+        the integration step below 2/ω (RK4 is stable to ωh ≈ 2.8)."""
         self.elements.append(ForceElement(law, a, b, np.asarray(params, dtype=float), states))
+        if stiffness > 0 and mass > 0:
+            self.max_step = min(self.max_step, 2.0 / math.sqrt(stiffness / mass))
 
     def insert_at_actuators(self, name: str, mass: float, law: Callable,
-                            params: Sequence[float], states: int = 0) -> None:
+                            params: Sequence[float], states: int = 0,
+                            stiffness: float = 0.0) -> None:
         self.add_dof(name, mass)
         self.set_actuator(moving=name)
-        self.add_force(law, name, "x", params, states)
+        self.add_force(law, name, "x", params, states, mass, stiffness)
 
-    def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0) -> None:
-        for s in self.storeys:
-            self.add_force(law, s, None, params, states)
+    def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0,
+                         stiffness: float = 0.0) -> None:
+        masses = _storey_masses(self.specimen)
+        for s, m in zip(self.storeys, masses, strict=True):
+            self.add_force(law, s, None, params, states, m, stiffness)
 
     def add_storey_quadratic_damper(self, c2: float) -> None:
         for s in self.storeys:
@@ -167,9 +177,29 @@ class ReducedAssembly:
         return order, ix, M, K, C
 
 
+def _storey_masses(spec) -> list[float]:
+    from vtable.params.specimen import SDOFSpecimen, ShearBuilding
+
+    if isinstance(spec, SDOFSpecimen):
+        return [spec.mass]
+    if isinstance(spec, ShearBuilding):
+        return [float(m) for m in spec.masses]
+    return []
+
+
+_COMBINED: dict = {}  # compiled element functions by structure (one kernel compile each)
+
+
 def _combined(elements: list[ForceElement], ix: dict[str, int], jit: bool):
     """One element function for the kernel: every force element's law on its relative
-    motion, its force added to its coordinate (and subtracted from the other)."""
+    motion, its force added to its coordinate (and subtracted from the other). Made once
+    per structure (laws, coordinates, sizes), so the kernel compiles once for it."""
+    params = np.concatenate([e.params for e in elements]) if elements else np.zeros(0)
+    key = (jit, tuple((e.law, ix[e.a], None if e.b is None else ix[e.b], e.states,
+                       len(e.params)) for e in elements))
+    if key in _COMBINED:
+        fn, s = _COMBINED[key]
+        return fn, s, params
     ns: dict = {}
     lines = ["def combined(q, qd, z, p, f, dz):"]
     s = o = 0
@@ -197,7 +227,7 @@ def _combined(elements: list[ForceElement], ix: dict[str, int], jit: bool):
         from numba import njit
 
         fn = njit(cache=False)(fn)
-    params = np.concatenate([e.params for e in elements]) if elements else np.zeros(0)
+    _COMBINED[key] = (fn, s)
     return fn, s, params
 
 
@@ -231,6 +261,7 @@ class ReducedModel:
         self.T, self.Tp, self.g, self.kp, self.kv = law.kernel()
         self.sp = law.hydraulics.vector()
         self.storeys, self.h_top = m.storeys, m.h_top
+        self.max_step = m.max_step
         self._element(m.elements)
 
     def _element(self, elements: list[ForceElement]) -> None:
@@ -252,20 +283,22 @@ class ReducedModel:
     def simulate(self, t: np.ndarray, x_c: np.ndarray) -> dict[str, np.ndarray]:
         """Channels (SI) on the uniform time grid `t` of a command x_c sampled on it. The
         model integrates at the run step divided by the smallest integer that brings it to
-        `SIM_DT` or below (any sample rate); the command is interpolated band-limited
-        (`resample_poly`) in between."""
+        `SIM_DT` (or a stiff element's step) or below (any sample rate); the command is
+        interpolated band-limited (`resample_poly`) in between."""
         t = np.asarray(t, dtype=float)
         if len(t) < 2:
             raise VtableError("the model needs a command of at least two samples")
         dt = float((t[-1] - t[0]) / (len(t) - 1))
         if not dt > 0:
             raise VtableError(f"run step {dt:g} s: the time column must increase")
-        up = max(1, math.ceil(dt / SIM_DT - 1e-9))
+        up = max(1, math.ceil(dt / self.max_step - 1e-9))
         h = dt / up
         xc = scipy.signal.resample_poly(x_c, up, 1)[: (len(t) - 1) * up + 1] if up > 1 \
             else np.ascontiguousarray(x_c, dtype=float)
         nq = self.M.shape[0]
-        run = simulate_reduced_python if self.python else simulate_reduced
+        run = simulate_reduced_python if self.python else \
+            simulate_reduced_elements if self.ne or self.elem is not no_element else \
+            simulate_reduced
         Q, Qd, Qdd, F = run(xc, h, nq, self.Minv, self.K, self.C, self.c2, self.bF, self.ax,
                             self.sp, self.T, self.Tp, self.g, self.kp, self.kv, self.Aw,
                             self.Wq, self.Wv, self.Fw, self.elem, self.ne, self.pe)

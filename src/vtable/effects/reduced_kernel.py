@@ -10,6 +10,8 @@ compile, as plain Python (`simulate_reduced.py_func`).
 
 from __future__ import annotations
 
+import types
+
 import numpy as np
 from numba import njit
 
@@ -113,11 +115,28 @@ def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, A
     return Q, Qd, Qdd, F
 
 
+def _variant(rates):
+    """`simulate_reduced`'s code calling `rates` instead."""
+    glb = dict(simulate_reduced.py_func.__globals__)
+    glb["_rates"] = rates
+    return types.FunctionType(simulate_reduced.py_func.__code__, glb)
+
+
 def simulate_reduced_python(*args):
     """`simulate_reduced` run as plain Python (for force laws numba cannot compile): the
     same code, with the rates evaluated by Python too."""
-    import types
+    return _variant(_rates.py_func)(*args)
 
-    glb = dict(simulate_reduced.py_func.__globals__)
-    glb["_rates"] = _rates.py_func
-    return types.FunctionType(simulate_reduced.py_func.__code__, glb)(*args)
+
+_UNCACHED = []
+
+
+def simulate_reduced_elements(*args):
+    """`simulate_reduced` for a model with a user's force elements: the same code compiled
+    without numba's on-disk cache (a cache entry typed on a function of a user's file
+    could not be loaded by another process)."""
+    if not _UNCACHED:
+        rates = njit(types.FunctionType(_rates.py_func.__code__,
+                                        dict(_rates.py_func.__globals__)))
+        _UNCACHED.append(njit(nogil=True)(_variant(rates)))
+    return _UNCACHED[0](*args)

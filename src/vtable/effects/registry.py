@@ -16,6 +16,10 @@ BUILT_IN = ("pitch_flexibility", "force_feedback_filter", "valve_flow_nonlineari
             "actuator_friction", "flow_saturation", "valve_dynamics", "oil_column_air",
             "amplitude_dependent_damping", "foundation_compliance", "sensor_filter")
 
+#: what the standard virtual table has beyond the chapter-7 base: its pitch system (Table
+#: 8.1) and the RC filter on the horizontal ΔP feedback (Table B.5), at their defaults
+STANDARD = ("pitch_flexibility", "force_feedback_filter")
+
 _REGISTRY: dict[str, Effect] = {}
 _USER: set[str] = set()
 _loaded = False
@@ -90,6 +94,23 @@ def names() -> list[str]:
     """Every registered effect: the catalog's, then users'."""
     _load_built_in()
     return list(_REGISTRY)
+
+
+def parse_spec(text: str, where: str = "--effect") -> tuple[str, dict[str, float]]:
+    """'name' or 'name:param=value,param=value' (values in the effect's units)."""
+    name, _, rest = text.partition(":")
+    e = get(name.strip())
+    values: dict[str, float] = {}
+    for item in filter(None, (x.strip() for x in rest.split(","))):
+        k, eq, v = item.partition("=")
+        if not eq:
+            raise VtableError(f"{where} {text!r}: expected PARAM=VALUE, got {item!r}")
+        try:
+            values[k.strip()] = float(v)
+        except ValueError:
+            raise VtableError(f"{where} {text!r}: {v.strip()!r} is not a number") from None
+    e.check(values, f"{where} {e.name}")
+    return e.name, values
 
 
 def is_user(name: str) -> bool:

@@ -58,6 +58,13 @@ class VirtualAssembly:
         self.controllers: list = []
         self.filters: list[Callable] = []
         self.n_actuators = len(self.vt.group("horizontal"))
+        self.max_step = MAX_STEP
+
+    def _stiff(self, mass: float, stiffness: float) -> None:
+        """MuJoCo's semi-implicit Euler with an explicit controller force is stable to
+        ω·dt ≈ 2: keep ω·dt ≤ 1 (accuracy: five steps a period)."""
+        if stiffness > 0 and mass > 0:
+            self.max_step = min(self.max_step, 1.0 / math.sqrt(stiffness / mass))
 
     # -- the vocabulary ----------------------------------------------------------------
     def set_servo(self, *, rc: float | None = None, supply_pressure: float | None = None,
@@ -83,13 +90,18 @@ class VirtualAssembly:
         edit.add_reaction_mass(self.ts, name, mass, stiffness, damping)
 
     def insert_at_actuators(self, name: str, mass: float, law: Callable,
-                            params: Sequence[float], states: int = 0) -> None:
+                            params: Sequence[float], states: int = 0,
+                            stiffness: float = 0.0) -> None:
+        self._stiff(mass, stiffness)
         acts = edit.insert_at_actuators(self.ts, name, mass)
         # each actuator carries its share of the lumped connection's force
         self.controllers.append(ForceLawController(tuple(acts), law, params, states,
                                                    scale=1.0 / len(acts)))
 
-    def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0) -> None:
+    def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0,
+                         stiffness: float = 0.0) -> None:
+        for m in self.ts.structure_masses:
+            self._stiff(m, stiffness)
         acts = edit.add_storey_actuators(self.ts)
         self.controllers.append(ForceLawController(tuple(acts), law, params, states))
 
@@ -120,15 +132,36 @@ def virtual_setup(ph: phys.Physics, vt: VirtualTable | None = None,
                   timestep: float = MAX_STEP) -> tuple[BuiltModel, list]:
     """The built model and controllers that realise `ph` on the virtual table (MuJoCo and
     control step `timestep`), and the output filters of its effects."""
-    built, ctl, _ = _setup(ph, vt, timestep)
+    built, ctl, _ = setup(ph, vt, timestep)
     return built, ctl
 
 
-def _setup(ph: phys.Physics, vt: VirtualTable | None, timestep: float):
+def setup(ph: phys.Physics, vt: VirtualTable | None = None, timestep: float = MAX_STEP):
+    """(built model, controllers, output filters) realising `ph`."""
     va = VirtualAssembly(ph, vt or virtual_table(), timestep)
     ph.apply(va, "virtual")
+    if va.max_step < timestep:
+        raise VtableError(f"a stiff force element needs a step of {va.max_step:.3g} s or "
+                          f"less, not {timestep:g} s")
     built, ctl = va.finalize()
     return built, ctl, va.filters
+
+
+def standard_physics(specimen, extra: dict[str, dict[str, float]] | None = None
+                     ) -> phys.Physics:
+    """The standard virtual table as a `Physics` (the chapter-7 base with the table's
+    pitch system and RC filter, `registry.STANDARD`) plus `extra` effects."""
+    from vtable.effects.registry import STANDARD
+
+    return phys.Physics(phys.nominal_open_loop(), specimen,
+                        {**{e: {} for e in STANDARD}, **(extra or {})})
+
+
+def max_step(ph: phys.Physics, vt: VirtualTable | None = None) -> float:
+    """The largest step the virtual table realising `ph` may take (stiff elements)."""
+    va = VirtualAssembly(ph, vt or virtual_table())
+    ph.apply(va, "virtual")
+    return va.max_step
 
 
 def virtual_run(ph: phys.Physics, command: Command, *, noise: float = 0.0, seed: int = 0,
@@ -143,9 +176,9 @@ def virtual_run(ph: phys.Physics, command: Command, *, noise: float = 0.0, seed:
     the simulation rate, before that sampling)."""
     if not output_fs > 0:
         raise VtableError(f"output rate {output_fs:g} Hz: expected a positive rate")
-    k = max(1, math.ceil(1.0 / (MAX_STEP * output_fs) - 1e-9))
+    k = max(1, math.ceil(1.0 / (max_step(ph, vt) * output_fs) - 1e-9))
     dt = 1.0 / (k * output_fs)
-    built, ctl, filters = _setup(ph, vt, dt)
+    built, ctl, filters = setup(ph, vt, dt)
     res = Simulator(built, ctl).run(command.t, {"x": command.x}, output_dt=dt)
     meta = {"title": name or f"{command.name} ({ph.label})", "table": {"preset": "eerc"},
             "specimen": specimen_table(ph.specimen), "command": command.table}

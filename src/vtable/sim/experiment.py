@@ -167,25 +167,49 @@ def run_experiment(specimen: Specimen, command: Command, *, vt: VirtualTable | N
                    valve: str = "linear", out: str | Path | None = None,
                    rerun: str | Path | None = None, exaggeration: float = 50.0,
                    output_dt: float = 0.005, title: str = "",
-                   rc_filter: bool = True) -> Experiment:
-    """Simulate `command` on the table carrying `specimen`; write the run and the .rrd."""
+                   rc_filter: bool = True,
+                   effects: dict[str, dict[str, float]] | None = None) -> Experiment:
+    """Simulate `command` on the table carrying `specimen`; write the run and the .rrd.
+    `effects` ({name: parameters in the effect's units}) are added to the standard table
+    (`vtable.effects.virtual.standard_physics`)."""
     vt = vt or virtual_table()
     if valve not in ("linear", "nonlinear"):
         raise VtableError(f"valve must be linear or nonlinear, got {valve!r}")
-    built = build(vt, specimen)
+    if effects:
+        if valve != "linear":
+            raise VtableError("--valve nonlinear and --effect do not combine; the appendix C "
+                              "valve is --effect valve_flow_nonlinearity --effect "
+                              "flow_saturation")
+        import math
+
+        from vtable.effects.virtual import max_step, setup, standard_physics
+
+        ph = standard_physics(specimen, effects)
+        k = max(1, math.ceil(output_dt / min(max_step(ph, vt), COMMAND_DT) - 1e-9))
+        built, ctl, filters = setup(ph, vt, output_dt / k)
+    else:
+        filters = []
+        built = build(vt, specimen)
+        if valve == "linear":
+            ctl = standard_controllers(vt, rc_filter=("x", "twist") if rc_filter else ())
+        else:
+            ctl = nonlinear_controllers(vt)
     notes = [*command.notes, *check_playable(command, vt, float(built.model.opt.timestep),
                                              output_dt)]
-    if valve == "linear":
-        ctl = standard_controllers(vt, rc_filter=("x", "twist") if rc_filter else ())
-    else:
-        ctl = nonlinear_controllers(vt)
+    if effects:
+        notes.append("effects on the standard table: " + ", ".join(
+            f"{k}" + (f" ({', '.join(f'{p}={v:g}' for p, v in pv.items())})" if pv else "")
+            for k, pv in effects.items()))
     res = Simulator(built, ctl).run(command.t, {"x": command.x}, output_dt=output_dt)
     meta = {"title": title or f"{command.name}, {specimen.title} (vtable virtual table)",
             "table": {"preset": "eerc"},
             "control": {k: v.to_dict() for k, v in vt.settings.items()},
             "specimen": specimen_table(specimen), "command": command.table}
-    exp = Experiment(res, result_run(res, meta, str(out or command.name)), command,
-                     notes=notes)
+    run = result_run(res, meta, str(out or command.name))
+    for fn in filters:  # the effects' output filters, on the recorded channels
+        run.channels = {c: v if c in ("h_span", "acc_cmd") or c.startswith("state_")
+                        else fn(v, 1.0 / output_dt) for c, v in run.channels.items()}
+    exp = Experiment(res, run, command, notes=notes)
     if out is not None:
         exp.files += list(write_run(exp.run, out))
     if rerun is not None:
