@@ -371,14 +371,14 @@ def test_notes_missing_samples_and_a_dead_command(tmp_path, capsys):
 
 
 def test_report_axes_have_units():
-    from vtable.diagnose.report import tf_overlay, waterfall
+    from vtable.viz.diagnosis_report import tf_overlay, waterfall
 
-    _, diag, d = effect_diagnosis(("pitch_flexibility",))
-    fig = tf_overlay(d, diag, "structure acceleration")
+    _, _diag, d = effect_diagnosis(("pitch_flexibility",))
+    fig = tf_overlay(d, "structure acceleration")
     a1, a2 = fig.axes
     assert a1.get_ylabel() == "amplitude (g/in)" and a2.get_ylabel() == "phase (deg)"
     assert a2.get_xlabel() == "frequency (Hz)"
-    assert tf_overlay(d, diag, "pitch").axes[0].get_ylabel() == "amplitude (rad/s²/in)"
+    assert tf_overlay(d, "pitch").axes[0].get_ylabel() == "amplitude (rad/s²/in)"
     ax = waterfall(d).axes[0]
     assert "%" in ax.get_ylabel() and ax.get_xlabel()
 

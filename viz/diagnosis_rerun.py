@@ -55,16 +55,14 @@ def _text(d) -> str:
     return "\n".join(lines)
 
 
-def log_diagnosis(d, diag, path: str | Path, application_id: str = "vtable-diagnosis") -> Path:
-    """Write the .rrd of diagnosis `d` made by `diag` (a `Diagnoser`) to `path`."""
+def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis") -> Path:
+    """Write the .rrd of diagnosis `d` (from the stages it kept: nothing is simulated again)
+    to `path`."""
     path = Path(path)
-    stages = [("start", diag.start_fitted)]
-    stages += [(f"{i}_{r.added}", c.physics) for i, (r, c) in
-               enumerate(((r, r.ranking[0]) for r in d.rounds if r.added), 1)]
     tabs = []
     with rrd_file(path, application_id) as rec:
-        preds = [(stage, diag.predict(ph)) for stage, ph in stages]
-        for run in diag.runs:
+        preds = [(st.label, st.predictions) for st in d.stages]
+        for run in d.runs:
             name = short(run.name)
             times = [rr.TimeColumn("time", duration=run.time - run.time[0])]
             views = []

@@ -395,12 +395,12 @@ def cmd_diagnose(a: argparse.Namespace) -> dict[str, Any]:
     if a.rerun:
         from vtable.viz.diagnosis_rerun import log_diagnosis
 
-        log_diagnosis(d, diag, a.rerun)
+        log_diagnosis(d, a.rerun)
         out.setdefault("_wrote", []).append(a.rerun)
     if a.report:
-        from vtable.diagnose.report import write_report
+        from vtable.viz.diagnosis_report import write_report
 
-        write_report(d, diag, a.report)
+        write_report(d, a.report)
         out.setdefault("_wrote", []).append(a.report)
     return out
 

@@ -25,8 +25,6 @@ KeyboardInterrupt) carries the rounds finished.
 
 from __future__ import annotations
 
-import dataclasses
-import math
 import os
 import queue
 import threading
@@ -36,42 +34,30 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.optimize
 
+from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import (
-    GROUPS,
     NOISE_FACTOR,
     UNEXPLAINED_RULE,
     Comparison,
-    analysis_run,
-    campaign_notes,
     compare,
-    group_prediction,
-    group_signal,
     localisation_text,
-    noise_floor,
-    segments,
     unexplained,
 )
+from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
 from vtable.effects.physics import Physics, nominal_open_loop
-from vtable.effects.reduced import ReducedModel
 from vtable.effects.registry import get as effect
 from vtable.effects.registry import names as registered
-from vtable.errors import VtableError
-from vtable.params.loops import OpenLoop
 from vtable.params.virtual import virtual_table
 from vtable.runs.model import Run
+
+__all__ = ["BASE_PARAMS", "Candidate", "Diagnoser", "Diagnosis", "DiagnosisInterrupted",
+           "Round", "Stage", "check_campaign", "diagnose", "localise"]
 
 PENALTY = 0.002  # held-out error charged per added parameter
 WORKERS = min(2, os.cpu_count() or 1)
 MIN_GAIN = 0.10  # an effect must remove 10 % of the excess over the noise floor ...
 FLOOR_GAIN = 0.2  # ... and at least 0.2 x the noise floor
-REQUIRED = ("h_span",)
-AT_BOUND = 0.01  # a fitted value within 1 % of its range (fitted scale) of a bound is flagged
-#: the base loop's fitted parameters: name -> (JSON key "owner.param", unit, lower, upper)
-BASE_PARAMS = {"f_o": ("servo_loop.f_o_hz", "Hz", 1.0, 100.0),
-               "xi_o": ("servo_loop.xi_o", "1", 0.02, 5.0),
-               "k_o": ("servo_loop.k_o_per_s", "1/s", 1.0, 500.0)}
 ERROR_DEFINITION = ("mean over runs and channel groups of the normalised RMS error "
                     "||model - measured|| / ||measured|| on the held-out last 40 % of every "
                     "run, at the analysis rate (runs faster than 200 Hz anti-alias filtered and "
@@ -79,8 +65,16 @@ ERROR_DEFINITION = ("mean over runs and channel groups of the normalised RMS err
                     "noise alone")
 
 
-class _StopRequestedError(Exception):
-    """Raised inside a fit when the diagnosis is being interrupted."""
+@dataclass
+class Stage:
+    """A model the diagnosis went through, with what it predicts for every run (analysis
+    rate) and how that compares with the measurements: the report and the recording render
+    these without simulating again."""
+
+    label: str
+    physics: Physics = field(repr=False)
+    predictions: dict[str, dict[str, np.ndarray]] = field(repr=False)
+    comparison: Comparison | None = None
 
 
 @dataclass
@@ -93,6 +87,7 @@ class Candidate:
     n_params: int
     physics: Physics = field(repr=False)
     flags: list[str] = field(default_factory=list)
+    predictions: dict | None = field(default=None, repr=False)
 
     @property
     def score(self) -> float:
@@ -122,6 +117,8 @@ class Diagnosis:
     unexplained: dict[str, Any] | None = None
     notes: list[str] = field(default_factory=list)
     interrupted: bool = False
+    stages: list[Stage] = field(default_factory=list, repr=False)
+    runs: list[Run] = field(default_factory=list, repr=False)
 
     @property
     def final_effects(self) -> list[str]:
@@ -172,43 +169,6 @@ class DiagnosisInterrupted(KeyboardInterrupt):
         self.partial = partial
 
 
-def check_campaign(runs: Sequence[Run]) -> list[Run]:
-    """Clear messages for what a diagnosis cannot use; returns the runs at their analysis
-    rate (`compare.analysis_run`)."""
-    if not runs:
-        raise VtableError("diagnosis needs at least one run")
-    ref = runs[0].configuration()
-    out = []
-    for r in runs:
-        for c in REQUIRED:
-            if not r.has(c):
-                raise VtableError(f"{r.name}: channel {c!r} (the command) is missing; the "
-                                  "model is driven by it")
-            if r.missing.get(c):
-                raise VtableError(f"{r.name}: channel {c!r} has {r.missing[c]} missing samples")
-        x = r.channels["h_span"]
-        if not np.all(np.isfinite(x)):
-            raise VtableError(f"{r.name}: channel 'h_span' has non-finite samples")
-        if np.ptp(x) == 0:
-            raise VtableError(f"{r.name}: channel 'h_span' (the command) is "
-                              + ("zero throughout" if not np.any(x) else f"constant ({x[0]:g} m)")
-                              + "; a model driven by it predicts no motion to compare")
-        if r.configuration() != ref:
-            raise VtableError(f"{r.name}: a different configuration ([table], [control] or "
-                              f"[specimen]) from {runs[0].name}; diagnose one configuration")
-        if "specimen" not in r.meta:
-            raise VtableError(f"{r.name}: no [specimen] table; the model needs the specimen")
-        a = analysis_run(r)
-        if len(a.time) < 512:
-            raise VtableError(f"{r.name}: {len(a.time)} samples ({r.duration:.2f} s) at "
-                              f"{a.fs:.4g} Hz is shorter than one 512-sample analysis frame")
-        if not any(group_signal(a, g) is not None for g in GROUPS if g != "pitch"):
-            raise VtableError(f"{r.name}: none of the response channels the model predicts "
-                              f"({', '.join(c for g in GROUPS.values() for c in g)})")
-        out.append(a)
-    return out
-
-
 @dataclass
 class _State:
     """What the loop has established so far (read by the caller on an interrupt)."""
@@ -219,6 +179,7 @@ class _State:
     cmp0: Comparison | None = None
     cmp: Comparison | None = None  # detailed comparison of `current`, when made
     rounds: list[Round] = field(default_factory=list)
+    stages: list[Stage] = field(default_factory=list)
     result: Diagnosis | None = None
     error: BaseException | None = None
 
@@ -234,11 +195,11 @@ class Diagnoser:
                  catalog: Sequence[str] | None = None,
                  progress: Callable[[int, int, str], None] | None = None,
                  max_rounds: int = 4) -> None:
-        self.source_runs = list(runs)
-        self.runs = check_campaign(runs)
+        self.campaign = Campaign.of(runs)
+        self.source_runs, self.runs = self.campaign.source_runs, self.campaign.runs
         for e in start_effects:
             effect(e)
-        self.notes = campaign_notes(self.runs)
+        self.notes = self.campaign.notes
         self.vt = virtual_table()
         self.specimen = self.runs[0].specimen()
         self.start = Physics(nominal_open_loop(self.vt), self.specimen,
@@ -248,129 +209,26 @@ class Diagnoser:
             effect(e)
         self.progress = progress or (lambda i, n, s: None)
         self.max_rounds = max_rounds
-        self.floor = noise_floor(self.runs)
+        self.floor = self.campaign.floor
         self._stop = threading.Event()
-        self._targets = []
-        for r in self.runs:
-            tr, _ = segments(r)
-            for g in GROUPS:
-                y = group_signal(r, g)
-                if y is not None:
-                    self._targets.append((r, g, y[tr][::2], float(np.linalg.norm(y[tr][::2]))))
 
-    # -- parameter vector --------------------------------------------------------------
-    def _layout(self, ph: Physics) -> list[tuple[str, str, float, float, bool]]:
-        lay = [("base", n, lo, hi, True) for n, (_, _, lo, hi) in BASE_PARAMS.items()]
-        for name in ph.effects:
-            for p in effect(name).params:
-                lay.append((name, p.name, p.lower, p.upper, p.log))
-        return lay
-
-    def _pack(self, ph: Physics, lay) -> np.ndarray:
-        x = []
-        for owner, name, _, _, log in lay:
-            v = getattr(ph.open_loop, name) if owner == "base" else ph.effects[owner][name]
-            x.append(math.log(v) if log else v)
-        return np.array(x)
-
-    def _unpack(self, x: np.ndarray, ph: Physics, lay) -> Physics:
-        base = {}
-        eff = {k: dict(v) for k, v in ph.effects.items()}
-        for xi, (owner, name, lo, hi, log) in zip(x, lay, strict=True):
-            v = float(np.clip(math.exp(xi) if log else xi, lo, hi))
-            if owner == "base":
-                base[name] = v
-            else:
-                eff[owner][name] = v
-        return dataclasses.replace(ph, open_loop=OpenLoop(**base), effects=eff)
-
-    def at_bounds(self, ph: Physics) -> list[str]:
-        """The fitted parameters of `ph` within 1 % of a bound, on the fitted scale (the
-        logarithm for log parameters): 'owner.param at its lower bound (value unit)'."""
-        flags = []
-        for owner, name, lo, hi, log in self._layout(ph):
-            v = getattr(ph.open_loop, name) if owner == "base" else ph.effects[owner][name]
-            if owner == "base":
-                key, unit = BASE_PARAMS[name][:2]
-            else:
-                key = f"{owner}.{name}"
-                unit = next(p.unit for p in effect(owner).params if p.name == name)
-            f = (lambda z: math.log(z)) if log else (lambda z: z)
-            pos = (f(v) - f(lo)) / (f(hi) - f(lo))
-            for side, bound, near in (("lower", lo, pos <= AT_BOUND),
-                                      ("upper", hi, pos >= 1 - AT_BOUND)):
-                if near:
-                    u = "" if unit == "1" else f" {unit}"
-                    flags.append(f"{key} at its {side} bound ({v:.4g}{u}; bound {bound:g}{u})")
-        return flags
-
-    def base_table(self, ph: Physics) -> dict[str, dict[str, Any]]:
-        """The spec's `base`: every calibrated base parameter, "owner.param" ->
-        {declared, fitted, bounds, unit}. Declared = the table preset's nominal loop (Table
-        B.5 through eq 6.16)."""
-        return {key: {"declared": getattr(self.start.open_loop, n),
-                      "fitted": getattr(ph.open_loop, n), "bounds": [lo, hi], "unit": unit}
-                for n, (key, unit, lo, hi) in BASE_PARAMS.items()}
-
-    # -- simulate, fit, score ----------------------------------------------------------
-    def predict(self, ph: Physics, train_only: bool = False) -> dict[str, dict[str, np.ndarray]]:
-        """Channels of the analysis-rate runs predicted by `ph`."""
-        model = ReducedModel(ph, self.vt)
-        out = {}
-        for r in self.runs:
-            if self._stop.is_set():
-                raise _StopRequestedError
-            n = segments(r)[0].stop if train_only else len(r.time)
-            out[r.name] = model.simulate(r.time[:n], r.channel("h_span")[:n])
-        return out
-
-    def _residuals(self, ph: Physics) -> np.ndarray:
-        if self._stop.is_set():
-            raise _StopRequestedError
-        try:
-            pred = self.predict(ph, train_only=True)
-        except VtableError:
-            return np.full(sum(len(t[2]) for t in self._targets), 10.0)
-        res = []
-        for r, g, y, norm in self._targets:
-            yhat = group_prediction(pred[r.name], r, g)[: segments(r)[0].stop][::2]
-            e = (yhat - y) / norm
-            res.append(np.where(np.isfinite(e), e, 10.0 / math.sqrt(len(e))))
-        return np.concatenate(res)
+    def model(self, start: Physics, multistart: str | None = None) -> TableModel:
+        """The estimator the loop fits (sharing this diagnosis's stop flag)."""
+        return TableModel(start=start, multistart=multistart, stop=self._stop)
 
     def fit(self, ph: Physics, multistart: str | None = None) -> tuple[Physics, float]:
-        """Least-squares fit of base + effect parameters on the training segments; for the
-        effect `multistart`, its parameters start from the best of a few trial values."""
-        lay = self._layout(ph)
-        x0 = self._pack(ph, lay)
-        nb = len(BASE_PARAMS)
-        if multistart:
-            # trial starts for the new effect's parameters, with the current base loop and
-            # with the nominal one (the current base may have compensated for the effect)
-            idx = [i for i, (o, *_rest) in enumerate(lay) if o == multistart]
-            nominal = self._pack(dataclasses.replace(ph, open_loop=self.start.open_loop), lay)
-            best, best_x = np.inf, x0
-            for base in (x0[:nb], nominal[:nb]):
-                for frac in (0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95, None):
-                    x = x0.copy()
-                    x[:nb] = base
-                    for i in idx:
-                        _, _, lo, hi, log = lay[i]
-                        if frac is not None:
-                            a, b = (math.log(lo), math.log(hi)) if log else (lo, hi)
-                            x[i] = a + frac * (b - a)
-                    c = float(np.sum(self._residuals(self._unpack(x, ph, lay)) ** 2))
-                    if c < best:
-                        best, best_x = c, x
-            x0 = best_x
-        lo = np.array([math.log(a) if log else a for _, _, a, _, log in lay])
-        hi = np.array([math.log(b) if log else b for _, _, _, b, log in lay])
-        x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
-        sol = scipy.optimize.least_squares(lambda x: self._residuals(self._unpack(x, ph, lay)),
-                                           x0, bounds=(lo, hi), diff_step=1e-4, xtol=1e-6,
-                                           ftol=1e-8, max_nfev=40)
-        fitted = self._unpack(sol.x, ph, lay)
-        return fitted, float(np.sqrt(np.mean(sol.fun**2) * len(sol.fun) / len(self._targets)))
+        m = self.model(ph, multistart).fit(self.campaign)
+        return m.physics_, m.train_error_
+
+    def at_bounds(self, ph: Physics) -> list[str]:
+        return TableModel().at_bounds(ph)
+
+    def base_table(self, ph: Physics) -> dict[str, dict[str, Any]]:
+        return TableModel().base_table(ph)
+
+    def predict(self, ph: Physics) -> dict[str, dict[str, np.ndarray]]:
+        """Channels of the analysis-rate runs predicted by `ph`."""
+        return TableModel(start=ph, stop=self._stop)._predict(ph, self.campaign)
 
     def score(self, ph: Physics, detail: bool = False) -> Comparison:
         return compare(self.predict(ph), self.runs, scored="held", floor=self.floor,
@@ -413,14 +271,18 @@ class Diagnoser:
     def _loop(self, st: _State, post: Callable[[tuple[int, int, str]], None]) -> None:
         try:
             st.result = self._run(st, lambda i, n, s: post((i, n, s)))
-        except _StopRequestedError:
+        except StopRequestedError:
             pass
         except BaseException as e:  # handed to the caller's thread
             st.error = e
 
     def _detail(self, st: _State) -> Comparison:
+        """The detailed comparison of the current model (from its stage's predictions)."""
         if st.cmp is None:
-            st.cmp = self.score(st.current, detail=True)
+            stage = st.stages[-1]
+            st.cmp = compare(stage.predictions, self.runs, scored="held", floor=self.floor,
+                             detail=True)
+            stage.comparison = st.cmp
         return st.cmp
 
     def _run(self, st: _State, progress: Callable[[int, int, str], None]) -> Diagnosis:
@@ -430,6 +292,7 @@ class Diagnoser:
         current, _ = self.fit(self.start)
         self.start_fitted = current
         st.current = current
+        st.stages.append(Stage("start", current, self.predict(current)))
         done += 1
         st.cmp0 = self._detail(st)
         st.err = st.start_err = err = st.cmp0.error
@@ -444,8 +307,10 @@ class Diagnoser:
 
             def trial(name: str, base: Physics = current) -> Candidate:
                 cand, train = self.fit(base.with_effect(name), multistart=name)
-                return Candidate(name, dict(cand.effects[name]), self.score(cand).error, train,
-                                 "", len(effect(name).params), cand, self.at_bounds(cand))
+                pred = self.predict(cand)
+                err = compare(pred, self.runs, scored="held", floor=self.floor).error
+                return Candidate(name, dict(cand.effects[name]), err, train, "",
+                                 len(effect(name).params), cand, self.at_bounds(cand), pred)
 
             # candidates are independent: fit them on both cores (the kernel releases the
             # GIL); on a stop, pending fits are cancelled and running ones end at their next
@@ -466,10 +331,14 @@ class Diagnoser:
             gain = err - best.error_after
             needed = max(MIN_GAIN * (err - self.floor), FLOOR_GAIN * self.floor,
                          PENALTY * best.n_params)
+            for c in ranking[1:]:
+                c.predictions = None  # only the added model's predictions are kept
             if gain > needed:
                 st.rounds.append(Round(ranking, best.effect, best.error_after, err))
                 current, err = best.physics, best.error_after
                 st.current, st.err, st.cmp = current, err, None
+                st.stages.append(Stage(f"{len(st.stages)}_{best.effect}", current,
+                                       best.predictions))
                 progress(done, steps, f"round {k} done: added {best.effect}")
             else:
                 st.rounds.append(Round(ranking, None, err, err))
@@ -520,7 +389,8 @@ class Diagnoser:
             parts.append(reason)
         return Diagnosis(list(self.start.effects), st.start_err, floor, list(st.rounds),
                          current, err, "; ".join(parts), st.cmp0, final_cmp,
-                         self.base_table(current), unexp, list(self.notes), interrupted)
+                         self.base_table(current), unexp, list(self.notes), interrupted,
+                         list(st.stages), list(self.runs))
 
     def _partial(self, st: _State) -> Diagnosis:
         """The diagnosis of the rounds that finished, without another simulation."""

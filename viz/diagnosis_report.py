@@ -1,7 +1,8 @@
 """The HTML report of a diagnosis: verdict, what remains unexplained, the notes, the base
 calibration, ranking tables with evidence and fit flags, the error waterfall and
 transfer-function overlays (matplotlib, embedded PNGs). Every axis names its unit; transfer
-functions are shown in the run format's units per inch of command."""
+functions are shown in the run format's units per inch of command. It renders the stages
+the diagnosis kept (models, predictions, comparisons) and simulates nothing."""
 
 from __future__ import annotations
 
@@ -13,8 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from vtable import units
-from vtable.diagnose.compare import GROUP_UNITS, GROUPS, group_prediction, group_signal, short
-from vtable.diagnose.engine import Diagnoser, Diagnosis
+from vtable.diagnose.compare import GROUP_UNITS, group_prediction, group_signal, short
+from vtable.diagnose.engine import Diagnosis
 from vtable.fileio import write_text
 from vtable.ident.tf import transfer_function
 
@@ -56,13 +57,13 @@ def waterfall(d: Diagnosis):
     return fig
 
 
-def tf_overlay(d: Diagnosis, diag: Diagnoser, group: str):
+def tf_overlay(d: Diagnosis, group: str):
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    run = max(diag.runs, key=lambda r: len(r.time))
+    run = max(d.runs, key=lambda r: len(r.time))
     x = run.channel("h_span")
     y = group_signal(run, group)
     if y is None:
@@ -75,9 +76,9 @@ def tf_overlay(d: Diagnosis, diag: Diagnoser, group: str):
     sel = (tm.f > 0.2) & (tm.f <= 30)
     a1.plot(tm.f[sel], scale * np.abs(tm.H[sel]), "k-", lw=1.5, label="measured")
     a2.plot(tm.f[sel], np.degrees(np.angle(tm.H[sel])), "k-", lw=1.5)
-    for label, ph, style in (("start model", diag.start_fitted, "tab:red"),
-                             ("final model", d.final, "tab:blue")):
-        yhat = group_prediction(diag.predict(ph)[run.name], run, group)
+    for label, stage, style in (("start model", d.stages[0], "tab:red"),
+                                ("final model", d.stages[-1], "tab:blue")):
+        yhat = group_prediction(stage.predictions[run.name], run, group)
         tp = transfer_function(x, yhat, run.fs, n)
         a1.plot(tp.f[sel], scale * np.abs(tp.H[sel]), color=style, ls="--", label=label)
         a2.plot(tp.f[sel], np.degrees(np.angle(tp.H[sel])), color=style, ls="--")
@@ -94,8 +95,8 @@ def _plus(effects) -> str:
     return (" + " + ", ".join(effects)) if effects else ""
 
 
-def write_report(d: Diagnosis, diag: Diagnoser, path: str | Path) -> Path:
-    """Write the HTML report of `d` (made by `diag`) to `path`."""
+def write_report(d: Diagnosis, path: str | Path) -> Path:
+    """Write the HTML report of `d` to `path`."""
     e = html.escape
     start = "—" if d.start_error is None else f"{d.start_error:.2%}"
     final = "—" if d.final_error is None else f"{d.final_error:.2%}"
@@ -108,7 +109,7 @@ def write_report(d: Diagnosis, diag: Diagnoser, path: str | Path) -> Path:
                                              "noise floor") if u is None else
                                            e(f"the final error is {u['ratio_to_floor']:.1f} x "
                                              f"the noise floor; {u['where']}")) + "</p>",
-             f"<p>Runs: {e(', '.join(r.name for r in diag.runs))}. Starting model: "
+             f"<p>Runs: {e(', '.join(r.name for r in d.runs))}. Starting model: "
              f"linear servo loop + specimen{_plus(d.start_effects)}."
              f" Held-out error {start} → {final}; noise floor {d.noise_floor:.2%}.</p>"]
     if d.notes:
@@ -133,10 +134,10 @@ def write_report(d: Diagnosis, diag: Diagnoser, path: str | Path) -> Path:
             parts.append(f"<tr><td>{k}</td><td>{e(c.effect)}</td><td>{c.error_after:.2%}</td>"
                          f"<td>{e(c.evidence)}</td><td>{e('; '.join(c.flags))}</td></tr>")
         parts.append("</table>")
-    if d.comparison_start is not None and d.comparison_final is not None:
+    if d.stages and d.comparison_start is not None and d.comparison_final is not None:
         parts.append("<h2>Transfer functions: measured, start and final models</h2>")
         for g in ("table displacement", "pitch", "structure acceleration"):
-            fig = tf_overlay(d, diag, g)
+            fig = tf_overlay(d, g)
             if fig is not None:
                 parts.append(f"<img src='data:image/png;base64,{_png(fig)}'>")
         parts.append("<h2>Error per channel group (held out, NRMS)</h2><table><tr><th>run</th>"
@@ -150,5 +151,3 @@ def write_report(d: Diagnosis, diag: Diagnoser, path: str | Path) -> Path:
     parts.append("</body></html>")
     return write_text(path, "\n".join(parts))
 
-
-GROUP_NAMES = tuple(GROUPS)

@@ -1,0 +1,95 @@
+"""A campaign prepared for fitting and scoring: its runs checked and at their analysis rate
+(`compare.analysis_run`), what the readers reported, the noise floor, and the training
+targets (every channel group of every run, training segment, every other sample)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from vtable.diagnose.compare import (
+    GROUPS,
+    analysis_run,
+    campaign_notes,
+    group_signal,
+    noise_floor,
+    segments,
+)
+from vtable.errors import VtableError
+from vtable.runs.model import Run
+
+REQUIRED = ("h_span",)
+
+
+def check_campaign(runs: Sequence[Run]) -> list[Run]:
+    """Clear messages for what a diagnosis cannot use; returns the runs at their analysis
+    rate (`compare.analysis_run`)."""
+    if not runs:
+        raise VtableError("diagnosis needs at least one run")
+    ref = runs[0].configuration()
+    out = []
+    for r in runs:
+        for c in REQUIRED:
+            if not r.has(c):
+                raise VtableError(f"{r.name}: channel {c!r} (the command) is missing; the "
+                                  "model is driven by it")
+            if r.missing.get(c):
+                raise VtableError(f"{r.name}: channel {c!r} has {r.missing[c]} missing samples")
+        x = r.channels["h_span"]
+        if not np.all(np.isfinite(x)):
+            raise VtableError(f"{r.name}: channel 'h_span' has non-finite samples")
+        if np.ptp(x) == 0:
+            raise VtableError(f"{r.name}: channel 'h_span' (the command) is "
+                              + ("zero throughout" if not np.any(x) else f"constant ({x[0]:g} m)")
+                              + "; a model driven by it predicts no motion to compare")
+        if r.configuration() != ref:
+            raise VtableError(f"{r.name}: a different configuration ([table], [control] or "
+                              f"[specimen]) from {runs[0].name}; diagnose one configuration")
+        if "specimen" not in r.meta:
+            raise VtableError(f"{r.name}: no [specimen] table; the model needs the specimen")
+        a = analysis_run(r)
+        if len(a.time) < 512:
+            raise VtableError(f"{r.name}: {len(a.time)} samples ({r.duration:.2f} s) at "
+                              f"{a.fs:.4g} Hz is shorter than one 512-sample analysis frame")
+        if not any(group_signal(a, g) is not None for g in GROUPS if g != "pitch"):
+            raise VtableError(f"{r.name}: none of the response channels the model predicts "
+                              f"({', '.join(c for g in GROUPS.values() for c in g)})")
+        out.append(a)
+    return out
+
+
+@dataclass
+class Campaign:
+    """`source_runs` as read; `runs` at the analysis rate; `targets` (run, group, training
+    samples, their norm) for the least-squares fits."""
+
+    source_runs: list[Run]
+    runs: list[Run]
+    notes: list[str]
+    floor: float
+    targets: list[tuple[Run, str, np.ndarray, float]] = field(repr=False)
+
+    @classmethod
+    def of(cls, runs: Sequence[Run] | Campaign) -> Campaign:
+        if isinstance(runs, Campaign):
+            return runs
+        a = check_campaign(runs)
+        targets = []
+        for r in a:
+            tr, _ = segments(r)
+            for g in GROUPS:
+                y = group_signal(r, g)
+                if y is not None:
+                    yt = y[tr][::2]
+                    targets.append((r, g, yt, float(np.linalg.norm(yt))))
+        return cls(list(runs), a, campaign_notes(a), noise_floor(a), targets)
+
+    @property
+    def specimen(self):
+        return self.runs[0].specimen()
+
+    @property
+    def n_target(self) -> int:
+        return sum(len(t[2]) for t in self.targets)
