@@ -3,10 +3,13 @@ virtual table (MuJoCo + controllers)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from conftest import HIDDEN, campaign_commands
 
+from vtable.effects import load_file
 from vtable.effects.physics import Physics, nominal_open_loop
 from vtable.effects.reduced import ReducedModel
 from vtable.effects.registry import get, names
@@ -26,9 +29,20 @@ def test_catalog_has_the_spec_names():
             assert p.lower <= p.default <= p.upper and p.unit
 
 
-@pytest.mark.parametrize("name", list(HIDDEN))
+#: every registered effect at a visible dose: the catalog's and the README's user effect
+#: (examples/swivel_backlash.py, loaded as a user would)
+load_file(Path(__file__).resolve().parents[1] / "examples" / "swivel_backlash.py")
+DOSES = {**HIDDEN, "swivel_backlash": {"gap": 0.005}}
+REGISTERED = names()  # at collection: the catalog and the README's effect
+
+
+def test_the_doses_cover_every_registered_effect():
+    assert set(DOSES) == set(REGISTERED)
+
+
+@pytest.mark.parametrize("name", list(DOSES))
 def test_reduced_model_agrees_with_the_virtual_table(name):
-    ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"), {name: HIDDEN[name]})
+    ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"), {name: DOSES[name]})
     random, _, quake = campaign_commands()
     for cmd in (random, quake):
         run = virtual_run(ph, cmd)
