@@ -24,7 +24,6 @@ import scipy.signal
 from vtable.analytic.virtual_table import mechanics
 from vtable.effects import physics as phys
 from vtable.effects.reduced_kernel import (
-    no_element,
     simulate_reduced,
     simulate_reduced_elements,
     simulate_reduced_python,
@@ -267,7 +266,7 @@ class ReducedModel:
     def _element(self, elements: list[ForceElement]) -> None:
         self.python = False
         if not elements:
-            self.elem, self.ne, self.pe = no_element, 0, np.zeros(0)
+            self.elem, self.ne, self.pe = None, 0, np.zeros(0)
             return
         fn, ne, pe = _combined(elements, self.ix, jit=True)
         try:  # compile now: a law numba cannot type runs as Python instead (slower)
@@ -296,12 +295,13 @@ class ReducedModel:
         xc = scipy.signal.resample_poly(x_c, up, 1)[: (len(t) - 1) * up + 1] if up > 1 \
             else np.ascontiguousarray(x_c, dtype=float)
         nq = self.M.shape[0]
-        run = simulate_reduced_python if self.python else \
-            simulate_reduced_elements if self.ne or self.elem is not no_element else \
-            simulate_reduced
-        Q, Qd, Qdd, F = run(xc, h, nq, self.Minv, self.K, self.C, self.c2, self.bF, self.ax,
-                            self.sp, self.T, self.Tp, self.g, self.kp, self.kv, self.Aw,
-                            self.Wq, self.Wv, self.Fw, self.elem, self.ne, self.pe)
+        args = (xc, h, nq, self.Minv, self.K, self.C, self.c2, self.bF, self.ax, self.sp,
+                self.T, self.Tp, self.g, self.kp, self.kv, self.Aw, self.Wq, self.Wv, self.Fw)
+        if self.elem is None:
+            Q, Qd, Qdd, F = simulate_reduced(*args)
+        else:
+            run = simulate_reduced_python if self.python else simulate_reduced_elements
+            Q, Qd, Qdd, F = run(*args, self.elem, self.ne, self.pe)
         ix = self.ix
         n = len(xc)
         x = ix["x"]

@@ -4,8 +4,11 @@ and damping matrices, one equivalent horizontal actuator stepped by the hydrauli
 ẇ = Aw w + Wq q + Wv q̇, generalized force Fw w), quadratic dampers c₂|q̇|q̇, and force
 elements with states z (`elem(q, q̇, z, p, f, ż)` adds generalized forces to f).
 
-The same code runs compiled (`simulate_reduced`) and, for a force law numba cannot
-compile, as plain Python (`simulate_reduced.py_func`).
+`simulate_reduced` integrates a model without force elements (the catalog's); it is
+cached on disk, so every process loads it compiled. `simulate_reduced_elements` wraps the
+same rates with a user's element function (compiled once per process: a cache entry typed
+on a function from a user's file could not be loaded by another process), and
+`simulate_reduced_python` runs that code as Python for a law numba cannot compile.
 """
 
 from __future__ import annotations
@@ -19,20 +22,14 @@ from vtable.hydraulics.element import servo_rates
 
 
 @njit(cache=True)
-def no_element(q, qd, z, p, f, dz):
-    """The element of a model without force elements."""
-    return
-
-
-@njit(cache=True)
-def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, elem, ne,
-           pe, dy):
+def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, fe, dy):
+    """Rates of the main state y = [q, q̇, servo (3), w] with extra generalized forces fe;
+    returns the actuator force."""
     q = y[:nq]
     qd = y[nq:2 * nq]
     z = y[2 * nq:2 * nq + 3].reshape(1, 3)
     na = Aw.shape[0]
     w = y[2 * nq + 3:2 * nq + 3 + na]
-    ze = y[2 * nq + 3 + na:]
     xa = np.zeros(1)
     va = np.zeros(1)
     for i in range(nq):
@@ -43,9 +40,6 @@ def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, 
     qcv = np.empty(1)
     qcv[0] = xc
     servo_rates(z, xa, va, qcv, T, Tp, g, kp, kv, sp, dz, force)
-    fe = np.zeros(nq)
-    dze = np.zeros(ne)
-    elem(q, qd, ze, pe, fe, dze)
     rhs = np.empty(nq)
     for i in range(nq):
         s = bF[i] * force[0] + fe[i]
@@ -69,74 +63,93 @@ def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, 
         for j in range(nq):
             s += Wq[a, j] * q[j] + Wv[a, j] * qd[j]
         dy[2 * nq + 3 + a] = s
-    for k in range(ne):
-        dy[2 * nq + 3 + na + k] = dze[k]
     return force[0]
 
 
 @njit(cache=True, nogil=True)
-def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
-                     elem, ne, pe):
+def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw):
     """RK4 at step dt (the command linear between samples); returns q, q̇, q̈ (n_t x nq)
     and the actuator force (n_t). A state that blows up ends the run with NaN."""
     n = xc.shape[0]
-    ny = 2 * nq + 3 + Aw.shape[0] + ne
+    ny = 2 * nq + 3 + Aw.shape[0]
+    fe = np.zeros(nq)
     y = np.zeros(ny)
-    Q = np.empty((n, nq))
-    Qd = np.empty((n, nq))
-    Qdd = np.empty((n, nq))
-    F = np.empty(n)
-    k1 = np.empty(ny)
-    k2 = np.empty(ny)
-    k3 = np.empty(ny)
-    k4 = np.empty(ny)
+    Q, Qd, Qdd, F = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq)), np.empty(n)
+    k1, k2, k3, k4 = np.empty(ny), np.empty(ny), np.empty(ny), np.empty(ny)
     for k in range(n):
         F[k] = _rates(y, xc[k], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
-                      Fw, elem, ne, pe, k1)
-        Q[k] = y[:nq]
-        Qd[k] = y[nq:2 * nq]
-        Qdd[k] = k1[nq:2 * nq]
+                      Fw, fe, k1)
+        Q[k], Qd[k], Qdd[k] = y[:nq], y[nq:2 * nq], k1[nq:2 * nq]
         if k == n - 1:
             break
         xm = 0.5 * (xc[k] + xc[k + 1])
         _rates(y + 0.5 * dt * k1, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
-               Wv, Fw, elem, ne, pe, k2)
+               Wv, Fw, fe, k2)
         _rates(y + 0.5 * dt * k2, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
-               Wv, Fw, elem, ne, pe, k3)
+               Wv, Fw, fe, k3)
         _rates(y + dt * k3, xc[k + 1], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
-               Wv, Fw, elem, ne, pe, k4)
+               Wv, Fw, fe, k4)
         y += dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
         if not np.isfinite(y[0]) or abs(y[0]) > 10.0:
-            Q[k + 1:] = np.nan
-            Qd[k + 1:] = np.nan
-            Qdd[k + 1:] = np.nan
-            F[k + 1:] = np.nan
+            Q[k + 1:], Qd[k + 1:], Qdd[k + 1:], F[k + 1:] = np.nan, np.nan, np.nan, np.nan
             break
     return Q, Qd, Qdd, F
 
 
-def _variant(rates):
-    """`simulate_reduced`'s code calling `rates` instead."""
-    glb = dict(simulate_reduced.py_func.__globals__)
-    glb["_rates"] = rates
-    return types.FunctionType(simulate_reduced.py_func.__code__, glb)
+def _element_rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
+                   elem, ne, pe, dy):
+    """Rates of y = [main state, element states]: the elements' forces, then `_rates`."""
+    m = y.shape[0] - ne
+    fe = np.zeros(nq)
+    dze = np.zeros(ne)
+    elem(y[:nq], y[nq:2 * nq], y[m:], pe, fe, dze)
+    force = _rates(y[:m], xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
+                   fe, dy[:m])
+    for k in range(ne):
+        dy[m + k] = dze[k]
+    return force
+
+
+def _element_integrate(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
+                       Fw, elem, ne, pe):
+    """`simulate_reduced` with force elements (see `_element_rates`)."""
+    n = xc.shape[0]
+    ny = 2 * nq + 3 + Aw.shape[0] + ne
+    y = np.zeros(ny)
+    Q, Qd, Qdd, F = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq)), np.empty(n)
+    k1, k2, k3, k4 = np.empty(ny), np.empty(ny), np.empty(ny), np.empty(ny)
+    for k in range(n):
+        F[k] = _element_rates(y, xc[k], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw,
+                              Wq, Wv, Fw, elem, ne, pe, k1)
+        Q[k], Qd[k], Qdd[k] = y[:nq], y[nq:2 * nq], k1[nq:2 * nq]
+        if k == n - 1:
+            break
+        xm = 0.5 * (xc[k] + xc[k + 1])
+        _element_rates(y + 0.5 * dt * k1, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv,
+                       Aw, Wq, Wv, Fw, elem, ne, pe, k2)
+        _element_rates(y + 0.5 * dt * k2, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv,
+                       Aw, Wq, Wv, Fw, elem, ne, pe, k3)
+        _element_rates(y + dt * k3, xc[k + 1], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp,
+                       kv, Aw, Wq, Wv, Fw, elem, ne, pe, k4)
+        y += dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        if not np.isfinite(y[0]) or abs(y[0]) > 10.0:
+            Q[k + 1:], Qd[k + 1:], Qdd[k + 1:], F[k + 1:] = np.nan, np.nan, np.nan, np.nan
+            break
+    return Q, Qd, Qdd, F
 
 
 def simulate_reduced_python(*args):
-    """`simulate_reduced` run as plain Python (for force laws numba cannot compile): the
-    same code, with the rates evaluated by Python too."""
-    return _variant(_rates.py_func)(*args)
+    """`_element_integrate` as plain Python (the compiled `_rates` does the rest)."""
+    return _element_integrate(*args)
 
 
-_UNCACHED = []
+_COMPILED: list = []
 
 
 def simulate_reduced_elements(*args):
-    """`simulate_reduced` for a model with a user's force elements: the same code compiled
-    without numba's on-disk cache (a cache entry typed on a function of a user's file
-    could not be loaded by another process)."""
-    if not _UNCACHED:
-        rates = njit(types.FunctionType(_rates.py_func.__code__,
-                                        dict(_rates.py_func.__globals__)))
-        _UNCACHED.append(njit(nogil=True)(_variant(rates)))
-    return _UNCACHED[0](*args)
+    """`_element_integrate` compiled (once per process, not cached on disk)."""
+    if not _COMPILED:
+        glb = dict(_element_integrate.__globals__)
+        glb["_element_rates"] = njit(_element_rates)
+        _COMPILED.append(njit(nogil=True)(types.FunctionType(_element_integrate.__code__, glb)))
+    return _COMPILED[0](*args)
