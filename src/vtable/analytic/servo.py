@@ -27,37 +27,51 @@ def open_loop_from_servo(c: ServoConstants, feedback: bool = True) -> OpenLoop:
     ξ_o = m ω_o (k k_f + k_c) / (2(k k_v + A)), with k = k_t, k_f = k_p/A, k_c = k_ct/A.
     Without feedback (eq 6.14, k_v = k_f = 0): k̂_o = k_t/A, ω̂_o² = 4βA²/(mV),
     ξ̂_o = m k_c ω̂_o/(2A).
+
+    A viscous damping c of the mass (m ẍ = A P - c ẋ; the report's tables have none)
+    generalises eq 6.16 with A_e = A + k k_v + c(k_ct + k k_p)/A in place of k k_v + A:
+    ω_o² = 4βA A_e/(mV), 2ξ_o/ω_o = (m(k_ct + k k_p) + cV/4β)/(A A_e), k_o = k/A_e.
     """
     k, A = c.k_t, c.area
-    k_v, k_f = (c.k_v, c.k_f) if feedback else (0.0, 0.0)
-    q = k * k_v + A
-    w2 = 4 * c.beta * A * q / (c.mass * c.volume)
-    w = math.sqrt(w2)
-    xi = c.mass * w * (k * k_f + c.k_c) / (2 * q)
-    return OpenLoop(f_o=w / TWO_PI, xi_o=xi, k_o=k / q,
+    k_v, k_p = (c.k_v, c.k_p) if feedback else (0.0, 0.0)
+    damp = c.damping or 0.0
+    A_e = A + k * k_v + damp * (c.k_ct + k * k_p) / A
+    w = math.sqrt(4 * c.beta * A * A_e / (c.mass * c.volume))
+    xi = w * (c.mass * (c.k_ct + k * k_p) + damp * c.volume / (4 * c.beta)) / (2 * A * A_e)
+    return OpenLoop(f_o=w / TWO_PI, xi_o=xi, k_o=k / A_e,
                     source="eq 6.16" if feedback else "eq 6.14")
 
 
 def servo_from_open_loop(ol: OpenLoop, template: ServoConstants) -> ServoConstants:
     """Invert eq 6.16: solve k_t, β and k_ct for (f_o, ξ_o, k_o), holding the template's
-    A, V, m, k_p (hence k_f) and k_v fixed.
+    A, V, m, k_p (hence k_f), k_v and damping c fixed.
 
-    k = k_o A/(1 - k_o k_v);  β = ω_o² m V/(4A(k k_v + A));
-    k_c = 2ξ_o (k k_v + A)/(m ω_o) - k k_f;  k_ct = A k_c.
+    Without damping in closed form: k = k_o A/(1 - k_o k_v); β = ω_o² m V/(4A(k k_v + A));
+    k_c = 2ξ_o (k k_v + A)/(m ω_o) - k k_f; k_ct = A k_c. With damping the same equations
+    with A_e of `open_loop_from_servo`, solved by fixed-point iteration (c·k_ct/A ≪ A).
     """
-    A, kv = template.area, template.k_v
+    A, kv, kp, c, m, V = (template.area, template.k_v, template.k_p, template.damping or 0.0,
+                          template.mass, template.volume)
     if ol.k_o * kv >= 1:
         raise VtableError(f"k_o·k_v = {ol.k_o * kv:g} >= 1: no positive k_t gives k_o = "
                           f"{ol.k_o:g} with this velocity feedback")
-    k = ol.k_o * A / (1 - ol.k_o * kv)
-    q = k * kv + A
     w = ol.omega_o
-    beta = w**2 * template.mass * template.volume / (4 * A * q)
-    k_c = 2 * ol.xi_o * q / (template.mass * w) - k * template.k_f
-    if k_c < 0:
-        raise VtableError(f"ξ_o = {ol.xi_o:g} is below what the pressure feedback alone "
-                          "gives: the flow-pressure coefficient k_ct would be negative")
-    return dataclasses.replace(template, k_t=k, beta=beta, k_ct=A * k_c)
+    k_ct = 0.0
+    for _ in range(50 if c else 1):
+        extra = c * k_ct / A
+        k = ol.k_o * (A + extra) / (1 - ol.k_o * (kv + c * kp / A))
+        A_e = A + k * kv + c * (k_ct + k * kp) / A
+        beta = w**2 * m * V / (4 * A * A_e)
+        new = (2 * ol.xi_o * A * A_e / w - c * V / (4 * beta)) / m - k * kp
+        if abs(new - k_ct) <= 1e-14 * max(abs(new), 1e-30):
+            k_ct = new
+            break
+        k_ct = new
+    if k_ct < 0:
+        raise VtableError(f"ξ_o = {ol.xi_o:g} is below what the pressure feedback and the "
+                          "damping alone give: the flow-pressure coefficient k_ct would be "
+                          "negative")
+    return dataclasses.replace(template, k_t=k, beta=beta, k_ct=k_ct)
 
 
 def routh_conditions(c: ServoConstants) -> tuple[float, float, float]:

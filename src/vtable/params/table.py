@@ -95,6 +95,9 @@ class ServoConstants(Params):
     volume: float = quantity("in3", "volume_in3", minimum=0)
     k_v: float = quantity("s", "k_v_s", default=0.0, minimum=0, exclusive=False,
                           source="eq B.6: velocity feedback neglected (k_v = 0)")
+    damping: float | None = quantity("lb-s/in", "damping_lb_s_per_in", default=None, minimum=0,
+                              exclusive=False, doc="viscous damping c of the mass, per actuator",
+                              source="the report's models have none")
     source: str = plain(default="")
 
     @property

@@ -1,0 +1,177 @@
+"""The shaking table a run was made on, as every model reads it (SI): the platen, its
+horizontal actuators and their servo loop, the controller, the limits.
+
+`lab_table(desc)` turns a run's [table] (`vtable.runs.table.TableDescription`: a preset
+and/or a description, shared/spec/measurement-format.md) into a `LabTable`; a run without
+[table] is the EERC table (the format's default). The horizontal loop is described per
+actuator by the report's constants (`ServoConstants`, eqs 6.1-6.5): for the EERC table
+Table B.5's at the Table 3.2 knobs; for a table described physically, the flow gain per
+metre of displacement error k_t = (valve flow gain) x (displacement gain) x (P gain), no
+ΔP or velocity feedback unless given, the leakage as k_ct, the platen's viscous damping
+shared by the actuators, and the servovalve's time constant as a spool lag.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from functools import cache
+
+from vtable.errors import VtableError
+from vtable.params.loops import OpenLoop
+from vtable.params.table import ServoConstants
+
+
+@dataclass(frozen=True)
+class LabTable:
+    """A shaking table (SI)."""
+
+    name: str
+    dofs: tuple[str, ...]
+    platen_mass: float              # kg
+    pitch_inertia: float | None     # kg m² about the horizontal actuator line
+    com_height: float | None        # m above the horizontal actuator line (None: not given)
+    n_actuators: int                # horizontal actuators (lumped by the reduced model)
+    servo: ServoConstants           # one actuator's loop (mass = platen mass per actuator)
+    valve_time_constant: float      # s (0: an instantaneous valve)
+    controller: str                 # "three_variable" | "pid"
+    pid: tuple[float, float, float]  # P (1), I (1/s), D (s) on the displacement error
+    feedforward: float              # s: velocity feedforward (flow = ff·A·ẋ_c)
+    stroke: float | None = None     # m (± amplitude)
+    velocity: float | None = None   # m/s
+    acceleration: float | None = None  # m/s²
+    payload: float | None = None    # kg
+    band: tuple[float, float] | None = None  # Hz
+
+    @property
+    def uniaxial(self) -> bool:
+        return tuple(self.dofs) == ("x",)
+
+    @property
+    def pitches(self) -> bool:
+        return "pitch" in self.dofs
+
+    def open_loop(self) -> OpenLoop:
+        """(f_o, ξ_o, k_o) of the bare table's horizontal loop (eq 6.16, with the platen's
+        damping; the valve lag is not in eq 6.15)."""
+        from vtable.analytic.servo import open_loop_from_servo
+
+        return open_loop_from_servo(self.servo)
+
+
+def _eerc(desc) -> LabTable:
+    from vtable.params.virtual import virtual_table
+
+    vt = virtual_table()
+    g, sp = vt.table.geometry, vt.table.specs
+    n = len(vt.group("horizontal"))
+    servo = dataclasses.replace(vt.horizontal_servo, mass=g.mass / n)
+    return LabTable("eerc", ("x", "z", "roll", "pitch", "twist"), g.mass, g.pitch_inertia,
+                    None, n, servo, 0.0, "three_variable", (1.0, 0.0, 0.0), 0.0,
+                    sp.stroke_h, sp.velocity_h, sp.acceleration_h, sp.weight_capacity / 9.80665,
+                    (0.0, sp.bandwidth))
+
+
+def lab_table(desc=None) -> LabTable:
+    """The table of a run's [table] description (None: the EERC table)."""
+    if desc is None or (desc.preset == "eerc" and _only_preset(desc)):
+        return _eerc_default()
+    if desc.preset == "eerc":
+        base = _eerc(desc)
+    else:
+        base = None
+    return _described(desc, base)
+
+
+@cache
+def _eerc_default() -> LabTable:
+    return _eerc(None)
+
+
+def _only_preset(desc) -> bool:
+    return all(getattr(desc, f.name) is None for f in dataclasses.fields(desc)
+               if f.name not in ("preset", "notes", "dofs", "mass", "pitch_inertia",
+                                 "horizontal", "controller", "limits")) and \
+        _same_as_preset(desc)
+
+
+def _same_as_preset(desc) -> bool:
+    from vtable.runs.table import table_from_dict
+
+    return desc == table_from_dict({"preset": desc.preset}, "preset")
+
+
+def _described(desc, base: LabTable | None) -> LabTable:
+    """A table from its description (over `base`, the preset's own model, when given)."""
+    where = f"[table]{' preset ' + repr(desc.preset) if desc.preset else ''}"
+    h = desc.horizontal
+    c = desc.controller
+    mass = desc.mass or (base.platen_mass if base else None)
+    if mass is None:
+        raise VtableError(f"{where}: the platen mass is not given (platen_mass_kg)")
+    n = (h.count if h and h.count else None) or (base.n_actuators if base else 1)
+    s0 = base.servo if base else None
+
+    def pick(attr, fallback):
+        v = getattr(h, attr) if h is not None else None
+        if v is not None:
+            return v
+        if fallback is None:
+            raise VtableError(f"{where}.horizontal: {attr} is not given")
+        return fallback
+
+    area = pick("piston_area", s0.area if s0 else None)
+    volume = pick("oil_volume", s0.volume if s0 else None)
+    beta = pick("bulk_modulus", s0.beta if s0 else None)
+    leak = pick("leakage", s0.k_ct if s0 else 0.0)
+    damping = (h.damping if h is not None and h.damping is not None else
+               (s0.damping or 0.0) * n if s0 else 0.0)
+    tau = h.valve_time_constant if h is not None and h.valve_time_constant is not None else \
+        (base.valve_time_constant if base else 0.0)
+    kind = (c.kind if c is not None and c.kind else None) or (base.controller if base
+                                                              else "pid")
+    if kind == "pid":
+        flow_gain = pick("valve_flow_gain", None)
+        dgain = c.displacement_gain if c is not None else None
+        if not dgain:
+            raise VtableError(f"{where}.controller: a pid needs displacement_gain_v_per_m "
+                              "(the transducer's volts per metre)")
+        P, Ki, Kd = (c.p or 1.0), (c.i or 0.0), (c.d or 0.0)
+        # u = P K_d (x_c - x) - K_pg P_L - K_vg ẋ volts, q = K_q u: the report's law
+        # q = k_t [(x_c - x) - k_p P_L - k_v ẋ] with k_t = K_q K_d P
+        k_t = flow_gain * dgain * P
+        k_p = (c.pressure_gain or 0.0) / (dgain * P)
+        k_v = (c.velocity_gain or 0.0) / (dgain * P)
+        servo = ServoConstants(k_p=k_p, k_t=k_t, k_ct=leak,
+                               rc=0.01, mass=mass / n, beta=beta, area=area, volume=volume,
+                               k_v=k_v, damping=damping / n,
+                               source=f"{where}: k_t = valve flow gain x displacement gain x P")
+        pid = (P, Ki / P, Kd / P)
+        ff = c.feedforward_velocity or 0.0
+    else:
+        if s0 is None:
+            raise VtableError(f"{where}.controller: the three_variable controller's constants "
+                              "come from the EERC preset (Table B.5); describe a pid instead")
+        servo = dataclasses.replace(s0, area=area, volume=volume, beta=beta, k_ct=leak,
+                                    mass=mass / n, damping=damping / n or None)
+        pid, ff = (1.0, 0.0, 0.0), 0.0
+    lim = desc.limits
+    return LabTable(
+        name=desc.preset or "described", dofs=desc.dofs or (base.dofs if base else ("x",)),
+        platen_mass=mass, pitch_inertia=desc.pitch_inertia or (base.pitch_inertia if base
+                                                                 else None),
+        com_height=desc.com_height if desc.com_height is not None else
+        (base.com_height if base else None),
+        n_actuators=n, servo=servo, valve_time_constant=tau, controller=kind, pid=pid,
+        feedforward=ff,
+        stroke=(lim.stroke if lim and lim.stroke else base.stroke if base else None),
+        velocity=(lim.velocity if lim and lim.velocity else base.velocity if base else None),
+        acceleration=(lim.acceleration if lim and lim.acceleration else
+                      base.acceleration if base else None),
+        payload=(lim.payload if lim and lim.payload else base.payload if base else None),
+        band=(lim.band if lim and lim.band else base.band if base else None))
+
+
+def run_table(run) -> LabTable:
+    """The table a run was made on (its [table]; the EERC table when it has none)."""
+    return lab_table(run.table())
