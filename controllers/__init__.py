@@ -16,8 +16,14 @@ from vtable.controllers.stabilizers import PassiveStabilizers
 
 
 def standard_controllers(vt, rc_filter=("x", "twist")) -> list:
-    """The EERC table's controllers for the virtual table `vt`."""
-    return [ServoController(vt, rc_filter=rc_filter), PassiveStabilizers(vt)]
+    """The table's controllers for the virtual table `vt` (the EERC table's: every loop,
+    and the passive stabilizers). A loop with a valve lag is stepped by the hydraulic
+    element (`HydraulicServo`)."""
+    if vt.valve_lag:
+        ctl = [HydraulicServo(vt), ServoController(vt, groups=("vertical",))]
+    else:
+        ctl = [ServoController(vt, rc_filter=rc_filter)]
+    return ctl + ([PassiveStabilizers(vt)] if vt.stabilizers.pairs else [])
 
 
 def nonlinear_controllers(vt, **valve) -> list:
@@ -29,8 +35,8 @@ def nonlinear_controllers(vt, **valve) -> list:
     h1 = vt.actuator("H1")
     base = group_law(vt, "horizontal").hydraulics
     hyd = appendix_c(base, vt.table.geometry.supply_pressure, h1.flow, **valve)
-    return [HydraulicServo(vt, hyd), ServoController(vt, groups=("vertical",)),
-            PassiveStabilizers(vt)]
+    return [HydraulicServo(vt, hyd), ServoController(vt, groups=("vertical",))] + \
+        ([PassiveStabilizers(vt)] if vt.stabilizers.pairs else [])
 
 
 __all__ = ["DOFS", "Controller", "ForceLawController", "HydraulicServo", "LinearController",

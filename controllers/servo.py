@@ -30,7 +30,7 @@ class ServoController(LinearController):
         self.vt = vt
         self.rc_filter = tuple(d for d in rc_filter if DIRECTION_GROUP[d] in groups)
         self.laws = {k: (laws or {}).get(k) or group_law(vt, k, rc_dofs=self.rc_filter)
-                     for k in ("horizontal", "vertical") if k in groups}
+                     for k in ("horizontal", "vertical") if k in groups and vt.group(k)}
         self.actuators = tuple(a for law in self.laws.values() for a in law.actuators)
         filt = [d for law in self.laws.values() for d, f in zip(law.dofs, law.filtered,
                                                                   strict=True) if f]

@@ -72,6 +72,9 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("--specimen", default="sdof_frame",
                      help="none, concrete_blocks, sdof_frame, table5_1, table8_1 or a TOML "
                           "file with a [specimen] table [sdof_frame]")
+    sim.add_argument("--table", default="eerc",
+                     help="the table: a preset (eerc, lnec-st1d) or a TOML file with a [table] "
+                          "in the run format's keys [eerc]")
     sim.add_argument("--command", default="random", dest="kind",
                      choices=["random", "sine", "pulse", "earthquake"])
     sim.add_argument("--record", default=None, help="earthquake: elcentro, a .AT2 or .csv "
@@ -406,7 +409,7 @@ def cmd_simulate(a: argparse.Namespace) -> dict[str, Any]:
     return verbs.simulate(a.specimen, a.kind, duration=a.duration, band=tuple(a.band),
                           peak=a.peak, freq=a.freq, seed=a.seed, record=a.record,
                           valve=a.valve, effects=a.effect, out=a.out, rerun=a.rerun,
-                          exaggerate=a.exaggerate)
+                          exaggerate=a.exaggerate, table=a.table)
 
 
 def cmd_export(a: argparse.Namespace) -> dict[str, Any]:

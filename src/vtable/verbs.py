@@ -260,17 +260,26 @@ def simulate(specimen: str = "sdof_frame", kind: str = "random", *,
              peak: float | None = None, freq: float = 2.0, seed: int = 0,
              record: str | None = None, valve: str = "linear",
              effects: Sequence[str] = (), out: str | None = None, rerun: str | None = None,
-             exaggerate: float = 50.0) -> dict[str, Any]:
-    """Run a command on the multibody virtual table (`effects`: 'name[:p=v,...]' added to
-    the standard table); the peak table, limits and files written."""
+             exaggerate: float = 50.0, table: str = "eerc") -> dict[str, Any]:
+    """Run a command on the multibody virtual table of `table` (a preset name, or a TOML
+    file with a [table] in the run format's keys; `effects`: 'name[:p=v,...]' added to the
+    standard table); the peak table, limits and files written."""
     from vtable.effects.registry import parse_spec
-    from vtable.sim.experiment import load_specimen, make_command, run_experiment
+    from vtable.params.virtual import virtual_table_for
+    from vtable.sim.experiment import load_specimen, load_table, make_command, run_experiment
 
     eff = dict(parse_spec(e) for e in effects)
+    lab = load_table(table)
+    vt = virtual_table_for(lab)
     spec = load_specimen(specimen)
+    if peak is None and lab.stroke is not None:  # the defaults, within the table's stroke
+        default = {"earthquake": 4.0, "pulse": 1.0, "random": 0.25, "sine": 0.1}[kind] \
+            if kind in ("earthquake", "pulse", "random", "sine") else None
+        if default is not None and default * 0.0254 > 0.5 * lab.stroke:
+            peak = 0.5 * lab.stroke / 0.0254
     cmd = make_command(kind, duration=duration, band=tuple(band), peak_in=peak,
                        frequency=freq, seed=seed, record=record)
-    exp = run_experiment(spec, cmd, valve=valve, out=out, rerun=rerun,
+    exp = run_experiment(spec, cmd, vt=vt, valve=valve, out=out, rerun=rerun,
                          exaggeration=exaggerate, effects=eff)
     summary = simulation_summary(exp)
     summary.update({"command": cmd.name, "specimen": spec.title,

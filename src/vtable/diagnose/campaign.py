@@ -91,5 +91,15 @@ class Campaign:
         return self.runs[0].specimen()
 
     @property
+    def table(self):
+        """The runs' table as the models read it (`vtable.params.virtual.VirtualTable`)."""
+        if not hasattr(self, "_vt"):
+            from vtable.params.lab import run_table
+            from vtable.params.virtual import virtual_table_for
+
+            self._vt = virtual_table_for(run_table(self.runs[0]))
+        return self._vt
+
+    @property
     def n_target(self) -> int:
         return sum(len(t[2]) for t in self.targets)

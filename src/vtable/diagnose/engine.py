@@ -48,7 +48,7 @@ from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
 from vtable.effects.physics import Physics, nominal_open_loop
 from vtable.effects.registry import get as effect
 from vtable.effects.registry import names as registered
-from vtable.params.virtual import virtual_table
+from vtable.errors import VtableError
 from vtable.runs.model import Run
 
 __all__ = ["BASE_PARAMS", "Candidate", "Diagnoser", "Diagnosis", "DiagnosisInterrupted",
@@ -100,6 +100,7 @@ class Round:
     added: str | None
     error: float
     before: float
+    skipped: dict[str, str] = field(default_factory=dict)  # effect -> why it cannot apply
 
 
 @dataclass
@@ -144,7 +145,8 @@ class Diagnosis:
                                      "n_params": c.n_params, "evidence": c.evidence,
                                      "flags": c.flags}
                                     for c in r.ranking],
-                        "added": r.added, "error": r.error, "error_before": r.before}
+                        "added": r.added, "error": r.error, "error_before": r.before,
+                        "skipped": r.skipped}
                        for r in self.rounds],
             "final_effects": self.final_effects,
             "final_params": {k: v for k, v in self.final.effects.items()},
@@ -200,7 +202,7 @@ class Diagnoser:
         for e in start_effects:
             effect(e)
         self.notes = self.campaign.notes
-        self.vt = virtual_table()
+        self.vt = self.campaign.table
         self.specimen = self.runs[0].specimen()
         self.start = Physics(nominal_open_loop(self.vt), self.specimen,
                              {e: {} for e in start_effects})
@@ -220,15 +222,31 @@ class Diagnoser:
         m = self.model(ph, multistart).fit(self.campaign)
         return m.physics_, m.train_error_
 
+    def _inapplicable(self, ph: Physics) -> str:
+        """Why a model cannot be built for this campaign's table (an effect needing a
+        motion the platen has not, say), or ''."""
+        from vtable.effects.reduced import ReducedModel
+
+        try:
+            ReducedModel(ph, self.vt)
+        except VtableError as e:
+            return str(e)
+        return ""
+
+    def _model(self) -> TableModel:
+        m = TableModel(stop=self._stop)
+        m.vt = self.vt
+        return m
+
     def at_bounds(self, ph: Physics) -> list[str]:
-        return TableModel().at_bounds(ph)
+        return self._model().at_bounds(ph)
 
     def base_table(self, ph: Physics) -> dict[str, dict[str, Any]]:
-        return TableModel().base_table(ph)
+        return self._model().base_table(ph)
 
     def predict(self, ph: Physics) -> dict[str, dict[str, np.ndarray]]:
         """Channels of the analysis-rate runs predicted by `ph`."""
-        return TableModel(start=ph, stop=self._stop)._predict(ph, self.campaign)
+        return self._model()._predict(ph, self.campaign)
 
     def score(self, ph: Physics, detail: bool = False) -> Comparison:
         return compare(self.predict(ph), self.runs, scored="held", floor=self.floor,
@@ -298,7 +316,15 @@ class Diagnoser:
         st.err = st.start_err = err = st.cmp0.error
         reason = ""
         for k in range(1, self.max_rounds + 1):
-            todo = [e for e in self.catalog if not current.has(e)]
+            todo, skipped = [], {}
+            for e in self.catalog:
+                if current.has(e):
+                    continue
+                why = self._inapplicable(current.with_effect(e))
+                if why:
+                    skipped[e] = why
+                else:
+                    todo.append(e)
             if not todo:
                 reason = "every catalog effect is in the model"
                 break
@@ -334,14 +360,14 @@ class Diagnoser:
             for c in ranking[1:]:
                 c.predictions = None  # only the added model's predictions are kept
             if gain > needed:
-                st.rounds.append(Round(ranking, best.effect, best.error_after, err))
+                st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
                 current, err = best.physics, best.error_after
                 st.current, st.err, st.cmp = current, err, None
                 st.stages.append(Stage(f"{len(st.stages)}_{best.effect}", current,
                                        best.predictions))
                 progress(done, steps, f"round {k} done: added {best.effect}")
             else:
-                st.rounds.append(Round(ranking, None, err, err))
+                st.rounds.append(Round(ranking, None, err, err, skipped))
                 reason = (f"the best candidate ({best.effect}) would lower the held-out error "
                           f"by {gain:.2%}, less than the {needed:.2%} the noise floor "
                           f"({self.floor:.1%}) and the parsimony penalty require")

@@ -65,7 +65,7 @@ class TableModel:
         self.effects = tuple(effects)
         self.start, self.multistart, self.stop = start, multistart, stop
         self.physics_: Physics | None = None
-        self.vt = virtual_table()
+        self.vt = None  # the campaign's table, known when fitting
 
     # -- parameter vector --------------------------------------------------------------
     def _layout(self, ph: Physics) -> list[tuple[str, str, float, float, bool]]:
@@ -98,7 +98,7 @@ class TableModel:
     # -- simulate ----------------------------------------------------------------------
     def _predict(self, ph: Physics, campaign: Campaign, train_only: bool = False
                  ) -> dict[str, dict[str, np.ndarray]]:
-        model = ReducedModel(ph, self.vt)
+        model = ReducedModel(ph, self.vt or campaign.table)
         out = {}
         for r in campaign.runs:
             if self.stop is not None and self.stop.is_set():
@@ -126,6 +126,7 @@ class TableModel:
         parameters at a bound), `base_` (the spec's `base` table), `notes_`."""
         campaign = Campaign.of(runs)
         self.campaign_ = campaign
+        self.vt = campaign.table
         start = self.start or Physics(nominal_open_loop(self.vt), campaign.specimen, {})
         for e in self.effects:
             if not start.has(e):
@@ -209,7 +210,7 @@ class TableModel:
         """The spec's `base`: every calibrated base parameter, "owner.param" ->
         {declared, fitted, bounds, unit}. Declared = the table preset's nominal loop (Table
         B.5 through eq 6.16)."""
-        nominal = nominal_open_loop(self.vt)
+        nominal = nominal_open_loop(self.vt or virtual_table())
         return {key: {"declared": getattr(nominal, n), "fitted": getattr(ph.open_loop, n),
                       "bounds": [lo, hi], "unit": unit}
                 for n, (key, unit, lo, hi) in BASE_PARAMS.items()}

@@ -68,8 +68,9 @@ def nominal_open_loop(vt: VirtualTable | None = None) -> OpenLoop:
 
 def base_hydraulics(ph: Physics, vt: VirtualTable) -> HydraulicParams:
     """One horizontal actuator's constants for the base loop (eq 6.16 inverted from the
-    open loop; no RC filter, no appendix C option: those are effects)."""
+    open loop; the table's valve lag; no RC filter, no appendix C option: those are
+    effects)."""
     c = servo_from_open_loop(ph.open_loop, per_actuator_template(vt))
     return HydraulicParams(area=c.area, volume=c.volume, beta=c.beta, k_t=c.k_t, k_ct=c.k_ct,
-                           k_p=c.k_p, k_v=c.k_v,
+                           k_p=c.k_p, k_v=c.k_v, spool_lag=vt.valve_lag,
                            mean_pressure=vt.table.geometry.supply_pressure)

@@ -72,6 +72,8 @@ class ReducedAssembly:
         self.max_step = SIM_DT
         self.servo = phys.base_hydraulics(ph, vt)
         self.n_actuators = len(vt.group("horizontal"))
+        if vt.horizontal_servo.damping:  # the platen's viscous damping (a lab's table)
+            self.add_spring("x", None, 0.0, vt.horizontal_servo.damping * self.n_actuators)
 
     # -- the vocabulary ----------------------------------------------------------------
     def set_servo(self, *, rc: float | None = None, supply_pressure: float | None = None,
@@ -88,8 +90,9 @@ class ReducedAssembly:
         self.servo = self.servo.replace(**ch)
 
     def unlock(self, dof: str) -> None:
-        if dof not in self._full[3][:5]:
-            raise ValueError(f"the platen has no DOF {dof!r}")
+        if dof not in self.vt.dofs:
+            raise VtableError(f"the {self.vt.name} table's platen has no {dof} motion "
+                              f"(its DOFs: {', '.join(self.vt.dofs)})")
         if dof not in self.active:
             self.active.insert(1, dof)
 

@@ -80,6 +80,9 @@ class VirtualAssembly:
         self.servo = self.servo.replace(**ch)
 
     def unlock(self, dof: str) -> None:
+        if dof not in self.vt.dofs:
+            raise VtableError(f"the {self.vt.name} table's platen has no {dof} motion "
+                              f"(its DOFs: {', '.join(self.vt.dofs)})")
         edit.unlock_joint(self.ts, dof)
 
     def set_rocking(self, k_theta: float, c_theta: float) -> None:
@@ -123,7 +126,8 @@ class VirtualAssembly:
         else:
             law = group_law(vt, "horizontal", self.servo, rc_dofs=rc)
             ctl = [ServoController(vt, rc_filter=rc, laws={"horizontal": law})]
-        ctl.append(PassiveStabilizers(vt))
+        if vt.stabilizers.pairs:
+            ctl.append(PassiveStabilizers(vt))
         built.vt = vt
         return built, ctl + self.controllers
 
@@ -180,7 +184,8 @@ def virtual_run(ph: phys.Physics, command: Command, *, noise: float = 0.0, seed:
     dt = 1.0 / (k * output_fs)
     built, ctl, filters = setup(ph, vt, dt)
     res = Simulator(built, ctl).run(command.t, {"x": command.x}, output_dt=dt)
-    meta = {"title": name or f"{command.name} ({ph.label})", "table": {"preset": "eerc"},
+    meta = {"title": name or f"{command.name} ({ph.label})",
+            "table": {"preset": built.vt.name},
             "specimen": specimen_table(ph.specimen), "command": command.table}
     run = result_run(res, meta, name or command.name, full_state=False)
     for fn in filters:

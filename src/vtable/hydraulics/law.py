@@ -145,9 +145,12 @@ def group_law(vt, kind: str, hydraulics: HydraulicParams | None = None,
         s = vt.horizontal_servo if kind == "horizontal" else vt.vertical_servo
         hydraulics = HydraulicParams(area=s.area, volume=s.volume, beta=s.beta, k_t=s.k_t,
                                      k_ct=s.k_ct, k_p=s.k_p, k_v=s.k_v, rc=s.rc,
+                                     spool_lag=vt.valve_lag if kind == "horizontal" else 0.0,
                                      mean_pressure=vt.table.geometry.supply_pressure)
     names, T = dof_matrix(vt, kind)
-    dofs = GROUP_DOFS[kind]
+    keep = [j for j, d in enumerate(GROUP_DOFS[kind]) if d in vt.dofs]
+    dofs = tuple(GROUP_DOFS[kind][j] for j in keep)
+    T = T[:, keep]
     scales = np.array([vt.gain_scales(DIRECTION[d]) for d in dofs])
     return ServoLaw(names, dofs, T, scales[:, 0], hydraulics.k_p * scales[:, 1],
                     hydraulics.k_v * scales[:, 2], tuple(d in rc_dofs for d in dofs),

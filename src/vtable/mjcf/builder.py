@@ -84,8 +84,8 @@ def table_spec(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: 
     specimen = specimen or NoSpecimen()
     check_specimen(vt, specimen)
     s = mujoco.MjSpec()
-    s.modelname = "eerc_virtual_table" + ("" if isinstance(specimen, NoSpecimen)
-                                          else f"_{specimen.kind}")
+    s.modelname = f"{vt.name}_virtual_table" + ("" if isinstance(specimen, NoSpecimen)
+                                                else f"_{specimen.kind}")
     s.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
     s.compiler.autolimits = True
     s.option.timestep = timestep
@@ -113,7 +113,10 @@ def table_spec(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: 
     slab.explicitinertial = True
     slab.mass, slab.ipos, slab.inertia = sb.mass, com, sb.inertia
     for name in SLAB_JOINTS:
-        slab.add_joint(name=name, **JOINT_KIND[name])
+        if name in vt.dofs:
+            j = slab.add_joint(name=name, **JOINT_KIND[name])
+            if name == "x" and vt.horizontal_servo.damping:  # the platen's viscous damping
+                j.damping[0] = vt.horizontal_servo.damping * len(vt.group("horizontal"))
     if with_meshes:
         mesh = add_mesh("slab", meshes.slab_with_ribs(g.plan_width, g.thickness, lay.rib_width,
                                                       lay.rib_depth, lay.rib_offset, pivot))
@@ -244,7 +247,7 @@ def check_specimen(vt: VirtualTable, spec: Specimen) -> None:
     if weight > specs.weight_capacity:
         raise VtableError(f"specimen weighs {units.from_si(weight, 'kip'):.1f} kips, above the "
                           f"table's capacity of {units.from_si(specs.weight_capacity, 'kip'):g} "
-                          "kips (Table 2.2)")
+                          f"kips ({vt.limits_source})")
     tops = {RigidBlock: lambda: spec.height + (spec.size[1] / 2 if spec.size else 0.0),
             SDOFSpecimen: lambda: spec.height,
             ShearBuilding: lambda: max(spec.heights)}
@@ -252,4 +255,4 @@ def check_specimen(vt: VirtualTable, spec: Specimen) -> None:
     if top > top_clear:
         raise VtableError(f"specimen reaches {units.from_si(top, 'ft'):.1f} ft above the table "
                           f"top, above the {units.from_si(top_clear, 'ft'):g} ft overhead "
-                          "clearance (Table 2.2)")
+                          f"clearance ({vt.limits_source})")

@@ -29,14 +29,18 @@ class TableGeometry(Params):
                                     source="Table 8.1")
     actuator_line_depth: float = quantity("in", "actuator_line_depth_in", minimum=0,
                                           source="§4.2.1: 219 - 189.3 in")
-    vertical_square: float = quantity("ft", "vertical_square_ft", minimum=0, source="§2.2")
-    stabilizer_square: float = quantity("ft", "stabilizer_square_ft", minimum=0, source="§2.2")
-    horizontal_offset: float = quantity("in", "horizontal_offset_in", minimum=0,
+    vertical_square: float = quantity("ft", "vertical_square_ft", minimum=0, exclusive=False,
+                                      source="§2.2")
+    stabilizer_square: float = quantity("ft", "stabilizer_square_ft", minimum=0, exclusive=False,
+                                        source="§2.2")
+    horizontal_offset: float = quantity("in", "horizontal_offset_in", minimum=0, exclusive=False,
                                         source="run format: H1/H3 at y = +-96 in")
-    pit_pressure: float = quantity("psi", "pit_pressure_psi", minimum=0,
+    pit_pressure: float = quantity("psi", "pit_pressure_psi", minimum=0, exclusive=False,
                                    source="§2.2 (bare table)")
-    foundation_weight: float = quantity("kip", "foundation_weight_kip", minimum=0, source="§2.2")
-    supply_pressure: float = quantity("psi", "supply_pressure_psi", minimum=0, source="§2.2")
+    foundation_weight: float = quantity("kip", "foundation_weight_kip", minimum=0, exclusive=False,
+                                        source="§2.2")
+    supply_pressure: float = quantity("psi", "supply_pressure_psi", minimum=0, exclusive=False,
+                                      source="§2.2")
     source: str = plain(default="")
 
     @property
@@ -51,13 +55,14 @@ class TableSpecs(Params):
 
     weight_capacity: float = quantity("kip", "weight_capacity_kip", minimum=0)
     overhead_clearance: float = quantity("ft", "overhead_clearance_ft", minimum=0)
-    overturning_capacity: float = quantity("kip-ft", "overturning_kip_ft", minimum=0)
+    overturning_capacity: float = quantity("kip-ft", "overturning_kip_ft", minimum=0,
+                                           exclusive=False)
     stroke_h: float = quantity("in", "displacement_h_in", minimum=0)
-    stroke_v: float = quantity("in", "displacement_v_in", minimum=0)
+    stroke_v: float = quantity("in", "displacement_v_in", minimum=0, exclusive=False)
     velocity_h: float = quantity("in/s", "velocity_h_in_per_s", minimum=0)
-    velocity_v: float = quantity("in/s", "velocity_v_in_per_s", minimum=0)
+    velocity_v: float = quantity("in/s", "velocity_v_in_per_s", minimum=0, exclusive=False)
     acceleration_h: float = quantity("g", "acceleration_h_g", minimum=0)
-    acceleration_v: float = quantity("g", "acceleration_v_g", minimum=0)
+    acceleration_v: float = quantity("g", "acceleration_v_g", minimum=0, exclusive=False)
     bandwidth: float = quantity("Hz", "bandwidth_hz", minimum=0)
     source: str = plain(default="")
 

@@ -23,23 +23,32 @@ from vtable import units
 from vtable.errors import VtableError
 from vtable.params.base import Params, plain, quantity
 from vtable.params.loops import OpenLoop
-from vtable.params.table import DirectionSettings, EERCTable, ServoConstants
+from vtable.params.table import (
+    ActuatorSpec,
+    ControlSettings,
+    DirectionSettings,
+    EERCTable,
+    KnobFactors,
+    ServoConstants,
+    TableGeometry,
+    TableSpecs,
+)
 
 
 @dataclass(frozen=True)
 class MultibodyLayout(Params):
     """Layout assumptions of the multibody table (eerc.toml [multibody])."""
 
-    rib_width: float = quantity("in", "rib_width_in", minimum=0)
-    rib_depth: float = quantity("in", "rib_depth_in", minimum=0)
+    rib_width: float = quantity("in", "rib_width_in", minimum=0, exclusive=False)
+    rib_depth: float = quantity("in", "rib_depth_in", minimum=0, exclusive=False)
     rib_offset: float = quantity("in", "rib_offset_in", minimum=0, exclusive=False)
     horizontal_length: float = quantity("in", "horizontal_length_in", minimum=0)
-    vertical_length: float = quantity("in", "vertical_length_in", minimum=0)
-    stabilizer_length: float = quantity("in", "stabilizer_length_in", minimum=0)
+    vertical_length: float = quantity("in", "vertical_length_in", minimum=0, exclusive=False)
+    stabilizer_length: float = quantity("in", "stabilizer_length_in", minimum=0, exclusive=False)
     stabilizer_beta: float = quantity("psi", "stabilizer_beta_psi", minimum=0)
     vertical_k_ct: float = quantity("in3/s/psi", "vertical_k_ct_in3_per_s_per_psi", minimum=0,
                                     exclusive=False)
-    pitch_loop_f: float = quantity("Hz", "pitch_loop_f_hz", minimum=0)
+    pitch_loop_f: float = quantity("Hz", "pitch_loop_f_hz", minimum=0, exclusive=False)
     twist_gain_factor: float = plain()
     twist_delta_p_factor: float = plain()
     roll_delta_p_factor: float = plain()
@@ -87,10 +96,19 @@ class VirtualTable:
     layout: MultibodyLayout
     actuators: tuple[Actuator, ...]
     horizontal_servo: ServoConstants  # Table B.5, per horizontal actuator
-    vertical_servo: ServoConstants  # derived (module docstring), per vertical actuator
-    pitch_loop: OpenLoop  # §8.6.2 target of the vertical calibration
+    vertical_servo: ServoConstants | None  # derived (module docstring), per vertical actuator
+    pitch_loop: OpenLoop | None  # §8.6.2 target of the vertical calibration
     stabilizers: Stabilizers
     settings: dict[str, DirectionSettings]
+    dofs: tuple[str, ...] = ("x", "z", "roll", "pitch", "twist")  # the platen's DOFs
+    knobs: bool = True  # the Table 3.2 knobs scale the gains (False: physical gains, a PID)
+    valve_lag: float = 0.0  # s: the horizontal servovalves' time constant
+    name: str = "eerc"
+
+    @property
+    def limits_source(self) -> str:
+        """Where the table's limits come from (for messages)."""
+        return "Table 2.2" if self.name == "eerc" else f"the {self.name} table's limits"
 
     @property
     def pivot_depth(self) -> float:
@@ -114,7 +132,10 @@ class VirtualTable:
 
     def gain_scales(self, direction: str) -> tuple[float, float, float]:
         """(gain, ΔP, rate) multipliers of a DOF relative to the calibrated reference, from
-        the knob factors (Tables B.1-B.4 plus the [multibody] assumptions)."""
+        the knob factors (Tables B.1-B.4 plus the [multibody] assumptions); 1 for a table
+        whose gains are physical (a PID)."""
+        if not self.knobs:
+            return 1.0, 1.0, 1.0
         s = self.settings[direction]
         kf = self.table.knob_factors
         lay = self.layout
@@ -152,11 +173,15 @@ def _actuators(table: EERCTable, lay: MultibodyLayout) -> tuple[Actuator, ...]:
     line = -g.actuator_line_depth
     bottom = -g.thickness
     out = []
-    for name, y in (("H1", g.horizontal_offset), ("H2", 0.0), ("H3", -g.horizontal_offset)):
-        spec = table.actuator(name)
-        out.append(Actuator(name, "horizontal", (-half, y, line),
-                            (-half - lay.horizontal_length, y, line),
+    hs = [a for a in table.actuators if a.name.startswith("H")]
+    ys = np.linspace(g.horizontal_offset, -g.horizontal_offset, len(hs)) if len(hs) > 1 \
+        else np.zeros(1)
+    for spec, y in zip(hs, ys, strict=True):  # H1 at +y, ... (run format: y = +96, 0, -96 in)
+        out.append(Actuator(spec.name, "horizontal", (-half, float(y), line),
+                            (-half - lay.horizontal_length, float(y), line),
                             spec.area, spec.stroke, spec.capacity, spec.flow))
+    if not any(a.name.startswith("V") for a in table.actuators):
+        return tuple(out)
     v, p = g.vertical_square / 2, g.stabilizer_square / 2
     # run format: V1 (+,+), V2 (-,+), V3 (-,-), V4 (+,-); P likewise
     signs = ((1, 1), (-1, 1), (-1, -1), (1, -1))
@@ -254,6 +279,67 @@ def virtual_table(table: EERCTable | None = None,
     return VirtualTable(table=table, layout=layout, actuators=acts,
                         horizontal_servo=table.servo, vertical_servo=vert, pitch_loop=pitch,
                         stabilizers=stab, settings=settings)
+
+
+def virtual_table_for(lab) -> VirtualTable:
+    """The multibody table of a `vtable.params.lab.LabTable`: the EERC table itself, or a
+    uniaxial platen (`uniaxial_table`); what the lab description changes of the EERC
+    table (its mass, its loop constants) is applied to the EERC model."""
+    if lab.name == "eerc" and lab.uniaxial is False:
+        vt = virtual_table()
+        if lab.servo != replace(vt.horizontal_servo, mass=lab.servo.mass) or \
+                abs(lab.platen_mass - vt.table.geometry.mass) > 1e-9 * lab.platen_mass:
+            g = replace(vt.table.geometry, weight=lab.platen_mass * units.G)
+            servo = replace(lab.servo, mass=vt.horizontal_servo.mass)
+            vt = replace(vt, table=replace(vt.table, geometry=g), horizontal_servo=servo)
+        return replace(vt, valve_lag=lab.valve_time_constant)
+    if not lab.uniaxial:
+        raise VtableError(f"table {lab.name!r}: the virtual table models the EERC table or a "
+                          f"uniaxial platen, not DOFs {', '.join(lab.dofs)}")
+    return uniaxial_table(lab)
+
+
+def uniaxial_table(lab) -> VirtualTable:
+    """A platen on a slide in x driven by its horizontal actuators (lumped or several, side
+    by side), their loop from the lab's description, physical gains (no knobs). The shape
+    the description does not give — a steel plate of the platen's mass, the actuators' pin
+    lengths — comes from params/data/uniaxial_multibody.toml (each number marked assumed)."""
+    from vtable.params import presets
+
+    d = presets._file("uniaxial_multibody")
+    lay = MultibodyLayout.from_dict(d["layout"], "uniaxial_multibody.toml [layout]")
+    rho, aspect = d["plate"]["density_kg_m3"], d["plate"]["width_over_thickness"]
+    m = lab.platen_mass
+    t = (m / (rho * aspect**2)) ** (1 / 3)  # a square steel plate w = aspect·t
+    w = aspect * t
+    depth = t / 2 if lab.com_height is None else t / 2 + lab.com_height  # c.o.m. above line
+    inertia = lab.pitch_inertia or m * (w * w + t * t) / 12
+    supply = units.to_si(d["hydraulics"]["supply_pressure_mpa"], "MPa")
+    n = lab.n_actuators
+    s = lab.servo
+    g = TableGeometry(plan_width=w, thickness=t, weight=m * units.G, pitch_inertia=inertia,
+                      actuator_line_depth=depth, vertical_square=0.0, stabilizer_square=0.0,
+                      horizontal_offset=w / 4 if n > 1 else 0.0, pit_pressure=0.0,
+                      foundation_weight=d["foundation"]["mass_over_platen"] * m * units.G,
+                      supply_pressure=supply, source=f"{lab.name}: assumed plate")
+    big = 1e9
+    specs = TableSpecs(weight_capacity=(lab.payload or m) * units.G, overhead_clearance=big,
+                       overturning_capacity=big, stroke_h=lab.stroke or big, stroke_v=0.0,
+                       velocity_h=lab.velocity or big, velocity_v=0.0,
+                       acceleration_h=lab.acceleration or big, acceleration_v=0.0,
+                       bandwidth=(lab.band or (0.0, 100.0))[1], source=lab.name)
+    acts = tuple(ActuatorSpec(name=f"H{i}", model="described", area=s.area,
+                              stroke=2 * (lab.stroke or 1.0), capacity=supply * s.area,
+                              flow=(lab.velocity * s.area if lab.velocity else None))
+                 for i in range(1, n + 1))
+    none = DirectionSettings(gain=0.0, delta_p=0.0, rate=0.0)
+    std = ControlSettings(horizontal=none, pitch=none, vertical=none, roll=none, twist=none)
+    table = EERCTable(g, specs, acts, s, std, KnobFactors({}))
+    return VirtualTable(table=table, layout=lay, actuators=_actuators(table, lay),
+                        horizontal_servo=s, vertical_servo=None, pitch_loop=None,
+                        stabilizers=Stabilizers((), 0.0, 0.0, 0.0, 0.0),
+                        settings={}, dofs=("x",), knobs=False, valve_lag=lab.valve_time_constant,
+                        name=lab.name)
 
 
 def describe(vt: VirtualTable) -> dict[str, Any]:

@@ -17,22 +17,31 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
     names = b.force_actuators
     ext = {a: res.extension[:, i] for i, a in enumerate(names)}
     force = {a: res.forces[:, i] for i, a in enumerate(names)}
-    si: dict[str, np.ndarray] = {
-        "h_span": res.commands[:, 0],
-        "avg_hdisp": np.mean([ext[f"H{i}"] for i in (1, 2, 3)], axis=0),
-        "avg_vdisp": np.mean([ext[f"V{i}"] for i in (1, 2, 3, 4)], axis=0),
-        "avg_hacc": res.joint("x", "qacc"), "avg_vacc": res.joint("z", "qacc"),
-        "pitch_acc": res.joint("pitch", "qacc"), "roll_acc": res.joint("roll", "qacc"),
-        "twist_acc": res.joint("twist", "qacc"), "pitch_disp": res.joint("pitch"),
-        "h_vel": res.joint("x", "qvel"), "acc_cmd": res.command_acc,
-    }
-    for i in (1, 2, 3, 4):
-        si[f"v{i}_disp"] = ext[f"V{i}"]
-        si[f"v{i}_force"] = force[f"V{i}"]
-        si[f"p{i}_stab"] = force[f"P{i}"]
-    for i in (1, 2, 3):
-        si[f"h{i}_disp"] = ext[f"H{i}"]
-        si[f"h{i}_force"] = force[f"H{i}"]
+    hs = [a.name for a in b.vt.group("horizontal")]
+    vs = [a.name for a in b.vt.group("vertical")]
+    dofs = b.vt.dofs
+    si: dict[str, np.ndarray] = {"h_span": res.commands[:, 0],
+                                 "avg_hdisp": np.mean([ext[a] for a in hs], axis=0)}
+    if vs:
+        si["avg_vdisp"] = np.mean([ext[a] for a in vs], axis=0)
+    si["avg_hacc"] = res.joint("x", "qacc")
+    for name, joint in (("avg_vacc", "z"), ("pitch_acc", "pitch"), ("roll_acc", "roll"),
+                        ("twist_acc", "twist")):
+        if joint in dofs:
+            si[name] = res.joint(joint, "qacc")
+    if "pitch" in dofs:
+        si["pitch_disp"] = res.joint("pitch")
+    si["h_vel"] = res.joint("x", "qvel")
+    si["acc_cmd"] = res.command_acc
+    stabs = [a.name for a in b.vt.group("stabilizer")]
+    for i, a in enumerate(vs):
+        si[f"{a.lower()}_disp"] = ext[a]
+        si[f"{a.lower()}_force"] = force[a]
+        if i < len(stabs):
+            si[f"{stabs[i].lower()}_stab"] = force[stabs[i]]
+    for a in hs:
+        si[f"{a.lower()}_disp"] = ext[a]
+        si[f"{a.lower()}_force"] = force[a]
     if b.structure_joints:
         si["acc_n_ne"] = res.sensor("top_ne_acc")[:, 0]
         si["acc_n_nw"] = res.sensor("top_nw_acc")[:, 0]

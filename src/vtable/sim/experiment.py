@@ -119,8 +119,8 @@ def check_playable(command: Command, vt: VirtualTable, control_dt: float,
     if tab.get("kind") == "sine":
         f = float(tab["frequency_hz"])
         if f > band:
-            raise VtableError(f"sine {f:g} Hz is above the table's 0-{band:g} Hz band (Table "
-                              "2.2): the table cannot play it")
+            raise VtableError(f"sine {f:g} Hz is above the table's 0-{band:g} Hz band "
+                              f"({vt.limits_source}): the table cannot play it")
         if f >= nyq:
             raise VtableError(f"sine {f:g} Hz is at or above the Nyquist frequency {nyq:g} Hz "
                               "of the recorded channels: it would alias")
@@ -131,8 +131,23 @@ def check_playable(command: Command, vt: VirtualTable, control_dt: float,
                               f"{nyq:g} Hz of the recorded channels: it would alias")
         if hi > band:
             notes.append(f"the random band reaches {hi:g} Hz, beyond the table's 0-{band:g} "
-                         "Hz band (Table 2.2): the table attenuates it")
+                         f"Hz band ({vt.limits_source}): the table attenuates it")
     return notes
+
+
+def load_table(name_or_path: str | None):
+    """A table preset name (eerc, lnec-st1d) or a TOML file with a run-format [table]
+    table, as the models read it (`vtable.params.lab.LabTable`)."""
+    from vtable.params.lab import lab_table
+    from vtable.runs.table import table_from_dict
+
+    if name_or_path in (None, "", "eerc"):
+        return lab_table(None)
+    p = Path(name_or_path)
+    if name_or_path.endswith(".toml") or p.is_file():
+        d = read_toml(p)
+        return lab_table(table_from_dict(d.get("table", d), f"{p} [table]"))
+    return lab_table(table_from_dict({"preset": name_or_path}, f"--table {name_or_path}"))
 
 
 def load_specimen(name_or_path: str | None) -> Specimen:
@@ -202,8 +217,9 @@ def run_experiment(specimen: Specimen, command: Command, *, vt: VirtualTable | N
             for k, pv in effects.items()))
     res = Simulator(built, ctl).run(command.t, {"x": command.x}, output_dt=output_dt)
     meta = {"title": title or f"{command.name}, {specimen.title} (vtable virtual table)",
-            "table": {"preset": "eerc"},
-            "control": {k: v.to_dict() for k, v in vt.settings.items()},
+            "table": {"preset": vt.name},
+            **({"control": {k: v.to_dict() for k, v in vt.settings.items()}} if vt.knobs
+               else {}),
             "specimen": specimen_table(specimen), "command": command.table}
     run = result_run(res, meta, str(out or command.name))
     for fn in filters:  # the effects' output filters, on the recorded channels

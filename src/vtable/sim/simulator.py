@@ -112,14 +112,15 @@ def check_commands(built: BuiltModel, t: np.ndarray, cmd: np.ndarray) -> None:
             i = int(np.argmax(np.abs(x) > stroke))
             raise VtableError(f"{dof} command reaches {units.from_si(peak, 'in'):.2f} in (first "
                               f"beyond ±{units.from_si(stroke, 'in'):g} in at t = {t[i]:.3f} s)"
-                              ", the table's stroke (Table 2.2)")
+                              f", the table's stroke ({built.vt.limits_source})")
         v = np.gradient(x, t) if len(t) > 1 else np.zeros(1)
         vpeak = float(np.max(np.abs(v)))
         if vpeak > vmax * (1 + 1e-9):
             i = int(np.argmax(np.abs(v) > vmax))
             raise VtableError(f"{dof} command velocity reaches {units.from_si(vpeak, 'in/s'):.1f}"
                               f" in/s (first beyond ±{units.from_si(vmax, 'in/s'):g} in/s at t = "
-                              f"{t[i]:.3f} s), the table's velocity limit (Table 2.2)")
+                              f"{t[i]:.3f} s), the table's velocity limit "
+                              f"({built.vt.limits_source})")
 
 
 class Simulator:
