@@ -29,7 +29,6 @@ from typing import Any
 
 import numpy as np
 
-from vtable import units
 from vtable.analytic.base import LinearModel
 from vtable.analytic.mdof import MDOFHybrid
 from vtable.analytic.mechanical import MechanicalModel
@@ -53,7 +52,7 @@ from vtable.params.table import ServoConstants
 
 #: the built-in EERC configuration: the SDOF frame on the table, hybrid model (Table 9.1)
 DEFAULT = "eerc-sdof"
-SDOF_HEIGHT = units.to_si(219.0, "in")  # Table 8.1 structural height
+SDOF_HEIGHT = presets.specimen("table8_1").height  # Table 8.1 structural height
 
 
 def _named() -> dict[str, Callable[[], LinearModel]]:

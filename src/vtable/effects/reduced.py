@@ -35,12 +35,6 @@ from vtable.runs.model import Run
 
 SIM_DT = 0.0025  # s: the largest integration step (a run step is divided until below it)
 
-#: the channels the reduced model predicts (format names)
-PREDICTED = ("avg_hdisp", "h1_disp", "h2_disp", "h3_disp", "h_vel", "avg_hacc", "h1_force",
-             "h2_force", "h3_force", "pitch_disp", "pitch_acc", "acc_n_ne", "acc_n_nw",
-             "pot_n_sw", "pot_n_se")
-
-
 @dataclass
 class ForceElement:
     law: Callable
@@ -323,9 +317,10 @@ class ReducedModel:
         for fn in self.assembly.filters:
             out = {k: fn(v, 1.0 / h) for k, v in out.items()}
         out = {k: v[::up] for k, v in out.items()}
-        for i in (1, 2, 3):
-            out[f"h{i}_disp"] = out["avg_hdisp"]
-        out["h2_force"] = out["h3_force"] = out["h1_force"]
+        force = out.pop("h1_force")
+        for a in self.vt.group("horizontal"):  # the lumped actuator stands for each
+            out[f"{a.name.lower()}_disp"] = out["avg_hdisp"]
+            out[f"{a.name.lower()}_force"] = force
         if slides:
             out["acc_n_nw"] = out["acc_n_ne"]
             out["pot_n_se"] = out["pot_n_sw"]
