@@ -98,13 +98,16 @@ def test_simulate_table_lnec_writes_a_run_of_that_table(capsys, tmp_path):
     ("FILE:[table.controller]\nkind = 'fuzzy'", "kind: expected one of three_variable, pid"),
     ("FILE:preset = 'lnec-st1d'\n[table.controller]\nkind = 'pid'\nbogus = 1\n"
      "displacement_gain_v_per_m = 0.0", "needs displacement_gain_v_per_m"),
+    ("FILE:preset = 'lnec-st1d'\n[table.controller]\nkind = 'pid'\n"
+     "displacement_gain_v_per_m = 129.93\ni = 2.0\nfeedforward_velocity_s = 0.01",
+     "controller i, feedforward_velocity_s: the virtual table and the fitted models hold P"),
 ])
 def test_bad_tables_are_one_line(capsys, tmp_path, table, msg):
     if table.startswith("FILE:"):
         p = tmp_path / "t.toml"
         p.write_text("[table]\n" + table[5:].replace("'", '"') + "\n")
         table = str(p)
-    code = main(["simulate", "--table", table, "--duration", "1"])
+    code = main(["simulate", "--table", table, "--specimen", "none", "--duration", "1"])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and msg in err, err
 

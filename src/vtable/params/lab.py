@@ -37,11 +37,20 @@ class LabTable:
     controller: str                 # "three_variable" | "pid"
     pid: tuple[float, float, float]  # P (1), I (1/s), D (s) on the displacement error
     feedforward: float              # s: velocity feedforward (flow = ff·A·ẋ_c)
+    feedforward_acc: float = 0.0    # s²: acceleration feedforward
     stroke: float | None = None     # m (± amplitude)
     velocity: float | None = None   # m/s
     acceleration: float | None = None  # m/s²
     payload: float | None = None    # kg
     band: tuple[float, float] | None = None  # Hz
+
+    def unmodelled_control(self) -> tuple[str, ...]:
+        """The controller's terms vtable's servo law (eqs 6.1-6.4: P on the error with
+        pressure and velocity feedback) does not hold: integral, derivative, feedforward."""
+        named = (("i", self.pid[1]), ("d", self.pid[2]),
+                 ("feedforward_velocity_s", self.feedforward),
+                 ("feedforward_acceleration_s2", self.feedforward_acc))
+        return tuple(k for k, v in named if v)
 
     @property
     def uniaxial(self) -> bool:
@@ -148,13 +157,14 @@ def _described(desc, base: LabTable | None) -> LabTable:
                                source=f"{where}: k_t = valve flow gain x displacement gain x P")
         pid = (P, Ki / P, Kd / P)
         ff = c.feedforward_velocity or 0.0
+        ffa = c.feedforward_acceleration or 0.0
     else:
         if s0 is None:
             raise VtableError(f"{where}.controller: the three_variable controller's constants "
                               "come from the EERC preset (Table B.5); describe a pid instead")
         servo = dataclasses.replace(s0, area=area, volume=volume, beta=beta, k_ct=leak,
                                     mass=mass / n, damping=damping / n or None)
-        pid, ff = (1.0, 0.0, 0.0), 0.0
+        pid, ff, ffa = (1.0, 0.0, 0.0), 0.0, 0.0
     lim = desc.limits
     return LabTable(
         name=desc.preset or "described", dofs=desc.dofs or (base.dofs if base else ("x",)),
@@ -163,7 +173,7 @@ def _described(desc, base: LabTable | None) -> LabTable:
         com_height=desc.com_height if desc.com_height is not None else
         (base.com_height if base else None),
         n_actuators=n, servo=servo, valve_time_constant=tau, controller=kind, pid=pid,
-        feedforward=ff,
+        feedforward=ff, feedforward_acc=ffa,
         stroke=(lim.stroke if lim and lim.stroke else base.stroke if base else None),
         velocity=(lim.velocity if lim and lim.velocity else base.velocity if base else None),
         acceleration=(lim.acceleration if lim and lim.acceleration else
