@@ -113,7 +113,8 @@ def m_unknown_key(csv, toml, r):
         toml = toml.replace("horizontal = {", f"horizontal = {{ {key} = 1,", 1)
     else:
         toml = toml.replace(f"[{where}]\n", f"[{where}]\n{key} = 1\n", 1)
-    return csv, toml, True, [key], f"unknown key in {where}"
+    # [table] is read by the models: an unknown key there is an error (issue 11)
+    return csv, toml, where != "table", [key], f"unknown key in {where}"
 
 
 def m_mm_unit(csv, toml, r):

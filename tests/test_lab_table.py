@@ -96,10 +96,12 @@ def test_simulate_table_lnec_writes_a_run_of_that_table(capsys, tmp_path):
     ("no-such-table", "is not a known table; expected one of eerc, lnec-st1d"),
     ("FILE:platen_mass_kg = -5.0", "platen_mass_kg: must be > 0"),
     ("FILE:[table.controller]\nkind = 'fuzzy'", "kind: expected one of three_variable, pid"),
-    ("FILE:preset = 'lnec-st1d'\n[table.controller]\nkind = 'pid'\nbogus = 1\n"
-     "displacement_gain_v_per_m = 0.0", "needs displacement_gain_v_per_m"),
     ("FILE:preset = 'lnec-st1d'\n[table.controller]\nkind = 'pid'\n"
-     "displacement_gain_v_per_m = 129.93\ni = 2.0\nfeedforward_velocity_s = 0.01",
+     "displacement_gain_v_per_m = 0.0", "needs displacement_gain_v_per_m"),
+    ("FILE:preset = 'lnec-st1d'\n[table.controller]\nkind = 'pid'\nbogus = 1\n",
+     "t.toml [table.controller]: unknown key 'bogus'; expected one of"),
+    ("FILE:preset = 'lnec-st1d'\n[table.controller]\nkind = 'pid'\n"
+     "displacement_gain_v_per_m = 129.93\ni_per_s = 2.0\nfeedforward_velocity_s = 0.01",
      "controller i, feedforward_velocity_s: the virtual table and the fitted models hold P"),
 ])
 def test_bad_tables_are_one_line(capsys, tmp_path, table, msg):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 import string
 from pathlib import Path
 
@@ -345,18 +346,12 @@ UNKNOWN_EVERYWHERE = '''format = "vtable-run/1"
 operator = "J. Doe"
 [table]
 preset = "eerc"
-colour = "blue"
 [table.horizontal]
 count = 3
-nozzle = 1
 [table.controller]
 kind = "three_variable"
-notch_hz = 5
 [table.limits]
 stroke_in = 5.0
-jerk = 1
-[table.cooling]
-fans = 2
 [control]
 horizontal = { gain = 9.0, delta_p = 1.5, rate = 5.0, dither = 1 }
 sway = { gain = 1.0 }
@@ -378,16 +373,25 @@ sky = "clear"
 '''
 
 
+@pytest.mark.parametrize("after, line, where", [
+    ('preset = "eerc"', 'colour = "blue"', "[table]: unknown key 'colour'"),
+    ('preset = "eerc"', '[table.cooling]\nfans = 2', "[table]: unknown key 'cooling'"),
+    ('count = 3', 'nozzle = 1', "[table.horizontal]: unknown key 'nozzle'"),
+    ('kind = "three_variable"', 'notch_hz = 5', "[table.controller]: unknown key 'notch_hz'"),
+    ('stroke_in = 5.0', 'jerk = 1', "[table.limits]: unknown key 'jerk'"),
+])
+def test_unknown_table_keys_are_errors(tmp_path, after, line, where):
+    """The models read [table]: a key they would not use is an error, at every level."""
+    text = UNKNOWN_EVERYWHERE.replace(after, after + "\n" + line, 1)
+    with pytest.raises(VtableError, match=re.escape(f"unk.toml {where}; expected one of")):
+        _read(tmp_path, "unk", CSV_OK, text)
+
+
 def test_unknown_keys_are_reported_at_every_level(tmp_path):
     r = _read(tmp_path, "unk", CSV_OK, UNKNOWN_EVERYWHERE)
     p = str(tmp_path / "unk.toml")
     expect = [f"{p}: unknown key 'operator' (kept, not used)",
               f"{p}: unknown key 'weather' (kept, not used)",
-              f"{p} [table]: unknown key 'colour' (kept, not used)",
-              f"{p} [table]: unknown key 'cooling' (kept, not used)",
-              f"{p} [table.horizontal]: unknown key 'nozzle' (kept, not used)",
-              f"{p} [table.controller]: unknown key 'notch_hz' (kept, not used)",
-              f"{p} [table.limits]: unknown key 'jerk' (kept, not used)",
               f"{p} [control.horizontal]: unknown knob 'dither' (kept, not used",
               f"{p} [control]: unknown direction 'sway' (kept, not used",
               f"{p} [command]: unknown key 'operator_note' (kept, not used)",

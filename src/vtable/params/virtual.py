@@ -284,7 +284,14 @@ def virtual_table(table: EERCTable | None = None,
 def virtual_table_for(lab) -> VirtualTable:
     """The multibody table of a `vtable.params.lab.LabTable`: the EERC table itself, or a
     uniaxial platen (`uniaxial_table`); what the lab description changes of the EERC
-    table (its mass, its loop constants) is applied to the EERC model."""
+    table (its mass, its loop constants) is applied to the EERC model. A controller with
+    terms the servo law does not hold (integral, derivative, feedforward) is refused, not
+    run as P control."""
+    if extra := lab.unmodelled_control():
+        raise VtableError(f"table {lab.name!r}: controller {', '.join(extra)}: the virtual "
+                          "table and the fitted models hold P control with pressure and "
+                          "velocity feedback (eqs 6.1-6.4) only; tf and identify still work "
+                          "on these runs")
     if lab.name == "eerc" and lab.uniaxial is False:
         vt = virtual_table()
         if lab.servo != replace(vt.horizontal_servo, mass=lab.servo.mass) or \

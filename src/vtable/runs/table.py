@@ -8,11 +8,11 @@ gravity. Values are stored in SI in typed frozen dataclasses.
 
 Errors (one line naming the file and the key): a value that is not a finite number, a
 mass or an area that is not > 0, two spellings of one quantity, an unknown preset or
-controller kind, a PID controller without gains. Unknown keys are not errors: they are
-collected in `TableDescription.notes` ("kept, not used"), which the reader adds to the
-run's reports.
+controller kind, a PID controller without gains, and an unknown key at any level: the
+models read this table, so a key they would not use (a misspelt unit suffix, a gain
+named without its unit) would change the physics without a word.
 
-Nothing reads the description yet: `Run.table()` returns it.
+`vtable.params.lab.lab_table` turns the description into the table the models read.
 """
 
 from __future__ import annotations
@@ -55,8 +55,9 @@ def _level(d: Any, schema: tuple[_Key, ...], where: str, notes: list[str],
         if k in subtables or k in plain:
             continue
         if k not in by_key:
-            notes.append(f"{where}: unknown key {k!r} (kept, not used)")
-            continue
+            known = sorted(by_key) + sorted(subtables) + sorted(plain)
+            raise VtableError(f"{where}: unknown key {k!r}; expected one of "
+                              f"{', '.join(known)}")
         q, unit = by_key[k]
         if q.attr in given:
             raise VtableError(f"{where}: {given[q.attr]!r} and {k!r} give the same quantity; "
