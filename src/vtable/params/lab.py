@@ -77,8 +77,8 @@ def _eerc(desc) -> LabTable:
     servo = dataclasses.replace(vt.horizontal_servo, mass=g.mass / n)
     return LabTable("eerc", ("x", "z", "roll", "pitch", "twist"), g.mass, g.pitch_inertia,
                     None, n, servo, 0.0, "three_variable", (1.0, 0.0, 0.0), 0.0,
-                    sp.stroke_h, sp.velocity_h, sp.acceleration_h, sp.weight_capacity / 9.80665,
-                    (0.0, sp.bandwidth))
+                    stroke=sp.stroke_h, velocity=sp.velocity_h, acceleration=sp.acceleration_h,
+                    payload=sp.weight_capacity / 9.80665, band=(0.0, sp.bandwidth))
 
 
 def lab_table(desc=None) -> LabTable:
