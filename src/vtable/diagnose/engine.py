@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import (
     NOISE_FACTOR,
@@ -196,7 +197,7 @@ class Diagnoser:
     def __init__(self, runs: Sequence[Run], start_effects: Sequence[str] = (),
                  catalog: Sequence[str] | None = None,
                  progress: Callable[[int, int, str], None] | None = None,
-                 max_rounds: int = 4) -> None:
+                 max_rounds: int = 4, calibration: Calibration | None = None) -> None:
         self.campaign = Campaign.of(runs)
         self.source_runs, self.runs = self.campaign.source_runs, self.campaign.runs
         for e in start_effects:
@@ -212,15 +213,21 @@ class Diagnoser:
         self.progress = progress or (lambda i, n, s: None)
         self.max_rounds = max_rounds
         self.floor = self.campaign.floor
+        self.calibration = calibration or Calibration()
         self._stop = threading.Event()
 
-    def model(self, start: Physics, multistart: str | None = None) -> TableModel:
+    def model(self, start: Physics, multistart: str | None = None,
+              free: str = "all") -> TableModel:
         """The estimator the loop fits (sharing this diagnosis's stop flag)."""
-        return TableModel(start=start, multistart=multistart, stop=self._stop)
+        return TableModel(start=start, multistart=multistart, stop=self._stop,
+                          calibration=self.calibration, free=free)
 
-    def fit(self, ph: Physics, multistart: str | None = None) -> tuple[Physics, float]:
-        m = self.model(ph, multistart).fit(self.campaign)
-        return m.physics_, m.train_error_
+    def fit(self, ph: Physics, multistart: str | None = None,
+            free: str = "all") -> tuple[Physics, float, list[str]]:
+        """Fit `ph` (see `TableModel`); returns the fitted physics, the training error and
+        the fit's flags (at a bound, not identifiable)."""
+        m = self.model(ph, multistart, free).fit(self.campaign)
+        return m.physics_, m.train_error_, m.flags_
 
     def _inapplicable(self, ph: Physics) -> str:
         """Why a model cannot be built for this campaign's table (an effect needing a
@@ -234,8 +241,8 @@ class Diagnoser:
         return ""
 
     def _model(self) -> TableModel:
-        m = TableModel(stop=self._stop)
-        m.vt = self.vt
+        m = TableModel(stop=self._stop, calibration=self.calibration)
+        m.vt, m.declared = self.vt, self.campaign.specimen
         return m
 
     def at_bounds(self, ph: Physics) -> list[str]:
@@ -307,7 +314,8 @@ class Diagnoser:
         steps = 1 + self.max_rounds * len(self.catalog)
         done = 0
         progress(done, steps, "fitting the starting model")
-        current, _ = self.fit(self.start)
+        current, _, start_flags = self.fit(self.start)
+        self.notes += [f"starting model: {f}" for f in start_flags]
         self.start_fitted = current
         st.current = current
         st.stages.append(Stage("start", current, self.predict(current)))
@@ -331,19 +339,22 @@ class Diagnoser:
             cmp_cur = self._detail(st)
             ranking: list[Candidate] = []
 
-            def trial(name: str, base: Physics = current) -> Candidate:
-                cand, train = self.fit(base.with_effect(name), multistart=name)
+            def trial(name: str, base: Physics = current, free: str = "loop",
+                      multistart: str | None = None) -> Candidate:
+                start = base if base.has(name) else base.with_effect(name)
+                cand, train, flags = self.fit(start, multistart=multistart, free=free)
                 pred = self.predict(cand)
                 err = compare(pred, self.runs, scored="held", floor=self.floor).error
                 return Candidate(name, dict(cand.effects[name]), err, train, "",
-                                 len(effect(name).params), cand, self.at_bounds(cand), pred)
+                                 len(effect(name).params), cand, flags, pred)
 
             # candidates are independent: fit them on both cores (the kernel releases the
             # GIL); on a stop, pending fits are cancelled and running ones end at their next
             # simulation
             pool = ThreadPoolExecutor(max_workers=WORKERS)
             try:
-                futures = {pool.submit(trial, name): name for name in todo}
+                futures = {pool.submit(trial, name, free="all", multistart=name): name
+                           for name in todo}
                 for fut in as_completed(futures):
                     ranking.append(fut.result())
                     done += 1
@@ -351,15 +362,22 @@ class Diagnoser:
             finally:
                 pool.shutdown(wait=True, cancel_futures=True)
             ranking.sort(key=lambda c: c.score)
+            # SELECTION: the best candidate that clears the margin and whose fit is sound (no
+            # parameter at a bound, none entangled with the base) is added
+            best, gain, needed = ranking[0], 0.0, 0.0
+            for c in ranking:
+                needed = max(MIN_GAIN * (err - self.floor), FLOOR_GAIN * self.floor,
+                             PENALTY * c.n_params)
+                best, gain = c, err - c.error_after
+                if gain <= needed or not c.flags:
+                    break  # sorted: no later candidate gains more; or this one is sound
+            ranking.sort(key=lambda c: c.score)
             for c in ranking:
                 c.evidence = _evidence(c, err, self.floor, cmp_cur)
-            best = ranking[0]
-            gain = err - best.error_after
-            needed = max(MIN_GAIN * (err - self.floor), FLOOR_GAIN * self.floor,
-                         PENALTY * best.n_params)
-            for c in ranking[1:]:
-                c.predictions = None  # only the added model's predictions are kept
-            if gain > needed:
+            for c in ranking:
+                if c is not best:
+                    c.predictions = None  # only the added model's predictions are kept
+            if gain > needed and not best.flags:
                 st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
                 current, err = best.physics, best.error_after
                 st.current, st.err, st.cmp = current, err, None
@@ -368,9 +386,17 @@ class Diagnoser:
                 progress(done, steps, f"round {k} done: added {best.effect}")
             else:
                 st.rounds.append(Round(ranking, None, err, err, skipped))
-                reason = (f"the best candidate ({best.effect}) would lower the held-out error "
-                          f"by {gain:.2%}, less than the {needed:.2%} the noise floor "
-                          f"({self.floor:.1%}) and the parsimony penalty require")
+                best = max(ranking, key=lambda c: err - c.error_after)
+                gain = err - best.error_after
+                if gain > needed and best.flags:
+                    reason = (f"the best candidate ({best.effect}) would lower the held-out "
+                              f"error by {gain:.2%} but is not added on that evidence: "
+                              + "; ".join(best.flags))
+                else:
+                    reason = (f"the best candidate ({best.effect}) would lower the held-out "
+                              f"error by {gain:.2%}, less than the {needed:.2%} the noise "
+                              f"floor ({self.floor:.1%}) and the parsimony penalty require, "
+                              "with the base recalibrated")
                 progress(done, steps, f"round {k} done: nothing added")
                 break
         if not reason:

@@ -19,21 +19,21 @@ from typing import Any
 import numpy as np
 import scipy.optimize
 
+from vtable.diagnose.calibration import LOOP, BaseParam, Calibration, base_params
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare, group_prediction, segments
 from vtable.effects.physics import Physics, nominal_open_loop
 from vtable.effects.reduced import ReducedModel
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
-from vtable.params.loops import OpenLoop
-from vtable.params.virtual import virtual_table
 from vtable.runs.model import Run
 
 AT_BOUND = 0.01  # a fitted value within 1 % of its range (fitted scale) of a bound is flagged
+#: an effect parameter this correlated with a base parameter is not identifiable apart
+#: from the base (the fit could trade one for the other)
+MAX_CORRELATION = 0.95
 #: the base loop's fitted parameters: name -> (JSON key "owner.param", unit, lower, upper)
-BASE_PARAMS = {"f_o": ("servo_loop.f_o_hz", "Hz", 1.0, 100.0),
-               "xi_o": ("servo_loop.xi_o", "1", 0.02, 5.0),
-               "k_o": ("servo_loop.k_o_per_s", "1/s", 1.0, 500.0)}
+BASE_PARAMS = LOOP
 MULTISTART = (0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95, None)  # fractions of a range; None: as is
 
 
@@ -41,9 +41,35 @@ class StopRequestedError(Exception):
     """Raised inside a fit when the caller asked it to stop (an interrupt)."""
 
 
+def _effect_param(name: str, p) -> BaseParam:
+    def get(ph: Physics) -> float:
+        return float(ph.effects[name][p.name])
+
+    def put(ph: Physics, v: float) -> Physics:
+        eff = {k: dict(val) for k, val in ph.effects.items()}
+        eff[name][p.name] = v
+        return dataclasses.replace(ph, effects=eff)
+
+    return BaseParam(f"{name}.{p.name}", p.unit, float("nan"), p.lower, p.upper, p.log, None,
+                     f"effect:{name}", get, put)
+
+
+def pitches(ph: Physics, vt) -> bool:
+    """Whether the model `ph` lets the platen pitch on table `vt`."""
+    from vtable.effects.reduced import ReducedAssembly
+
+    try:
+        m = ReducedAssembly(ph, vt)
+        ph.apply(m, "reduced")
+    except VtableError:
+        return False
+    return "pitch" in m.active
+
+
 class TableModel:
     """The linear uni-directional servo loop carrying the runs' specimen (report ch. 7)
-    plus `effects`.
+    plus `effects`, with the base calibrated around the runs' declarations
+    (`vtable.diagnose.calibration`).
 
     Parameters
     ----------
@@ -58,42 +84,55 @@ class TableModel:
     stop
         A `threading.Event`; when set, the fit ends at its next simulation
         (`StopRequestedError`).
+    calibration
+        The calibration's bounds and priors (default `Calibration()`).
+    free
+        "all": every base parameter is fitted with the effects; "loop": the servo loop and
+        the platen's pitch parameters only, the specimen and the platen mass held at the
+        start's values (the diagnosis's screening of candidates).
     """
 
     def __init__(self, effects: Sequence[str] = (), *, start: Physics | None = None,
-                 multistart: str | None = None, stop: threading.Event | None = None) -> None:
+                 multistart: str | None = None, stop: threading.Event | None = None,
+                 calibration: Calibration | None = None, free: str = "all") -> None:
+        if free not in ("all", "loop"):
+            raise ValueError(f"free: expected 'all' or 'loop', got {free!r}")
         self.effects = tuple(effects)
         self.start, self.multistart, self.stop = start, multistart, stop
+        self.calibration = calibration or Calibration()
+        self.free = free
         self.physics_: Physics | None = None
         self.vt = None  # the campaign's table, known when fitting
+        self.declared = None  # the campaign's declared specimen, known when fitting
 
     # -- parameter vector --------------------------------------------------------------
-    def _layout(self, ph: Physics) -> list[tuple[str, str, float, float, bool]]:
-        lay = [("base", n, lo, hi, True) for n, (_, _, lo, hi) in BASE_PARAMS.items()]
-        for name in ph.effects:
-            for p in effect(name).params:
-                lay.append((name, p.name, p.lower, p.upper, p.log))
-        return lay
+    def base_params(self, ph: Physics) -> list[BaseParam]:
+        """Every calibrated base parameter of `ph` on this campaign's table."""
+        return base_params(self.declared if self.declared is not None else ph.specimen,
+                           self.vt, self.calibration, pitch=pitches(ph, self.vt))
+
+    def _layout(self, ph: Physics) -> list[BaseParam]:
+        base = self.base_params(ph)
+        if self.free == "loop":
+            base = [p for p in base if p.group in ("loop", "pitch")]
+        return base + [_effect_param(name, p) for name in ph.effects
+                       for p in effect(name).params]
 
     @staticmethod
-    def _value(ph: Physics, owner: str, name: str) -> float:
-        return getattr(ph.open_loop, name) if owner == "base" else ph.effects[owner][name]
-
-    def _pack(self, ph: Physics, lay) -> np.ndarray:
-        return np.array([math.log(self._value(ph, o, n)) if log else self._value(ph, o, n)
-                         for o, n, _, _, log in lay])
+    def _pack(ph: Physics, lay) -> np.ndarray:
+        return np.array([math.log(p.get(ph)) if p.log else p.get(ph) for p in lay])
 
     @staticmethod
     def _unpack(x: np.ndarray, ph: Physics, lay) -> Physics:
-        base = {}
-        eff = {k: dict(v) for k, v in ph.effects.items()}
-        for xi, (owner, name, lo, hi, log) in zip(x, lay, strict=True):
-            v = float(np.clip(math.exp(xi) if log else xi, lo, hi))
-            if owner == "base":
-                base[name] = v
-            else:
-                eff[owner][name] = v
-        return dataclasses.replace(ph, open_loop=OpenLoop(**base), effects=eff)
+        for xi, p in zip(x, lay, strict=True):
+            ph = p.set(ph, float(np.clip(math.exp(xi) if p.log else xi, p.lower, p.upper)))
+        return ph
+
+    def _priors(self, x: np.ndarray, lay, campaign: Campaign) -> np.ndarray:
+        lam = self.calibration.prior_weight * campaign.floor * math.sqrt(len(campaign.targets))
+        out = [lam * (xi - (math.log(p.declared) if p.log else p.declared)) / p.prior
+               for xi, p in zip(x, lay, strict=True) if p.prior]
+        return np.array(out)
 
     # -- simulate ----------------------------------------------------------------------
     def _predict(self, ph: Physics, campaign: Campaign, train_only: bool = False
@@ -119,14 +158,20 @@ class TableModel:
             res.append(np.where(np.isfinite(e), e, 10.0 / math.sqrt(len(e))))
         return np.concatenate(res)
 
+    def _cost(self, x, start, lay, campaign) -> np.ndarray:
+        return np.concatenate([self._residuals(self._unpack(x, start, lay), campaign),
+                               self._priors(x, lay, campaign)])
+
     # -- the estimator -----------------------------------------------------------------
     def fit(self, runs: Sequence[Run] | Campaign) -> TableModel:
         """Fit on the campaign's training segments. Sets `physics_`, `train_error_`
         (RMS over the groups of the normalised training residual), `flags_` (fitted
-        parameters at a bound), `base_` (the spec's `base` table), `notes_`."""
+        parameters at a bound, effect parameters not identifiable apart from the base),
+        `base_` (the spec's `base` table), `notes_`."""
         campaign = Campaign.of(runs)
         self.campaign_ = campaign
         self.vt = campaign.table
+        self.declared = campaign.specimen
         start = self.start or Physics(nominal_open_loop(self.vt), campaign.specimen, {})
         for e in self.effects:
             if not start.has(e):
@@ -134,39 +179,60 @@ class TableModel:
         self.start_ = start
         lay = self._layout(start)
         x0 = self._pack(start, lay)
-        nb = len(BASE_PARAMS)
         if self.multistart:
-            idx = [i for i, (o, *_rest) in enumerate(lay) if o == self.multistart]
+            idx = [i for i, p in enumerate(lay) if p.group == f"effect:{self.multistart}"]
+            loop = [i for i, p in enumerate(lay) if p.group == "loop"]
             nominal = self._pack(dataclasses.replace(
                 start, open_loop=nominal_open_loop(self.vt)), lay)
             best, best_x = np.inf, x0
-            for base in (x0[:nb], nominal[:nb]):
+            for base in (x0[loop], nominal[loop]):
                 for frac in MULTISTART:
                     x = x0.copy()
-                    x[:nb] = base
+                    x[loop] = base
                     for i in idx:
-                        _, _, lo, hi, log = lay[i]
+                        p = lay[i]
                         if frac is not None:
-                            a, b = (math.log(lo), math.log(hi)) if log else (lo, hi)
+                            a, b = ((math.log(p.lower), math.log(p.upper)) if p.log
+                                    else (p.lower, p.upper))
                             x[i] = a + frac * (b - a)
-                    c = float(np.sum(self._residuals(self._unpack(x, start, lay),
-                                                     campaign) ** 2))
+                    c = float(np.sum(self._cost(x, start, lay, campaign) ** 2))
                     if c < best:
                         best, best_x = c, x
             x0 = best_x
-        lo = np.array([math.log(a) if log else a for _, _, a, _, log in lay])
-        hi = np.array([math.log(b) if log else b for _, _, _, b, log in lay])
-        x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
+        lo = np.array([math.log(p.lower) if p.log else p.lower for p in lay])
+        hi = np.array([math.log(p.upper) if p.log else p.upper for p in lay])
+        x0 = np.clip(x0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         sol = scipy.optimize.least_squares(
-            lambda x: self._residuals(self._unpack(x, start, lay), campaign), x0,
+            lambda x: self._cost(x, start, lay, campaign), x0,
             bounds=(lo, hi), diff_step=1e-4, xtol=1e-6, ftol=1e-8, max_nfev=40)
         self.physics_ = self._unpack(sol.x, start, lay)
-        self.train_error_ = float(np.sqrt(np.mean(sol.fun**2) * len(sol.fun)
+        n_data = campaign.n_target
+        self.train_error_ = float(np.sqrt(np.sum(sol.fun[:n_data] ** 2)
                                           / len(campaign.targets)))
-        self.flags_ = self.at_bounds(self.physics_)
+        self.layout_ = lay
+        self.correlations_ = _correlations(sol.jac, sol.fun, len(lay))
+        self.flags_ = self.at_bounds(self.physics_) + self._unidentified(lay)
         self.base_ = self.base_table(self.physics_)
         self.notes_ = list(campaign.notes)
         return self
+
+    def _unidentified(self, lay) -> list[str]:
+        """Effect parameters the fit cannot tell apart from a base parameter (|correlation|
+        above `MAX_CORRELATION` in the Gauss-Newton covariance at the solution)."""
+        R = self.correlations_
+        flags = []
+        for i, p in enumerate(lay):
+            if not p.group.startswith("effect:"):
+                continue
+            if not np.isfinite(R[i, i]):
+                flags.append(f"{p.key} not identifiable (the data do not depend on it)")
+                continue
+            for j, b in enumerate(lay):
+                if not p.group.startswith("effect:") and abs(R[i, j]) > MAX_CORRELATION:
+                    flags.append(f"{p.key} not identifiable apart from {b.key} "
+                                 f"(correlation {R[i, j]:+.2f})")
+                    break
+        return flags
 
     def predictions(self, campaign: Campaign | None = None) -> dict[str, dict[str, np.ndarray]]:
         """The fitted model's channels for every run of the campaign (analysis rate)."""
@@ -191,26 +257,41 @@ class TableModel:
         """The fitted parameters of `ph` within 1 % of a bound, on the fitted scale (the
         logarithm for log parameters): 'owner.param at its lower bound (value unit)'."""
         flags = []
-        for owner, name, lo, hi, log in self._layout(ph):
-            v = self._value(ph, owner, name)
-            if owner == "base":
-                key, unit = BASE_PARAMS[name][:2]
-            else:
-                key, unit = f"{owner}.{name}", effect(owner).param(name).unit
-            f = math.log if log else (lambda z: z)
-            pos = (f(v) - f(lo)) / (f(hi) - f(lo))
-            for side, bound, near in (("lower", lo, pos <= AT_BOUND),
-                                      ("upper", hi, pos >= 1 - AT_BOUND)):
+        for p in self._layout(ph):
+            v = p.get(ph)
+            f = math.log if p.log else (lambda z: z)
+            pos = (f(v) - f(p.lower)) / (f(p.upper) - f(p.lower))
+            for side, bound, near in (("lower", p.lower, pos <= AT_BOUND),
+                                      ("upper", p.upper, pos >= 1 - AT_BOUND)):
                 if near:
-                    u = "" if unit == "1" else f" {unit}"
-                    flags.append(f"{key} at its {side} bound ({v:.4g}{u}; bound {bound:g}{u})")
+                    u = "" if p.unit == "1" else f" {p.unit}"
+                    flags.append(f"{p.key} at its {side} bound ({v:.4g}{u}; bound {bound:g}{u})")
         return flags
 
     def base_table(self, ph: Physics) -> dict[str, dict[str, Any]]:
         """The spec's `base`: every calibrated base parameter, "owner.param" ->
-        {declared, fitted, bounds, unit}. Declared = the table preset's nominal loop (Table
-        B.5 through eq 6.16)."""
-        nominal = nominal_open_loop(self.vt or virtual_table())
-        return {key: {"declared": getattr(nominal, n), "fitted": getattr(ph.open_loop, n),
-                      "bounds": [lo, hi], "unit": unit}
-                for n, (key, unit, lo, hi) in BASE_PARAMS.items()}
+        {declared, fitted, bounds, unit, prior}. The servo loop's declared value is the
+        table's nominal loop (its constants through eq 6.16)."""
+        return {p.key: {"declared": p.declared, "fitted": p.get(ph),
+                        "bounds": [p.lower, p.upper], "unit": p.unit,
+                        "prior": ("none" if not p.prior else
+                                  f"±{p.prior:.3g}{'' if p.log else ' ' + p.unit}"
+                                  + (" (log)" if p.log else ""))}
+                for p in self.base_params(ph)}
+
+
+def _correlations(jac: np.ndarray, fun: np.ndarray, n: int) -> np.ndarray:
+    """Correlation matrix of the fitted parameters (Gauss-Newton: cov ∝ (JᵀJ)⁻¹); a
+    parameter the residual does not depend on gets NaN on its diagonal."""
+    J = np.asarray(jac, dtype=float)
+    JtJ = J.T @ J
+    d = np.sqrt(np.diag(JtJ))
+    R = np.full((n, n), np.nan)
+    ok = d > 1e-12 * max(float(d.max()) if d.size else 0.0, 1e-300)
+    if not ok.any():
+        return R
+    cov = np.linalg.pinv(JtJ[np.ix_(ok, ok)] / np.outer(d[ok], d[ok]))
+    s = np.sqrt(np.abs(np.diag(cov)))
+    sub = cov / np.outer(s, s)
+    R[np.ix_(ok, ok)] = sub
+    return R

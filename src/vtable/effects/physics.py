@@ -15,6 +15,7 @@ from vtable.params.loops import OpenLoop
 from vtable.params.specimen import Specimen
 from vtable.params.table import ServoConstants
 from vtable.params.virtual import VirtualTable, virtual_table
+from vtable.units import G
 
 
 @dataclass(frozen=True)
@@ -24,6 +25,9 @@ class Physics:
     open_loop: OpenLoop
     specimen: Specimen
     effects: dict[str, dict[str, float]] = field(default_factory=dict)
+    #: calibrated table values replacing the declared ones (SI): platen_mass (kg),
+    #: com_height (m above the actuator line), pitch_inertia (kg m²)
+    table: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         checked = {name: get(name).check(p, name) for name, p in self.effects.items()}
@@ -38,6 +42,18 @@ class Physics:
     def without(self, name: str) -> Physics:
         return dataclasses.replace(self, effects={k: v for k, v in self.effects.items()
                                                   if k != name})
+
+    def on_table(self, vt: VirtualTable) -> VirtualTable:
+        """`vt` with this model's calibrated table values (the base servo constants follow
+        through `base_hydraulics`: eq 6.16 with the calibrated mass)."""
+        if not self.table:
+            return vt
+        t = self.table
+        g = vt.table.geometry
+        g = dataclasses.replace(g, weight=t.get("platen_mass", g.mass) * G,
+                                pitch_inertia=t.get("pitch_inertia", g.pitch_inertia))
+        return dataclasses.replace(vt, table=dataclasses.replace(vt.table, geometry=g),
+                                   com_height=t.get("com_height", vt.com_height))
 
     def si(self, name: str) -> dict[str, float]:
         """An effect's parameters in SI."""

@@ -50,6 +50,7 @@ class ReducedAssembly:
     slides ("x_s", "x_s1", ...), and what effects add."""
 
     def __init__(self, ph: phys.Physics, vt: VirtualTable) -> None:
+        vt = ph.on_table(vt)
         self.vt, self.specimen = vt, ph.specimen
         M, K, C, _, names, slides, pos = mechanics(vt, ph.specimen)
         self._full = (M, K, C, list(names))
@@ -231,8 +232,8 @@ class ReducedModel:
     """Predicts a run's channels from its command for a given `Physics`."""
 
     def __init__(self, physics: phys.Physics, vt: VirtualTable | None = None) -> None:
-        self.physics, self.vt = physics, vt or virtual_table()
-        m = ReducedAssembly(physics, self.vt)
+        m = ReducedAssembly(physics, vt or virtual_table())
+        self.physics, self.vt = physics, m.vt
         physics.apply(m, "reduced")
         self.assembly = m
         order, ix, M, K, C = m.matrices()

@@ -47,6 +47,7 @@ class VirtualAssembly:
     """The virtual table under construction (see the module docstring)."""
 
     def __init__(self, ph: phys.Physics, vt: VirtualTable, timestep: float = MAX_STEP) -> None:
+        vt = ph.on_table(vt)
         base = phys.base_hydraulics(ph, vt)
         servo = replace(vt.horizontal_servo, k_t=base.k_t, k_p=base.k_p, k_ct=base.k_ct,
                         volume=base.volume, area=base.area, beta=base.beta, k_v=base.k_v)

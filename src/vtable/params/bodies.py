@@ -41,14 +41,15 @@ class Body:
 def slab_body(vt: VirtualTable) -> Body:
     """Slab + ribs: 100 kips (§2.2) shared by plate and ribs in proportion to volume;
     pitch and roll inertias about the centre of mass are Table 8.1's 1251 kip-in-s², the
-    twist inertia the plate's m(w² + w²)/12."""
+    twist inertia the plate's m(w² + w²)/12. `vt.com_height` (a calibrated height above the
+    actuator line) replaces the shape's centre-of-mass height."""
     g, lay = vt.table.geometry, vt.layout
     w, t = g.plan_width, g.thickness
     v_plate = w * w * t
     v_ribs = 2 * lay.rib_width * w * lay.rib_depth
     z_com = (v_plate * (-t / 2) + v_ribs * (-t - lay.rib_depth / 2)) / (v_plate + v_ribs)
-    return Body("slab", "world", (0.0, 0.0, -g.actuator_line_depth), g.mass,
-                (0.0, 0.0, z_com + g.actuator_line_depth),
+    h_com = z_com + g.actuator_line_depth if vt.com_height is None else vt.com_height
+    return Body("slab", "world", (0.0, 0.0, -g.actuator_line_depth), g.mass, (0.0, 0.0, h_com),
                 (g.pitch_inertia, g.pitch_inertia, g.mass * 2 * w * w / 12))
 
 

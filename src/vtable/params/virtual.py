@@ -104,6 +104,7 @@ class VirtualTable:
     knobs: bool = True  # the Table 3.2 knobs scale the gains (False: physical gains, a PID)
     valve_lag: float = 0.0  # s: the horizontal servovalves' time constant
     name: str = "eerc"
+    com_height: float | None = None  # m: platen c.o.m. above the actuator line (None: shape's)
 
     @property
     def limits_source(self) -> str:

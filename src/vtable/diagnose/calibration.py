@@ -1,0 +1,251 @@
+"""Calibrating the base: what a lab only approximately knows, refitted within bounds around
+its declaration (shared/spec/effects.md: "a difference that such a calibration absorbs is
+a wrong declaration, not a missing effect").
+
+The base parameters of a campaign (`base_params`):
+
+- the servo loop (f_o, ξ_o, k_o) of eq 6.15: free within wide bounds, no prior (Table B.5
+  through eq 6.16 is a design value, not a measurement);
+- each specimen mode's fixed-base frequency (declared ± `Calibration.frequency`), the
+  specimen's damping ratio (declared ×/÷ `Calibration.damping`, one ratio for every mode as
+  the run format declares it) and its mass (± `Calibration.mass`, every storey scaled
+  alike; the frequencies are held, so the stiffnesses follow);
+- the platen's mass (± `Calibration.mass`);
+- when the model lets the platen pitch: the platen's centre-of-mass height above the
+  horizontal actuator line (anywhere from the line itself to `Calibration.com_height` ×
+  the declared height; the report's models put it on the line, eqs 7.7, 8.16) and its
+  pitch inertia (declared ×/÷ `Calibration.pitch_inertia`).
+
+Priors: a declared parameter p with prior width σ adds the residual
+λ (p - p_declared)/σ, λ = `Calibration.prior_weight` × noise floor × √(channel groups):
+moving one σ costs what an error of 0.3 × the noise floor would, so a parameter stays
+near its declaration unless the data insist. σ is half the bound (frequency ±2.5 %, mass
+±5 %, damping ×/÷√3 on the log scale, pitch inertia likewise); the centre-of-mass height and
+the servo loop carry none.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from vtable.effects.physics import Physics, nominal_open_loop
+from vtable.errors import VtableError
+from vtable.params.bodies import slab_body
+from vtable.params.specimen import (
+    NoSpecimen,
+    RigidBlock,
+    SDOFSpecimen,
+    ShearBuilding,
+    specimen_frequencies,
+)
+from vtable.params.virtual import VirtualTable
+
+#: the servo loop's bounds: name -> (JSON key, unit, lower, upper)
+LOOP = {"f_o": ("servo_loop.f_o_hz", "Hz", 1.0, 100.0),
+        "xi_o": ("servo_loop.xi_o", "1", 0.02, 5.0),
+        "k_o": ("servo_loop.k_o_per_s", "1/s", 1.0, 500.0)}
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """How far the base may move from the declaration (see the module docstring).
+
+    Parameters
+    ----------
+    frequency
+        Relative bound on each specimen mode's frequency (0.05: ±5 %).
+    damping
+        Factor bound on the specimen's damping ratio (3: declared ×/÷ 3).
+    mass
+        Relative bound on the specimen's and the platen's masses (0.10: ±10 %).
+    com_height
+        Upper bound of the platen's centre-of-mass height, × the declared (lower bound 0).
+    pitch_inertia
+        Factor bound on the platen's pitch inertia.
+    prior_weight
+        λ / (noise floor × √groups) of the priors; 0: no priors.
+    enabled
+        False: only the servo loop is fitted (the declarations are taken as exact).
+    """
+
+    frequency: float = 0.05
+    damping: float = 3.0
+    mass: float = 0.10
+    com_height: float = 2.0
+    pitch_inertia: float = 1.5
+    prior_weight: float = 0.3
+    enabled: bool = True
+
+    def __post_init__(self) -> None:
+        for name, lo, hi in (("frequency", 0.0, 0.5), ("damping", 1.0, 100.0),
+                             ("mass", 0.0, 0.9), ("com_height", 0.0, 100.0),
+                             ("pitch_inertia", 1.0, 100.0), ("prior_weight", 0.0, 100.0)):
+            v = getattr(self, name)
+            if not (isinstance(v, int | float) and math.isfinite(v) and lo <= v <= hi):
+                raise VtableError(f"calibration {name}: expected a number from {lo:g} to "
+                                  f"{hi:g}, got {v!r}")
+
+    @classmethod
+    def parse(cls, text: str) -> Calibration:
+        """'none' or 'frequency=0.03,damping=2,...' (the CLI's --calibrate)."""
+        if text.strip().lower() == "none":
+            return cls(enabled=False)
+        kw: dict[str, float] = {}
+        names = [f.name for f in dataclasses.fields(cls) if f.name != "enabled"]
+        for part in filter(None, (p.strip() for p in text.split(","))):
+            key, sep, value = part.partition("=")
+            key = key.strip()
+            if not sep or key not in names:
+                raise VtableError(f"--calibrate: {part!r}: expected NAME=VALUE with NAME one "
+                                  f"of {', '.join(names)}, or 'none'")
+            try:
+                kw[key] = float(value)
+            except ValueError:
+                raise VtableError(f"--calibrate {key}: {value!r} is not a number") from None
+        return cls(**kw)
+
+
+@dataclass(frozen=True)
+class BaseParam:
+    """One calibrated base parameter (values in the unit of `key`)."""
+
+    key: str
+    unit: str
+    declared: float
+    lower: float
+    upper: float
+    log: bool
+    prior: float | None  # σ on the fitted scale (the log for log parameters); None: none
+    group: str           # "loop", "specimen", "table", "pitch"
+    get: Callable[[Physics], float] = dataclasses.field(repr=False)
+    set: Callable[[Physics, float], Physics] = dataclasses.field(repr=False)
+
+
+def _loop_param(name: str, declared: float) -> BaseParam:
+    key, unit, lo, hi = LOOP[name]
+
+    def get(ph: Physics) -> float:
+        return float(getattr(ph.open_loop, name))
+
+    def put(ph: Physics, v: float) -> Physics:
+        return dataclasses.replace(ph, open_loop=dataclasses.replace(ph.open_loop, **{name: v}))
+
+    return BaseParam(key, unit, declared, lo, hi, True, None, "loop", get, put)
+
+
+def _frequencies(spec) -> list[float]:
+    return list(specimen_frequencies(spec))
+
+
+def _with_frequency(spec, i: int, f: float):
+    if isinstance(spec, SDOFSpecimen):
+        return dataclasses.replace(spec, frequency=f)
+    fs = _frequencies(spec)
+    fs[i] = f
+    return dataclasses.replace(spec, stiffnesses=None, frequencies=tuple(fs))
+
+
+def _mass_of(spec) -> float:
+    return float(spec.mass)
+
+
+def _with_mass(spec, m: float):
+    s = m / _mass_of(spec)
+    if isinstance(spec, ShearBuilding):
+        if spec.stiffnesses is not None:  # hold the frequencies: scale the stiffnesses too
+            spec = dataclasses.replace(spec, stiffnesses=tuple(k * s for k in spec.stiffnesses))
+        return dataclasses.replace(spec, weights=tuple(w * s for w in spec.weights))
+    return dataclasses.replace(spec, weight=spec.weight * s)
+
+
+def _specimen_params(spec, cal: Calibration) -> list[BaseParam]:
+    out: list[BaseParam] = []
+    if isinstance(spec, NoSpecimen):
+        return out
+    if isinstance(spec, SDOFSpecimen | ShearBuilding):
+        fs = _frequencies(spec)
+        for i, f0 in enumerate(fs):
+            key = ("specimen.frequency_hz" if isinstance(spec, SDOFSpecimen)
+                   else f"specimen.mode{i + 1}.frequency_hz")
+
+            def get(ph: Physics, i: int = i) -> float:
+                return _frequencies(ph.specimen)[i]
+
+            def put(ph: Physics, v: float, i: int = i) -> Physics:
+                return dataclasses.replace(ph, specimen=_with_frequency(ph.specimen, i, v))
+
+            out.append(BaseParam(key, "Hz", f0, f0 * (1 - cal.frequency),
+                                 f0 * (1 + cal.frequency), False,
+                                 f0 * cal.frequency / 2 or None, "specimen", get, put))
+        xi = spec.damping
+        if xi > 0:
+            def get_xi(ph: Physics) -> float:
+                return float(ph.specimen.damping)
+
+            def put_xi(ph: Physics, v: float) -> Physics:
+                return dataclasses.replace(ph, specimen=dataclasses.replace(ph.specimen,
+                                                                            damping=v))
+
+            out.append(BaseParam("specimen.damping", "1", xi, xi / cal.damping,
+                                 min(xi * cal.damping, 0.99), True,
+                                 math.log(cal.damping) / 2 or None, "specimen", get_xi, put_xi))
+    if isinstance(spec, SDOFSpecimen | ShearBuilding | RigidBlock):
+        m0 = _mass_of(spec)
+
+        def get_m(ph: Physics) -> float:
+            return _mass_of(ph.specimen)
+
+        def put_m(ph: Physics, v: float) -> Physics:
+            return dataclasses.replace(ph, specimen=_with_mass(ph.specimen, v))
+
+        out.append(BaseParam("specimen.mass_kg", "kg", m0, m0 * (1 - cal.mass),
+                             m0 * (1 + cal.mass), False, m0 * cal.mass / 2 or None, "specimen",
+                             get_m, put_m))
+    return [p for p in out if p.upper > p.lower]
+
+
+def _table_value(name: str, vt: VirtualTable) -> float:
+    if name == "platen_mass":
+        return float(vt.table.geometry.mass)
+    if name == "com_height":
+        return float(slab_body(vt).com[2])
+    return float(vt.table.geometry.pitch_inertia)
+
+
+def _table_param(name: str, key: str, unit: str, declared: float, lo: float, hi: float,
+                 log: bool, prior: float | None, group: str, vt: VirtualTable) -> BaseParam:
+    def get(ph: Physics) -> float:
+        return float(ph.table.get(name, _table_value(name, vt)))
+
+    def put(ph: Physics, v: float) -> Physics:
+        return dataclasses.replace(ph, table={**ph.table, name: v})
+
+    return BaseParam(key, unit, declared, lo, hi, log, prior, group, get, put)
+
+
+def base_params(spec, vt: VirtualTable, cal: Calibration, *, pitch: bool,
+                loop_declared=None) -> list[BaseParam]:
+    """The calibrated base of a campaign whose runs declare `spec` on table `vt`; `pitch`:
+    the model lets the platen pitch (adds its centre-of-mass height and pitch inertia)."""
+    nominal = loop_declared or nominal_open_loop(vt)
+    out = [_loop_param(n, getattr(nominal, n)) for n in LOOP]
+    if not cal.enabled:
+        return out
+    out += _specimen_params(spec, cal)
+    m0 = _table_value("platen_mass", vt)
+    out.append(_table_param("platen_mass", "table.platen_mass_kg", "kg", m0,
+                            m0 * (1 - cal.mass), m0 * (1 + cal.mass), False,
+                            m0 * cal.mass / 2 or None, "table", vt))
+    if pitch:
+        h0 = _table_value("com_height", vt)
+        if h0 > 0:
+            out.append(_table_param("com_height", "table.com_height_m", "m", h0, 0.0,
+                                    h0 * cal.com_height, False, None, "pitch", vt))
+        j0 = _table_value("pitch_inertia", vt)
+        out.append(_table_param("pitch_inertia", "table.pitch_inertia_kg_m2", "kg m2", j0,
+                                j0 / cal.pitch_inertia, j0 * cal.pitch_inertia, True,
+                                math.log(cal.pitch_inertia) / 2 or None, "pitch", vt))
+    return [p for p in out if p.upper > p.lower]
