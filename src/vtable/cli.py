@@ -46,6 +46,10 @@ def _add_json(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", nargs="?", const="-", default=None, metavar="FILE", help=_JSON_HELP)
 
 
+_CALIBRATE = ("how far the base may move from the runs' declarations: 'none', or "
+              "NAME=VALUE,... of frequency (relative, 0.05), damping (factor, 3), mass "
+              "(relative, 0.1), com_height (x declared, 2), pitch_inertia (factor, 1.5), "
+              "prior_weight (0.3)")
 _EFFECTS_FROM = "a Python file of your own effects (it calls vtable.effects.register)"
 
 
@@ -126,6 +130,7 @@ def _parser() -> argparse.ArgumentParser:
                     help=_EFFECTS_FROM)
     dg.add_argument("--max-rounds", type=_integer, default=4,
                     help="stop after this many rounds of adding an effect [4]")
+    dg.add_argument("--calibrate", default="", metavar="SPEC", help=_CALIBRATE)
     _add_json(dg)
     dg.add_argument("--rerun", default=None, help="write a Rerun recording (.rrd)")
     dg.add_argument("--report", default=None, help="write an HTML report")
@@ -133,6 +138,7 @@ def _parser() -> argparse.ArgumentParser:
     cp.add_argument("runs", nargs="+")
     cp.add_argument("--with", dest="with_", default="",
                     help="effects in the model, comma separated")
+    cp.add_argument("--calibrate", default="", metavar="SPEC", help=_CALIBRATE)
     cp.add_argument("--effects-from", action="append", default=[], metavar="FILE",
                     help=_EFFECTS_FROM)
     _add_json(cp)
@@ -243,15 +249,11 @@ def _print_diagnose(d: dict[str, Any]) -> None:
             print(f"  {k:>4}  {c['effect']:<28} {c['error_after']:9.2%}  "
                   + (c["evidence"] if k <= 3 else ""))
             if c.get("flags"):
-                print(f"  {'':>4}  {'':<28} {'':>9}  fit at a bound: " + "; ".join(c["flags"]))
+                print(f"  {'':>4}  {'':<28} {'':>9}  flags: " + "; ".join(c["flags"]))
     print("\nerror history: " + " -> ".join(
         [f"{d['start_error']:.2%}"] + [f"{r['error']:.2%} (+{r['added']})"
                                         for r in d["rounds"] if r["added"]]))
-    base = d.get("base", {})
-    if base:
-        print("base: " + "; ".join(f"{k} {v['fitted']:.4g} (declared {v['declared']:.4g}, "
-                                   f"bounds {v['bounds'][0]:g}-{v['bounds'][1]:g})"
-                                   for k, v in base.items()))
+    _print_base(d.get("base", {}))
     u = d.get("unexplained")
     print("unexplained: " + ("none (the final error is consistent with the noise floor)"
                              if u is None else f"{u['ratio_to_floor']:.1f} x the noise floor, "
@@ -259,6 +261,19 @@ def _print_diagnose(d: dict[str, Any]) -> None:
     print(f"verdict: {d['verdict']}")
     for f in d.get("_wrote", []):
         print(f"wrote {f}")
+
+
+def _print_base(base: dict[str, Any], indent: str = "") -> None:
+    """The calibrated base: declared -> fitted within its bounds, one line each."""
+    if not base:
+        return
+    print(f"{indent}base (declared -> fitted, bounds):")
+    for k, v in base.items():
+        u = "" if v["unit"] == "1" else f" {v['unit']}"
+        lo, hi = v["bounds"]
+        moved = (v["fitted"] / v["declared"] - 1) if v["declared"] else float("nan")
+        print(f"{indent}  {k:<28} {v['declared']:.4g} -> {v['fitted']:.4g}{u} ({moved:+.1%}; "
+              f"bounds {lo:.4g}-{hi:.4g})")
 
 
 def _print_compare(d: dict[str, Any]) -> None:
@@ -271,7 +286,8 @@ def _print_compare(d: dict[str, Any]) -> None:
     for e, p in d["params"].items():
         print(f"  {e}: " + ", ".join(f"{k} = {v:.4g}" for k, v in p.items()))
     for f in d.get("flags", []):
-        print(f"  fit at a bound: {f}")
+        print(f"  flag: {f}")
+    _print_base(d.get("base_fit", {}), indent="  ")
     print(f"  held-out error {d['error']:.2%}, noise floor {d['noise_floor']:.2%}")
     for run, errs in d["per_run"].items():
         print(f"  {run}: " + ", ".join(f"{g} {e:.1%}" for g, e in errs.items()))
@@ -379,7 +395,7 @@ def cmd_identify(a: argparse.Namespace) -> dict[str, Any]:
 
 def cmd_compare(a: argparse.Namespace) -> dict[str, Any]:
     verbs.load_effects(a.effects_from)
-    return verbs.compare(a.runs, verbs.effect_names(a.with_))
+    return verbs.compare(a.runs, verbs.effect_names(a.with_), a.calibrate)
 
 
 def cmd_diagnose(a: argparse.Namespace) -> dict[str, Any]:
@@ -390,7 +406,7 @@ def cmd_diagnose(a: argparse.Namespace) -> dict[str, Any]:
     try:
         out, _ = verbs.diagnose(a.runs, verbs.effect_names(a.with_),
                                 verbs.effect_names(a.effects), a.max_rounds, _Progress(),
-                                json_path, a.rerun, a.report)
+                                json_path, a.rerun, a.report, a.calibrate)
     except DiagnosisInterrupted as e:
         # Ctrl-C: the rounds finished are in the JSON; one line; exit code 130 (main)
         wrote = f"wrote {e.wrote}" if getattr(e, "wrote", None) else "nothing written (no --json)"

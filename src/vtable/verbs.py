@@ -180,14 +180,17 @@ def identify(paths: Sequence[str]) -> dict[str, Any]:
             "runs": [identify_run(r) for r in campaign(paths)]}
 
 
-def compare(paths: Sequence[str], effects: Sequence[str] = ()) -> dict[str, Any]:
+def compare(paths: Sequence[str], effects: Sequence[str] = (),
+            calibrate: str = "") -> dict[str, Any]:
     """How the model with `effects` fits the runs (fitted on the training segments,
-    scored on the held-out ones)."""
+    scored on the held-out ones; the base calibrated as `calibrate` says, see
+    `vtable.diagnose.calibration.Calibration.parse`)."""
+    from vtable.diagnose.calibration import Calibration
     from vtable.diagnose.compare import UNEXPLAINED_RULE, localisation_text, unexplained
     from vtable.diagnose.model import TableModel
     from vtable.runs import campaign
 
-    m = TableModel(effects).fit(campaign(paths))
+    m = TableModel(effects, calibration=Calibration.parse(calibrate)).fit(campaign(paths))
     c = m.comparison()
     ol = m.physics_.open_loop
     return {"effects": list(m.effects), "params": m.physics_.effects,
@@ -201,7 +204,7 @@ def compare(paths: Sequence[str], effects: Sequence[str] = ()) -> dict[str, Any]
 
 def diagnose(paths: Sequence[str], with_: Sequence[str] = (), catalog: Sequence[str] = (),
              max_rounds: int = 4, progress: Callable | None = None, json_path: str | None = None,
-             rerun: str | None = None, report: str | None = None):
+             rerun: str | None = None, report: str | None = None, calibrate: str = ""):
     """The diagnosis loop on the runs; writes the JSON (also on an interrupt: the rounds
     finished, `interrupted` true), the .rrd and the HTML report asked for. Returns (the
     diagnosis JSON, the `Diagnosis`)."""
@@ -214,8 +217,11 @@ def diagnose(paths: Sequence[str], with_: Sequence[str] = (), catalog: Sequence[
 
     if max_rounds < 1:
         raise VtableError(f"--max-rounds must be at least 1, got {max_rounds}")
+    from vtable.diagnose.calibration import Calibration
+
     diag = Diagnoser(campaign(paths), list(with_), catalog=list(catalog) or None,
-                     progress=progress, max_rounds=max_rounds)
+                     progress=progress, max_rounds=max_rounds,
+                     calibration=Calibration.parse(calibrate))
     try:
         d = diag.diagnose()
     except DiagnosisInterrupted as e:

@@ -343,7 +343,12 @@ class Diagnoser:
                       multistart: str | None = None) -> Candidate:
                 start = base if base.has(name) else base.with_effect(name)
                 cand, train, flags = self.fit(start, multistart=multistart, free=free)
-                pred = self.predict(cand)
+                try:
+                    pred = self.predict(cand)
+                except VtableError as e:  # the fit found no model it could build
+                    return Candidate(name, dict(cand.effects[name]), float("inf"), train, "",
+                                     len(effect(name).params), cand,
+                                     [f"no valid model found: {e}"], None)
                 err = compare(pred, self.runs, scored="held", floor=self.floor).error
                 return Candidate(name, dict(cand.effects[name]), err, train, "",
                                  len(effect(name).params), cand, flags, pred)
@@ -451,6 +456,8 @@ class Diagnoser:
 
 
 def _evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
+    if not np.isfinite(c.error_after):
+        return "; ".join(c.flags)
     worst = cmp.worst_groups(2)
     where = ", ".join(g for g, _ in worst)
     band = cmp.worst_band(worst[0][0]) if worst else None

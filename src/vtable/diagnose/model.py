@@ -181,14 +181,16 @@ class TableModel:
         x0 = self._pack(start, lay)
         if self.multistart:
             idx = [i for i, p in enumerate(lay) if p.group == f"effect:{self.multistart}"]
-            loop = [i for i, p in enumerate(lay) if p.group == "loop"]
-            nominal = self._pack(dataclasses.replace(
-                start, open_loop=nominal_open_loop(self.vt)), lay)
+            base = [i for i, p in enumerate(lay) if not p.group.startswith("effect:")]
+            # the start's base (calibrated before the effect was there, it may have absorbed
+            # some of it) and the declaration itself (the table's nominal loop)
+            declared = np.array([math.log(lay[i].declared) if lay[i].log else lay[i].declared
+                                 for i in base])
             best, best_x = np.inf, x0
-            for base in (x0[loop], nominal[loop]):
+            for b in (x0[base], declared):
                 for frac in MULTISTART:
                     x = x0.copy()
-                    x[loop] = base
+                    x[base] = b
                     for i in idx:
                         p = lay[i]
                         if frac is not None:
