@@ -345,10 +345,10 @@ class Diagnoser:
                 cand, train, flags = self.fit(start, multistart=multistart, free=free)
                 try:
                     pred = self.predict(cand)
-                except VtableError as why:  # the fit found no model it could build
+                except VtableError as exc:  # the fit found no model it could build
                     return Candidate(name, dict(cand.effects[name]), float("inf"), train, "",
                                      len(effect(name).params), cand,
-                                     [f"no valid model found: {why}"], None)
+                                     [f"no valid model found: {exc}"], None)
                 err = compare(pred, self.runs, scored="held", floor=self.floor).error
                 return Candidate(name, dict(cand.effects[name]), err, train, "",
                                  len(effect(name).params), cand, flags, pred)
