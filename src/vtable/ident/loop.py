@@ -159,18 +159,18 @@ def _starts(st: Structure, data: LoopData, prior: Prior | None) -> list[list[flo
         if prior is not None:
             ol = prior.open_loop
             x = [ol.f_o, max(ol.xi_o, 0.02), ol.k_o]
-            out.append(x + [max(prior.tau, 1e-3)] if st.key == "eq_6_15_lag" else x)
+            out.append([*x, max(prior.tau, 0.001)] if st.key == "eq_6_15_lag" else x)
         try:
             f0 = phase_crossover(data.f, data.H)
             h0 = float(np.interp(f0, data.f, np.abs(data.H)))
             k0 = max(2 * 0.5 * TWO_PI * f0 * h0 / (1 + h0), 1.0)
             x = [f0, 0.5, k0]
-            out.append(x + [1e-3] if st.key == "eq_6_15_lag" else x)
+            out.append([*x, 0.001] if st.key == "eq_6_15_lag" else x)
         except VtableError:
             pass
         if not out:
             x = [float(data.f[-1]), 0.5, TWO_PI * float(data.f[-1]) / 4]
-            out.append(x + [1e-3] if st.key == "eq_6_15_lag" else x)
+            out.append([*x, 0.001] if st.key == "eq_6_15_lag" else x)
     else:
         k0 = float(np.mean(np.abs(data.H[:3])))
         ph = np.unwrap(np.angle(data.H))
@@ -195,9 +195,9 @@ def fit_structure(key: str, data: LoopData, prior: Prior | None = None,
     names = list(st.params)
     lo, hi = list(st.lower), list(st.upper)
     if gain:
-        names, lo, hi = names + ["gain"], lo + [1e-3], hi + [100.0]
+        names, lo, hi = [*names, "gain"], [*lo, 0.001], [*hi, 100.0]
     if delay_dt is not None:
-        names, lo, hi = names + ["delay"], lo + [DELAY_SCAN[0] - 0.5], hi + [DELAY_SCAN[1] + 0.5]
+        names, lo, hi = [*names, "delay"], [*lo, DELAY_SCAN[0] - 0.5], [*hi, DELAY_SCAN[1] + 0.5]
     if start is not None:
         starts = [[start.params[k] for k in st.params]]
     else:
@@ -292,3 +292,32 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
                     if not STRUCTURES[best].type1 else "; no candidate structure fits")
         why = "x_t/x_c does not fit eq 6.15: " + "; ".join(reasons) + fit_note
     return LoopStructure(fits, crit, best, dc, ok, why, delay_dt is not None)
+
+
+def fit_delay_held(data: LoopData, prior: Prior, delay_dt: float) -> Fit:
+    """The delay alone, with the loop held at the table's description (eq 6.16 and its
+    valve time constant, `prior`): for a record whose lines do not tell the candidate
+    structures apart (their AICs within `AIC_MARGIN`), where a delay fitted jointly
+    would trade against the loop's own lag."""
+    ol = prior.open_loop
+    h = h_open_loop_lag(data.f, ol.f_o, ol.xi_o, ol.k_o, prior.tau)
+    s = 1j * TWO_PI * data.f
+    st = STRUCTURES["eq_6_15_lag"]
+    x0 = _scan_delay(st, data, [ol.f_o, ol.xi_o, ol.k_o, prior.tau], delay_dt)
+
+    def fun(x):
+        r = (h * np.exp(s * x[0]) - data.H) / data.sigma
+        return np.concatenate([r.real, r.imag])
+
+    target = np.concatenate([(data.H / data.sigma).real, (data.H / data.sigma).imag])
+    lo, hi = DELAY_SCAN[0] - 0.5, DELAY_SCAN[1] + 0.5
+    return _least_squares(fun, [x0], [lo], [hi], ("delay",), target,
+                          f"the loop of {prior.source} (eq 6.16, valve lag {prior.tau:g} s) "
+                          "held", (), data.context, xtol=1e-12, ftol=1e-12)
+
+
+def resolved(ls: LoopStructure) -> bool:
+    """Whether the record tells the structures apart: the best one's fit is unflagged and
+    its AIC lower than every other's by more than `AIC_MARGIN`."""
+    others = [a for k, a in ls.aic.items() if k != ls.best]
+    return ls.fits[ls.best].ok and all(a - ls.aic[ls.best] > AIC_MARGIN for a in others)
