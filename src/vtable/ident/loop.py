@@ -285,8 +285,11 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
                        "-270° of a valve-integrator loop")
     ok = not reasons
     if ok:
+        margin = min((a - crit[best] for k, a in crit.items() if k != best), default=0.0)
         why = (f"a valve-integrator loop: DC gain {g:.3f} ± {sg:.2g}; best structure "
-               f"{STRUCTURES[best].name}")
+               f"{STRUCTURES[best].name}" +
+               ("" if margin > AIC_MARGIN else
+                f" (the record hardly tells the structures apart: AIC within {margin:.0f})"))
     else:
         fit_note = (f"; {STRUCTURES[best].name} fits (R² {fits[best].r2:.4f})"
                     if not STRUCTURES[best].type1 else "; no candidate structure fits")
