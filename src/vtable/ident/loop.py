@@ -15,7 +15,9 @@ data's own scale. The structures are compared by Akaike's criterion
 AIC = n ln(χ²/n) + 2p over the n = 2 x lines real numbers.
 
 The DC gain: a valve-integrator loop follows a static command exactly (type 1, DC gain
-1); the lag structure with a free gain g (g x `h_open_loop_lag`) measures it. The loop
+1); `dc_gain` measures it on the lines below k_o/(2π·`DC_BELOW`) (there a type-1 loop's
+|H| is within 5 % of 1; a record without such lines has its DC gain not judged, with a
+note). The loop
 is *not* eq 6.15 when g differs from 1 (|g - 1| > max(3σ_g, `DC_TOL`)) or when the type-0
 structure's AIC is lower than both type-1 structures' by more than `AIC_MARGIN`; then
 its eq 6.15 parameters are not quoted, and the structure that fits is named.
@@ -55,6 +57,8 @@ EPS_MIN = 2e-3
 AIC_MARGIN = 10.0
 #: a DC gain within this of 1 is a type-1 loop whatever its standard error
 DC_TOL = 0.03
+#: the DC gain is judged only from records with lines below k_o/(2π DC_BELOW)
+DC_BELOW = 3.0
 #: the delays scanned for a start (s, relative to the coarse alignment)
 DELAY_SCAN = (-0.5, 1.0)
 
@@ -263,6 +267,35 @@ class LoopStructure:
                 "notes": list(self.notes)}
 
 
+def dc_gain(data: LoopData, type1: Fit, f_dc: float) -> Fit:
+    """The DC gain g from the lines below `f_dc`: the weighted mean of the real part of
+    H/H₁, H₁ the fitted type-1 loop (its own |H₁| -> 1 at DC, so g is the data's static
+    gain with the loop's small roll-off there removed, not an extrapolation across the
+    band); its standard error from the lines' random errors and their scatter. No lines:
+    g = NaN, n_points 0."""
+    st = STRUCTURES[_key_of(type1)]
+    low = data.f <= f_dc
+    if not low.any():
+        return Fit({"gain": float("nan")}, {"gain": float("nan")}, float("nan"),
+                   float("nan"), 0, "DC gain: no lines")
+    names = st.params
+    hm = st.h(data.f[low], *[type1.params[k] for k in names])
+    if "delay" in type1.params:
+        hm = hm * np.exp(1j * TWO_PI * data.f[low] * type1.params["delay"])
+    r = (data.H[low] / hm).real
+    w = (np.abs(hm) / data.sigma[low]) ** 2
+    g = float(np.sum(w * r) / np.sum(w))
+    n = int(low.sum())
+    scatter = float(np.sqrt(np.sum(w * (r - g) ** 2) / np.sum(w) / max(n - 1, 1)))
+    sg = float(max(np.sqrt(1 / np.sum(w)), scatter))
+    return Fit({"gain": g}, {"gain": sg}, float("nan"), float("nan"), n,
+               f"DC gain: H/H₁ on {n} lines below {f_dc:.3g} Hz")
+
+
+def _key_of(fit: Fit) -> str:
+    return "eq_6_15_lag" if "tau" in fit.params else "eq_6_15"
+
+
 def compare_structures(data: LoopData, prior: Prior | None = None,
                        delay_dt: float | None = None) -> LoopStructure:
     """Fit the three structures (and the DC gain) to the data and say whether the loop
@@ -270,12 +303,18 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
     fits = {k: fit_structure(k, data, prior, delay_dt) for k in STRUCTURES}
     crit = {k: aic(f) for k, f in fits.items()}
     best = min(crit, key=crit.__getitem__)
-    dc = fit_structure("eq_6_15_lag", data, prior, delay_dt, gain=True,
-                       start=fits["eq_6_15_lag"])
-    g, sg = dc.params["gain"], dc.stderr["gain"]
     type1 = min(crit["eq_6_15"], crit["eq_6_15_lag"])
-    reasons = []
-    if not math.isfinite(sg) or abs(g - 1) > max(3 * sg, DC_TOL):
+    reasons, notes = [], []
+    t1 = min(("eq_6_15", "eq_6_15_lag"), key=crit.__getitem__)
+    f_dc = fits[t1].params["k_o"] / (TWO_PI * DC_BELOW)
+    dc = dc_gain(data, fits[t1], f_dc)
+    g, sg = dc.params["gain"], dc.stderr["gain"]
+    measured = dc.n_points > 0
+    if not measured:
+        notes.append(f"DC gain not measured: the lowest usable line {data.f[0]:.3g} Hz is "
+                     f"above k_o/(2π·{DC_BELOW:g}) = {f_dc:.3g} Hz, where a type-1 loop's "
+                     "|H| has reached 1 (the free-gain fit would extrapolate)")
+    elif not math.isfinite(sg) or abs(g - 1) > max(3 * sg, DC_TOL):
         reasons.append(f"its DC gain is {g:.3f} ± {sg:.2g}, not 1: a valve-integrator "
                        "(type-1) loop follows a static command exactly")
     type0_better = crit["type_0"] + AIC_MARGIN < type1
@@ -286,7 +325,8 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
     ok = not reasons
     if ok:
         margin = min((a - crit[best] for k, a in crit.items() if k != best), default=0.0)
-        why = (f"a valve-integrator loop: DC gain {g:.3f} ± {sg:.2g}; best structure "
+        dc_text = f"DC gain {g:.3f} ± {sg:.2g}" if measured else "DC gain not measured"
+        why = (f"a valve-integrator loop: {dc_text}; best structure "
                f"{STRUCTURES[best].name}" +
                ("" if margin > AIC_MARGIN else
                 f" (the record hardly tells the structures apart: AIC within {margin:.0f})"))
@@ -294,7 +334,7 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
         fit_note = (f"; {STRUCTURES[best].name} fits (R² {fits[best].r2:.4f})"
                     if not STRUCTURES[best].type1 else "; no candidate structure fits")
         why = "x_t/x_c does not fit eq 6.15: " + "; ".join(reasons) + fit_note
-    return LoopStructure(fits, crit, best, dc, ok, why, delay_dt is not None)
+    return LoopStructure(fits, crit, best, dc, ok, why, delay_dt is not None, tuple(notes))
 
 
 def fit_delay_held(data: LoopData, prior: Prior, delay_dt: float) -> Fit:

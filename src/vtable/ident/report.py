@@ -441,6 +441,8 @@ def _print_structure(ls: dict[str, Any]) -> None:
     with its parameters (the eq 6.15 ones are not quoted)."""
     mark = "" if ls["fits_eq_6_15"] else "⚠ "
     print(f"  loop structure: {mark}{ls['why']}")
+    for n in ls.get("notes", []):
+        print(f"      note: {n}")
     for key, c in ls["candidates"].items():
         if ls["fits_eq_6_15"] and key != ls["best"]:
             continue
