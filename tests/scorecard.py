@@ -268,7 +268,7 @@ def diagnose_case(case: Case, root: Path | None = None, use_cache: bool = True) 
     """Generate (or reuse) the case's campaign, diagnose it with the full catalog, judge it.
     Results are cached per (case, engine source)."""
     root = root or cache_root()
-    rpath = root / "results" / f"{_safe(case.name)}-{case.key(engine_fingerprint())}.json"
+    rpath = _result_path(case, root)
     if use_cache and rpath.exists():
         out = json.loads(rpath.read_text())
         out["cached"] = True
@@ -297,6 +297,34 @@ def diagnose_case(case: Case, root: Path | None = None, use_cache: bool = True) 
     _write_json(rpath, out)
     out["cached"] = False
     return out
+
+
+def diagnose_cases(cases: list[Case], jobs: int = 2, root: Path | None = None,
+                   use_cache: bool = True) -> dict[str, dict]:
+    """`diagnose_case` for several cases, the uncached ones in `jobs` processes (spawned:
+    the parent may hold numba's and the engine's threads)."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    todo = [c for c in cases if not (use_cache and _cached(c, root))]
+    out = {c.name: diagnose_case(c, root) for c in cases if c not in todo}
+    if len(todo) > 1 and jobs > 1:
+        ctx = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=min(jobs, len(todo)), mp_context=ctx) as pool:
+            futs = {c.name: pool.submit(diagnose_case, c, root, use_cache) for c in todo}
+            out.update({n: f.result() for n, f in futs.items()})
+    else:
+        out.update({c.name: diagnose_case(c, root, use_cache) for c in todo})
+    return out
+
+
+def _result_path(case: Case, root: Path | None = None) -> Path:
+    return ((root or cache_root()) / "results"
+            / f"{_safe(case.name)}-{case.key(engine_fingerprint())}.json")
+
+
+def _cached(case: Case, root: Path | None = None) -> bool:
+    return _result_path(case, root).exists()
 
 
 def judge(case: Case, r: dict) -> dict:
