@@ -26,7 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import scorecard as sc
 
-HEAD = (f"{'case':<30} {'kind':<8} {'truth':<44} {'found':<40} {'first-ranked':<24} "
+HEAD = (f"{'case':<30} {'kind':<8} {'truth':<44} {'found':<56} {'first-ranked':<24} "
         f"{'start':>6} {'final':>6} {'floor':>6} {'ratio':>5} {'time':>6}  ok")
 
 
@@ -47,7 +47,7 @@ def line(case: sc.Case, r: dict) -> str:
     u = r["unexplained"]
     ratio = f"{u['ratio_to_floor']:.1f}" if u else "-"
     found = ",".join(r["found"]) or "-"
-    return (f"{case.name:<30} {_short(case.kind):<8} {_truth(case):<44.44} {found:<40.40} "
+    return (f"{case.name:<30} {_short(case.kind):<8} {_truth(case):<44.44} {found:<56.56} "
             f"{(r['first_ranked'] or '-'):<24.24} {r['start_error']:6.2%} "
             f"{r['final_error']:6.2%} {r['noise_floor']:6.2%} {ratio:>5} "
             f"{r['time_s']:5.0f}s  {'yes' if r['ok'] else 'NO: ' + r['why']}"
