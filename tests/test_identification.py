@@ -321,9 +321,22 @@ def test_damping_flagged_unless_resolved():
 
 
 def test_printed_flags(capsys):
-    d = identify_run(independent_sdof_run(10.0))
+    run = independent_sdof_run(10.0)
+    d = identify_run(run)
+    # the table is the run's (the EERC preset: 100 kips, three actuators): u of eq 7.9
+    assert d["table"]["platen_mass_kg"] == pytest.approx(45359.237)
+    assert d["table"]["horizontal_actuators"] == 3
+    assert d["table_sdof"]["mass_ratio"] == pytest.approx(run.specimen().mass / 45359.237)
     print_identification(d)
     out = capsys.readouterr().out
+    assert "table: eerc (DOFs x, z, roll, pitch, twist; platen 45359.2 kg, 3 horizontal" in out
+    # a lighter platen in the run's [table] is the m_t of u = m_s/m_t, not 100 kips
+    light = dataclasses.replace(run, meta={**run.meta, "table": {"preset": "eerc",
+                                                                  "platen_mass_kg": 2000.0}})
+    dl = identify_run(light)
+    assert dl["table"]["platen_mass_kg"] == 2000.0
+    assert dl["table_sdof"]["mass_ratio"] == pytest.approx(run.specimen().mass / 2000.0)
+    assert dl["table_sdof"]["table_mass_kg"] == 2000.0
     line = next(ln for ln in out.splitlines() if ln.strip().startswith("fixed base"))
     assert "⚠ unresolved" in line
     assert "the damping is not resolved" in out

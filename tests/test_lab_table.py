@@ -149,3 +149,34 @@ def test_diagnose_finds_the_withheld_valve_lag_first():
     assert "pitch_flexibility" in r0.skipped and "no pitch motion" in r0.skipped[
         "pitch_flexibility"]
     assert d.unexplained is None
+
+
+def test_readme_table_description_is_the_lnec_preset():
+    """The README's "Your own table" example, read as a run's [table], is the lnec-st1d
+    preset's table (same loop, valve lag, limits) and its [command] names a drive file."""
+    import pathlib
+    import re
+    import tomllib
+
+    text = (pathlib.Path(__file__).parents[1] / "README.md").read_text()
+    sec = text.split("## Your own table", 1)[1]
+    block = re.search(r"```toml\n(.*?)```", sec, re.S).group(1)
+    d = tomllib.loads(block)
+    described = lab_table(table_from_dict(d["table"], "README [table]"))
+    preset = lnec()
+    assert dataclasses_equal(described, preset)
+    assert d["command"]["drive_offset_s"] == "auto"
+    ol = described.open_loop()
+    assert (ol.f_o, ol.xi_o, ol.k_o) == pytest.approx((24.15, 0.170, 20.05), rel=3e-3)
+
+
+def dataclasses_equal(a, b) -> bool:
+    import dataclasses
+
+    skip = {"name", "servo"}
+    same = all(getattr(a, f.name) == getattr(b, f.name) for f in dataclasses.fields(a)
+               if f.name not in skip)
+    sa, sb = a.servo, b.servo
+    return same and all(getattr(sa, f.name) == pytest.approx(getattr(sb, f.name), rel=1e-12)
+                        for f in dataclasses.fields(sa)
+                        if isinstance(getattr(sa, f.name), float))

@@ -490,15 +490,23 @@ def test_bad_table_descriptions_are_one_line(tmp_path, table, msg):
 
 # ---- 5. [command] ----------------------------------------------------------------------
 def test_command_description_and_drive_file(tmp_path):
-    (tmp_path / "pink.csv").write_text("time,disp\n0,0\n")
+    (tmp_path / "pink.csv").write_text("time,disp\n0,0\n0.005,2\n0.01,4\n0.015,6\n")
     toml = TOML + ('\n[command]\nkind = "random"\nband_hz = [0.5, 25.0]\nspan = 400\n'
                    'drive_file = "pink.csv"\ndrive_unit = "mm"\ndrive_scale = 0.5\n'
-                   'drive_offset_s = "auto"\n')
+                   'drive_offset_s = 0.005\n')
     r = _read(tmp_path, "drv", "time,avg_hdisp\n0,0\n0.005,1\n0.01,2\n", toml)
     d = r.drive()
     assert d.drive_file == tmp_path / "pink.csv" and d.drive_unit == "mm"
-    assert d.band == (0.5, 25.0) and d.span == 400 and d.drive_offset == "auto"
+    assert d.band == (0.5, 25.0) and d.span == 400 and d.drive_offset == 0.005
     assert not any("command the table played is not known" in m for m in r.reports)
+    # the command is the drive x 0.5 mm, one sample ahead: x_c(t) = d(t + 0.005 s)
+    assert r.channels["h_span"] == pytest.approx([1e-3, 2e-3, 3e-3], abs=1e-15)
+    assert any("command h_span from the drive file pink.csv (mm, scale 0.5), offset 0.005 s "
+               "(1 samples, given)" in m for m in r.reports)
+    # "auto" on a record too short to estimate the lag: one line naming the key
+    with pytest.raises(VtableError, match=r"\[command\]\.drive_offset_s: \"auto\""):
+        _read(tmp_path, "drv2", "time,avg_hdisp\n0,0\n0.005,1\n0.01,2\n",
+              toml.replace("drive_offset_s = 0.005", 'drive_offset_s = "auto"'))
     # no h_span and no drive file: said
     r = _read(tmp_path, "nocmd", "time,avg_hdisp\n0,0\n0.005,1\n0.01,2\n")
     assert any("no h_span column and no [command] drive_file" in m for m in r.reports)

@@ -146,6 +146,25 @@ def h_open_loop(f_hz, f_o: float, xi_o: float, k_o: float) -> np.ndarray:
     return k_o / (s * (s * s / w**2 + 2 * xi_o * s / w + 1) + k_o)
 
 
+def h_open_loop_lag(f_hz, f_o: float, xi_o: float, k_o: float, tau: float) -> np.ndarray:
+    """Eq 6.15b with a first-order servovalve lag inside the loop: the flow follows the
+    valve command through 1/(1 + τs), so the open loop of eq 6.13 becomes
+    G = k_o/(s(1 + τs)(s²/ω_o² + 2ξ_o s/ω_o + 1)) and H = G/(1 + G)
+    = k_o/(s(1 + τs)(s²/ω_o² + 2ξ_o s/ω_o + 1) + k_o). τ = 0 is eq 6.15b; the DC gain
+    is 1 (a valve-integrator loop is type 1)."""
+    s = 1j * TWO_PI * np.asarray(f_hz, dtype=float)
+    w = TWO_PI * f_o
+    return k_o / (s * (1 + tau * s) * (s * s / w**2 + 2 * xi_o * s / w + 1) + k_o)
+
+
+def h_type0(f_hz, gain: float, f_n: float, zeta: float) -> np.ndarray:
+    """A type-0 second-order loop (no integrator: an electrodynamic shaker, a stiff
+    plant under proportional control): H = K ω_n²/(s² + 2ζω_n s + ω_n²), DC gain K."""
+    s = 1j * TWO_PI * np.asarray(f_hz, dtype=float)
+    w = TWO_PI * f_n
+    return gain * w**2 / (s * s + 2 * zeta * w * s + w**2)
+
+
 def phase_crossover(f: np.ndarray, H: np.ndarray) -> float:
     """The first frequency where the phase of H passes -180° (§6.7: H(iω_o) is real and
     negative, eq 6.19), by linear interpolation of the unwrapped phase."""
@@ -177,8 +196,13 @@ def fit_open_loop(f, H, coherence=None, band=None, min_coherence=0.9) -> Fit:
 
 
 # ---- table + SDOF (eq 7.9) ----------------------------------------------------------------
-def h_table_sdof(f_hz, f_o, xi_o, k_o, f_s, xi_s, u) -> np.ndarray:
-    """x_t/x_c of eq 7.9 (a2 with ξ_o, the derived form)."""
+def h_table_sdof(f_hz, f_o, xi_o, k_o, f_s, xi_s, u, tau: float = 0.0) -> np.ndarray:
+    """x_t/x_c of eq 7.9 (a2 with ξ_o, the derived form).
+
+    Eq 7.9 is k_o N(s)/P(s) with N = s² + 2ξ_sω_s s + ω_s²: the loop's open-loop gain is
+    k_o N/(P - k_o N). A first-order servovalve lag τ in the loop (as in
+    `h_open_loop_lag`) divides it by (1 + τs): H = k_o N/((1 + τs)(P - k_o N) + k_o N);
+    τ = 0 is eq 7.9."""
     s = 1j * TWO_PI * np.asarray(f_hz, dtype=float)
     wo, ws = TWO_PI * f_o, TWO_PI * f_s
     r = ws / wo
@@ -186,12 +210,18 @@ def h_table_sdof(f_hz, f_o, xi_o, k_o, f_s, xi_s, u) -> np.ndarray:
          r * r * (1 + u) + 4 * r * xi_o * xi_s * (1 + u) + 1,
          2 * (1 + u) * ws**2 * xi_o / wo + 2 * xi_s * ws + k_o,
          ws**2 + 2 * ws * xi_s * k_o, k_o * ws**2]
-    return k_o * (s * s + 2 * xi_s * ws * s + ws**2) / np.polyval(a, s)
+    num = k_o * (s * s + 2 * xi_s * ws * s + ws**2)
+    den = np.polyval(a, s)
+    if tau:
+        den = (1 + tau * s) * (den - num) + num
+    return num / den
 
 
-def fit_table_sdof(f, H, u: float, coherence=None, band=None, min_coherence=0.9) -> Fit:
+def fit_table_sdof(f, H, u: float, coherence=None, band=None, min_coherence=0.9,
+                   tau: float = 0.0) -> Fit:
     """(f_o, ξ_o, k_o, f_s, ξ_s) of eq 7.9 with the mass ratio u known, on the amplitude
-    (§7.6); f_o started just below the 180° crossing, f_s at the notch."""
+    (§7.6); f_o started just below the 180° crossing, f_s at the notch. A known valve
+    lag `tau` (s) is held in the loop (`h_table_sdof`), not fitted."""
     f, H, w, ctx = _select(f, H, coherence, band, min_coherence)
     mag = np.abs(H)
     f0 = phase_crossover(f, H)
@@ -199,7 +229,7 @@ def fit_table_sdof(f, H, u: float, coherence=None, band=None, min_coherence=0.9)
     fs0 = float(f[low][np.argmin(mag[low])]) if low.any() else f0 / 3
 
     def resid(x):
-        return w * (np.abs(h_table_sdof(f, *x, u)) - mag)
+        return w * (np.abs(h_table_sdof(f, *x, u, tau)) - mag)
 
     return _least_squares(resid, [0.95 * f0, 0.5, 25.0, fs0, 0.03],
                           [0.1, 0.01, 0.1, 0.05, 1e-4], [200.0, 5.0, 1e4, 100.0, 0.5],

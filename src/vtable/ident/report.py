@@ -5,7 +5,17 @@ Each section is its own guarded step: one that cannot be made (a channel absent,
 constant, a record too short for the mode, a fit that fails) is listed under `skipped`
 with the reason, and the others are still made. Every fitted number carries its validity
 flags (vtable.ident.validity); numbers derived from flagged fits inherit them. Notes say
-what was assumed (no [specimen], a table without pitch, the table mass).
+what was assumed (no [specimen], a table without pitch).
+
+The table is the run's own (`vtable.params.lab.run_table`: its [table], the EERC table
+when it has none): the platen mass m_t of eq 7.9's mass ratio u = m_s/m_t and of the
+springs of eqs 5.15-5.16, its DOFs (the pitch sections are skipped, with the reason, on
+a table that does not pitch), its valve time constant τ (eq 6.15 x a first-order valve
+lag, τ fitted beside (f_o, ξ_o, k_o); eq 7.9 with τ held) and its described loop (eq
+6.16, the starting point of the fits). Before any eq 6.15 parameter is quoted, the loop's
+structure is checked (`vtable.ident.loop.compare_structures`): a loop whose DC gain is not
+1, or which a type-0 loop fits better, is reported as not fitting eq 6.15, with the
+structure that does.
 """
 
 from __future__ import annotations
@@ -21,6 +31,7 @@ from vtable.errors import VtableError
 from vtable.ident import channels
 from vtable.ident.fits import Fit, fit_open_loop, fit_table_sdof
 from vtable.ident.frames import MIN_AVERAGES, frame_for_averages, frame_for_mode
+from vtable.ident.loop import STRUCTURES, LoopData, Prior, compare_structures
 from vtable.ident.structure import (
     ModalEstimate,
     fixed_base,
@@ -35,31 +46,29 @@ from vtable.ident.structure import (
 )
 from vtable.ident.tf import TransferFunction, transfer_function
 from vtable.ident.validity import Flag, flags_json, inherit, loop_flags, marker, settled
+from vtable.params.lab import LabTable, run_table
 from vtable.params.loops import OpenLoop
 from vtable.params.specimen import NoSpecimen, RigidBlock, SDOFSpecimen, ShearBuilding
 from vtable.runs.model import FORMAT_UNITS, Run
 
-#: the servo-loop fits use this band (the report's 0-25 Hz random tests)
+#: the servo-loop fits use this band (the report's 0-25 Hz random tests), widened to 1.5
+#: times the described f_o (below 0.45 fs) for a table whose loop lies above it
 SERVO_BAND = (0.2, 25.0)
-#: the EERC table's weight (§2.2, Table 8.1), for runs whose [table] is the eerc preset
-EERC_TABLE_KIP = 100.0
+
+
+def servo_band(run: Run, table: LabTable) -> tuple[float, float]:
+    """The band of the servo-loop fits: `SERVO_BAND`, its top raised to 1.5 f_o of the
+    table's described loop (eq 6.16) and kept below 0.45 fs."""
+    hi = max(SERVO_BAND[1], 1.5 * table.open_loop().f_o)
+    return SERVO_BAND[0], min(hi, 0.45 * run.fs)
 
 
 def _fit_dict(fit: Fit | None) -> dict[str, Any] | None:
     return None if fit is None else fit.to_json()
 
 
-def _table_mass(run: Run, weight_kip: float) -> tuple[float, str | None]:
-    """m_t from the run's [table] (platen_mass_kg, or the eerc preset's 100 kips), else
-    `weight_kip` with a note saying it was assumed."""
-    t = run.meta.get("table") or {}
-    if isinstance(t, dict) and "platen_mass_kg" in t:
-        return float(t["platen_mass_kg"]), None
-    if isinstance(t, dict) and t.get("preset") == "eerc" and weight_kip == EERC_TABLE_KIP:
-        return units.weight_to_mass(weight_kip), None
-    return units.weight_to_mass(weight_kip), (
-        f"table mass: {weight_kip:g} kips assumed (the run's [table] gives no "
-        "platen_mass_kg)")
+def _no_pitch(table: LabTable) -> str:
+    return f"the {table.name} table does not pitch (its DOFs: {', '.join(table.dofs)})"
 
 
 def _section(out: dict[str, Any], name: str, step: Callable[[], None]) -> None:
@@ -81,9 +90,22 @@ def _unusable_channels(run: Run) -> list[str]:
     return out
 
 
-def identify_run(run: Run, table_weight_kip: float = EERC_TABLE_KIP) -> dict[str, Any]:
-    """Everything identifiable from the run's channels, each section in its own guarded
-    step; sections that cannot be made are listed under `skipped` with the reason."""
+def identify_run(run: Run) -> dict[str, Any]:
+    """Everything identifiable from the run's channels on the run's table
+    (`vtable.params.lab.run_table`), each section in its own guarded step; sections that
+    cannot be made (a channel absent, a DOF the table does not have, a fit that fails)
+    are listed under `skipped` with the reason.
+
+    Parameters
+    ----------
+    run
+        A run as read (`vtable.runs.read_run`; a drive-file command is already h_span).
+
+    Returns
+    -------
+    dict
+        JSON-ready sections (report units), ``notes`` and ``skipped``.
+    """
     out: dict[str, Any] = {"run": run.name, "fs_hz": run.fs, "duration_s": run.duration,
                            "reports": list(run.reports), "notes": [], "skipped": {}}
     notes = out["notes"]
@@ -92,12 +114,17 @@ def identify_run(run: Run, table_weight_kip: float = EERC_TABLE_KIP) -> dict[str
     else:
         spec = NoSpecimen()
         notes.append("no [specimen]: identified as a bare table")
+    table = run_table(run)
+    out["table"] = {"name": table.name, "dofs": list(table.dofs),
+                    "platen_mass_kg": table.platen_mass,
+                    "horizontal_actuators": table.n_actuators,
+                    "valve_time_constant_s": table.valve_time_constant}
+    if "table" not in run.meta:
+        notes.append("no [table]: the EERC table assumed (the format's default)")
     notes.extend(_unusable_channels(run))
-    m_t, note = _table_mass(run, table_weight_kip)
-    if note and not isinstance(spec, ShearBuilding):
-        notes.append(note)
+    m_t = table.platen_mass
 
-    _section(out, "servo loop fit", lambda: _servo_loop(run, spec, m_t, out))
+    _section(out, "servo loop fit", lambda: _servo_loop(run, spec, m_t, table, out))
     rows: dict[str, ModalEstimate] = {}
     if isinstance(spec, SDOFSpecimen):
         out["table_3_1"], out["table_3_1_methods"] = [], {}
@@ -110,8 +137,11 @@ def identify_run(run: Run, table_weight_kip: float = EERC_TABLE_KIP) -> dict[str
                          "(sensor noise biases them near the fixed-base notch of x_eff)")
         _section(out, "table 3.1: fixed base",
                  lambda: _row(out, rows, "fixed", fixed_base(run)))
-        _section(out, "table 3.1: base rotation coupling", lambda: _row(
-            out, rows, "rocking", rocking_coupled(run, *_after(rows, "fixed"))))
+        if table.pitches:
+            _section(out, "table 3.1: base rotation coupling", lambda: _row(
+                out, rows, "rocking", rocking_coupled(run, *_after(rows, "fixed"))))
+        else:
+            out["skipped"]["table 3.1: base rotation coupling"] = _no_pitch(table)
         _section(out, "table 3.1: transl. and rot. coupling", lambda: _row(
             out, rows, "coupled", fully_coupled(
                 run, *_after(rows, "rocking" if "rocking" in rows else "fixed"))))
@@ -122,16 +152,24 @@ def identify_run(run: Run, table_weight_kip: float = EERC_TABLE_KIP) -> dict[str
             (" (shear buildings: vtable.ident.structure.table_3_1)"
              if isinstance(spec, ShearBuilding) else ""))
     at: dict[str, Any] = {}
-    _section(out, "rocking impedance", lambda: _rocking(run, rows, out, at))
-    _section(out, "hysteresis", lambda: _hysteresis(run, out, at))
+    if table.pitches:
+        _section(out, "rocking impedance", lambda: _rocking(run, rows, out, at))
+        _section(out, "hysteresis", lambda: _hysteresis(run, out, at))
+    else:
+        out["skipped"]["rocking impedance"] = _no_pitch(table)
+        out["skipped"]["hysteresis"] = _no_pitch(table) + ": no moment-rotation loop"
     return out
 
 
 # ---- the servo loop -------------------------------------------------------------------
-def _servo_loop(run: Run, spec, m_t: float, out: dict[str, Any]) -> None:
-    """x_t/x_c: eq 6.15 (bare table, rigid mass) or eq 7.9 (a SDOF structure)."""
+def _servo_loop(run: Run, spec, m_t: float, table: LabTable, out: dict[str, Any]) -> None:
+    """x_t/x_c: eq 6.15 (bare table, rigid mass; x a first-order valve lag when the
+    table has a valve time constant), checked against the other loop structures first,
+    or eq 7.9 (a SDOF structure, the valve lag held)."""
     x_c, x_t = channels.require(run, "h_span", "avg_hdisp", purpose="the servo-loop fit x_t/x_c")
     n_samples = len(run.time)
+    band = servo_band(run, table)
+    tau = table.valve_time_constant
     if isinstance(spec, NoSpecimen | RigidBlock):
         # a broad loop resonance (ξ_o ~ 0.5): frames for averages, the report's 2048 at most
         n = frame_for_averages(n_samples, MIN_AVERAGES, longest=2048) or \
@@ -140,11 +178,23 @@ def _servo_loop(run: Run, spec, m_t: float, out: dict[str, Any]) -> None:
             raise VtableError(f"{run.name}: {run.duration:.1f} s is too short for a transfer "
                               "function with 2 averages")
         tf = transfer_function(x_c, x_t, run.fs, n)
-        fit = fit_open_loop(tf.f, tf.H, tf.coherence, band=SERVO_BAND).checked(
-            averages=tf.averages)
+        prior = Prior(table.open_loop(), tau, table.name)
+        ls = compare_structures(LoopData.from_tf(tf, band), prior)
+        out["loop_structure"] = ls.to_json()
+        if not ls.fits_eq_6_15:
+            raise VtableError(ls.why + "; its eq 6.15 parameters would not be physical")
+        if tau > 0:  # the table's valve lag: eq 6.15 x 1/(1 + τs), τ fitted
+            fit = ls.fits["eq_6_15_lag"]
+            what = f"{STRUCTURES['eq_6_15_lag'].name} fit"
+        else:
+            fit = fit_open_loop(tf.f, tf.H, tf.coherence, band=band).checked(
+                averages=tf.averages)
+            what = "eq 6.15 fit"
         ol = OpenLoop(f_o=fit["f_o"], xi_o=fit["xi_o"], k_o=fit["k_o"])
-        derived = inherit(fit.flags, "eq 6.15 fit")
+        derived = inherit(fit.flags, what)
         d = _fit_dict(fit)
+        d["model"] = what.removesuffix(" fit")
+        d["band_hz"] = list(band)
         d["gain_margin"] = closed_forms.gain_margin_bare(ol)
         d["gain_margin_flags"] = flags_json(derived)
         out["open_loop"] = d
@@ -154,13 +204,16 @@ def _servo_loop(run: Run, spec, m_t: float, out: dict[str, Any]) -> None:
         out["horizontal_spring"] = {
             "f_hz": f.tolist(), "k_h_kip_per_in": units.from_si(k_h, "kip/in").tolist(),
             "c_h_lb_s_per_in": units.from_si(c_h, "lb-s/in").tolist(),
-            "equations": "5.15, 5.16", "flags": flags_json(derived)}
+            "equations": "5.15, 5.16", "flags": flags_json(derived),
+            "mass_kg": mass,
+            **({"note": f"eqs 5.15-5.16 have no valve lag: τ {fit['tau']:.3g} s left out"}
+               if tau > 0 else {})}
     elif isinstance(spec, SDOFSpecimen):
         u = spec.mass / m_t
 
         def fit_on(n: int) -> tuple[Fit, TransferFunction]:
             tf = transfer_function(x_c, x_t, run.fs, n)
-            return fit_table_sdof(tf.f, tf.H, u, tf.coherence, band=SERVO_BAND).checked(
+            return fit_table_sdof(tf.f, tf.H, u, tf.coherence, band=band, tau=tau).checked(
                 averages=tf.averages), tf
 
         what = "eq 7.9 fit (the notch of f_s, ξ_s)"
@@ -176,6 +229,12 @@ def _servo_loop(run: Run, spec, m_t: float, out: dict[str, Any]) -> None:
             pass
         d = _fit_dict(fit)
         d["frame"] = choice.why
+        d["mass_ratio"] = u
+        d["table_mass_kg"] = m_t
+        if tau > 0:
+            d["valve_lag_s"] = tau
+            d["note_valve"] = (f"eq 7.9 with the valve lag τ {tau:g} s of the table's "
+                               "description held in the loop")
         if channels.usable(run, "pitch_acc"):
             d["note"] = ("eq 7.9 has no pitch: on a pitching table f_s, ξ_s are the "
                          "structure's on the rocking table (compare Table 3.1's base "
@@ -377,6 +436,24 @@ def _print_methods(m: dict[str, Any]) -> None:
         print("      compare: " + "; ".join(parts))
 
 
+def _print_structure(ls: dict[str, Any]) -> None:
+    """The loop-structure verdict; when the loop is not eq 6.15, the structure that fits
+    with its parameters (the eq 6.15 ones are not quoted)."""
+    mark = "" if ls["fits_eq_6_15"] else "⚠ "
+    print(f"  loop structure: {mark}{ls['why']}")
+    for n in ls.get("notes", []):
+        print(f"      note: {n}")
+    for key, c in ls["candidates"].items():
+        if ls["fits_eq_6_15"] and key != ls["best"]:
+            continue
+        if not ls["fits_eq_6_15"] and STRUCTURES[key].type1:
+            print(f"      {c['name']}: ΔAIC {c['delta_aic']:+.0f} (R² {c['r2']:.4f}), "
+                  "parameters not quoted")
+            continue
+        ps = ", ".join(f"{k} {v:.4g} ± {c['stderr'][k]:.2g}" for k, v in c["params"].items())
+        print(f"      {c['name']}: {ps} (ΔAIC {c['delta_aic']:+.0f}, R² {c['r2']:.4f})")
+
+
 def print_identification(d: dict[str, Any]) -> None:
     """The identification of one run, each number with its flags (⚠)."""
     print(f"{d['run']}: {d['duration_s']:.1f} s at {d['fs_hz']:.0f} Hz")
@@ -384,14 +461,23 @@ def print_identification(d: dict[str, Any]) -> None:
         print(f"  note: {r}")
     for r in d.get("notes", []):
         print(f"  note: {r}")
+    if "table" in d:
+        t = d["table"]
+        print(f"  table: {t['name']} (DOFs {', '.join(t['dofs'])}; platen "
+              f"{t['platen_mass_kg']:.6g} kg, {t['horizontal_actuators']} horizontal "
+              f"actuator(s), valve time constant {t['valve_time_constant_s']:g} s)")
+    if "loop_structure" in d:
+        _print_structure(d["loop_structure"])
     if "open_loop" in d:
         o = d["open_loop"]
         p, e, fl = o["params"], o["stderr"], o["flags"]
         gm = "" if not o["gain_margin_flags"] else " ⚠ from a flagged fit"
-        print(f"  open loop (eq 6.15): f_o {p['f_o']:.3f} ± {e['f_o']:.3g} Hz"
-              f"{_mark(fl, 'f_o')}, ξ_o {p['xi_o']:.3f} ± {e['xi_o']:.3g}{_mark(fl, 'xi_o')}, "
-              f"k_o {p['k_o']:.2f} ± {e['k_o']:.3g} 1/s{_mark(fl, 'k_o')} "
-              f"(R² {o['r2']:.4f}{_frame(o)}); gain margin (eq 6.20) "
+        lag = (f", τ {p['tau']:.4f} ± {e['tau']:.2g} s{_mark(fl, 'tau')}" if "tau" in p
+               else "")
+        print(f"  open loop ({o.get('model', 'eq 6.15')}): f_o {p['f_o']:.3f} ± "
+              f"{e['f_o']:.3g} Hz{_mark(fl, 'f_o')}, ξ_o {p['xi_o']:.3f} ± {e['xi_o']:.3g}"
+              f"{_mark(fl, 'xi_o')}, k_o {p['k_o']:.2f} ± {e['k_o']:.3g} 1/s{_mark(fl, 'k_o')}"
+              f"{lag} (R² {o['r2']:.4f}{_frame(o)}); gain margin (eq 6.20) "
               f"{o['gain_margin']:.2f}{gm}")
         _warn_lines(fl)
         hs = d.get("horizontal_spring")

@@ -43,10 +43,15 @@ def accelerations(run: Run) -> dict[str, np.ndarray]:
     """Table, effective (eq 4.11/4.13) and top-mass accelerations (m/s²).
 
     A pitch_acc of zeros (a table without pitch) gives x_eff = x_t; `pitch_is_zero`
-    tells the caller, which must say so."""
+    tells the caller, which must say so. On a table whose DOFs have no pitch (the run's
+    [table], `vtable.params.lab.run_table`) x_eff = x_t without a pitch channel."""
+    from vtable.params.lab import run_table
+
     h = effective_height(run)
     (a_t,) = channels.require(run, "avg_hacc", purpose="the table motion")
-    if channels.channel_problem(run, "pitch_acc") in (None, "pitch_acc is zero throughout"):
+    if not run.has("pitch_acc") and not run_table(run).pitches:
+        a_th = np.zeros_like(a_t)
+    elif channels.channel_problem(run, "pitch_acc") in (None, "pitch_acc is zero throughout"):
         a_th = run.channels["pitch_acc"]
     else:
         (a_th,) = channels.require(run, "pitch_acc", purpose="the effective motion x_t + hθ")

@@ -513,8 +513,13 @@ def _assemble(name: str, header: list[str], data: np.ndarray, meta: dict[str, An
     fs = (len(time) - 1) / (time[-1] - time[0])
     _check_against_rate(meta, fs, toml_where, source.parent)
     missing = {h: int(np.isnan(v).sum()) for h, v in channels.items()}
-    return Run(name=name, time=time, channels=channels, units=units, meta=meta, source=source,
-               missing={h: n for h, n in missing.items() if n}, extra=extra, reports=reports)
+    run = Run(name=name, time=time, channels=channels, units=units, meta=meta, source=source,
+              missing={h: n for h, n in missing.items() if n}, extra=extra, reports=reports)
+    if isinstance(meta.get("command"), dict) and "drive_file" in meta["command"]:
+        from vtable.runs.drive import apply_drive
+
+        run = apply_drive(run, toml_where)  # the command from the drive file
+    return run
 
 
 def read_run(path: str | Path) -> Run:

@@ -1,0 +1,143 @@
+"""The diagnosis scorecard's cached subset (issue 12; cases and rules in tests/scorecard.py,
+the full table from benchmarks/bench_diagnosis_scorecard.py).
+
+The campaigns come from the independent truth simulator with declarations perturbed within
+the calibration bounds. Each diagnosis is cached per (case, vtable source) under
+$VTABLE_SCORECARD_CACHE (default ~/.cache/vtable-scorecard): an unchanged engine costs a
+few seconds here, a changed one is diagnosed again (about a minute a case today).
+Where the engine fails a rule today the case is marked xfail(strict=True) with what it
+does, so the suite flips to an XPASS failure when the engine is fixed: then drop the mark.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scorecard as sc
+import truth
+
+# ---------------------------------------------------------------------------------------------
+# the scorecard itself (no diagnosis)
+
+
+def test_the_cases_cover_what_issue_12_asks():
+    cases = sc.CASES
+    assert len(cases) >= 40 and len(sc.BY_NAME) == len(cases)
+    kinds = {k: [c for c in cases if c.kind == k] for k in sc.KINDS}
+    assert {c.specimen for c in cases} == {"sdof", "3storey"}
+    assert {c.fs for c in cases} == {200.0, 256.0, 500.0}
+    assert {c.noise for c in cases} == {0.01, 0.02, 0.03}
+    assert {c.record for c in cases} == {"elcentro", "synthetic"}
+    assert {c.pitch for c in cases} == {"none", "hybrid", "two_directional"}
+    assert {c.com_height_in for c in cases if c.pitch != "none"} == {0.0, sc.DECLARED_COM_IN}
+    # every catalog effect alone at two different doses
+    catalog = [e for e in truth.EFFECTS if e not in truth.OUTSIDE_CATALOG]
+    for e in catalog:
+        alone = [c.effects[e] for c in kinds["in_catalog"] if list(c.effects) == [e]]
+        assert len({tuple(sorted(d.items())) for d in alone}) >= 2, e
+    sizes = [len(c.hidden) for c in kinds["in_catalog"]]
+    assert sizes.count(2) >= 2 and sizes.count(3) >= 1
+    assert kinds["null"] and kinds["misdeclared_null"]
+    assert len({e for c in kinds["outside"] for e in c.outside}) >= 2
+    # the pitch family is the truth's pitch_flexibility and nothing else
+    for c in cases:
+        assert (c.pitch != "none") == ("pitch_flexibility" in c.effects), c.name
+
+
+def test_declarations_are_perturbed_within_the_calibration_bounds():
+    for c in sc.CASES:
+        t, d = c.true_specimen(), c.declared_specimen()
+        if c.perturb is None:
+            assert d == t, c.name
+            continue
+        f_t, f_d = np.array(t.frequencies_hz()), np.array(d.frequencies_hz())
+        df = np.abs(f_d / f_t - 1)
+        assert np.all(df <= 0.05) and np.max(df) >= 0.005, (c.name, df)  # ±5 % bound
+        r = max(d.xi / t.xi, t.xi / d.xi)
+        assert 1.19 <= r <= 3.0, (c.name, r)  # x/÷3 bound, at least x/÷1.2
+        dw = np.abs(np.array(d.weights_kip) / np.array(t.weights_kip) - 1)
+        assert np.all(dw <= 0.10) and np.all(dw >= 0.0049), (c.name, dw)  # ±10 % bound
+
+
+def test_a_cached_campaign_reads_back_with_the_declared_specimen(tmp_path):
+    from vtable.runs import read_run
+
+    case = sc.BY_NAME["misdeclared_3storey_synthetic"]
+    paths = sc.campaign(case, tmp_path)
+    assert sc.campaign(case, tmp_path) == paths  # the second call reuses the files
+    runs = [read_run(p) for p in paths]
+    decl = case.declared_specimen().declared()
+    for r in runs:
+        assert r.meta["specimen"] == decl and not r.extra
+        assert r.meta["specimen"]["frequencies_hz"] != pytest.approx(
+            case.true_specimen().frequencies_hz(), rel=0.005)
+        assert r.fs == pytest.approx(case.fs)
+        for k in (1, 2, 3):
+            assert f"floor{k}_acc" in r.channels
+    assert [r.duration for r in runs[:2]] == pytest.approx([sc.RANDOM_S] * 2, abs=0.01)
+    assert 15.0 < runs[2].duration < 20.0  # the synthetic record, time-compressed
+    peak_m = np.max(np.abs(runs[1].channels["h_span"]))  # read in SI
+    assert peak_m == pytest.approx(sc.SPANS_IN[1] * 0.0254, rel=0.02)  # peak set at 2 kHz
+
+
+def test_the_rules():
+    inc, null, out = (sc.BY_NAME[n] for n in ("actuator_friction_1", "null_sdof_elcentro",
+                                              "backlash_1"))
+    r = {"found": ["actuator_friction"], "unexplained": None}
+    assert sc.judge(inc, r)["ok"] and not sc.judge(null, r)["ok"]
+    assert not sc.judge(out, r)["ok"]
+    assert sc.judge(out, {**r, "unexplained": {"ratio_to_floor": 3.0}})["ok"]
+    assert not sc.judge(inc, {**r, "found": ["actuator_friction", "pitch_flexibility"]})["ok"]
+    assert sc.judge(null, {"found": [], "unexplained": None})["ok"]
+    tot = sc.totals([(inc, {"ok": True, "time_s": 1.0}), (null, {"ok": True, "time_s": 2.0}),
+                     (out, {"ok": False, "time_s": 3.0})])
+    assert tot["in_catalog"] == (1, 1) and tot["outside"] == (0, 1) and not tot["accepted"]
+    assert tot["time_s"] == 6.0
+
+
+# ---------------------------------------------------------------------------------------------
+# the diagnosis on the cached subset
+
+XFAIL = {  # what the engine does today on these cases (see the benchmark's table)
+}
+
+
+@pytest.fixture(scope="module")
+def subset() -> dict[str, dict]:
+    """The subset's diagnoses: cached, or made in two processes."""
+    return sc.diagnose_cases([sc.BY_NAME[n] for n in sc.QUICK], jobs=2)
+
+
+@pytest.mark.parametrize("name", [
+    pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=XFAIL[n])) if n in XFAIL
+    else n for n in sc.QUICK])
+def test_scorecard_case(name, subset):
+    case = sc.BY_NAME[name]
+    r = subset[name]
+    assert r["hidden"] == case.hidden and r["noise_floor"] > 0
+    assert math.isfinite(r["final_error"]) and r["final_error"] <= r["start_error"] + 1e-12
+    found = sorted(r["found"])
+    if case.kind == "in_catalog":
+        assert found == case.hidden, r["verdict"]
+    elif case.kind in ("null", "misdeclared_null"):
+        assert found == [], r["verdict"]
+    else:
+        assert r["unexplained"] is not None, r["verdict"]
+        assert "no missing effect" not in r["verdict"] and "no further" not in r["verdict"]
+    assert sc.judge(case, r)["ok"]
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "the engine calibrates only the servo loop (f_o, ξ_o, k_o): the declared specimen's "
+    "frequency, damping and weight are not refitted within their bounds, so declaring "
+    "2.83 Hz, 1.43 %, 70.4 kip for 2.87 Hz, 2 %, 68 kip leaves 19 % held-out error (15 x "
+    "the noise floor) and a residual 'unexplained'"))
+def test_a_misdeclared_null_is_calibrated_away(subset):
+    """effects.md: a difference the calibration absorbs is a wrong declaration, and for a
+    model that then matches the verdict is "no missing effect" (unexplained null)."""
+    r = subset["misdeclared_sdof_synthetic"]
+    assert r["found"] == []
+    assert r["unexplained"] is None, r["verdict"]
+    assert "no missing effect" in r["verdict"]
