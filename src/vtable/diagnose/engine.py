@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign, check_campaign
@@ -295,7 +296,8 @@ class Diagnoser:
 
     def _loop(self, st: _State, post: Callable[[tuple[int, int, str]], None]) -> None:
         try:
-            st.result = self._run(st, lambda i, n, s: post((i, n, s)))
+            with threadpool_limits(limits=1, user_api="blas"):  # small matrices: see model
+                st.result = self._run(st, lambda i, n, s: post((i, n, s)))
         except StopRequestedError:
             pass
         except BaseException as e:  # handed to the caller's thread

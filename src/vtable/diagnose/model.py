@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 import scipy.optimize
+from threadpoolctl import threadpool_limits
 
 from vtable.diagnose.calibration import LOOP, BaseParam, Calibration, base_params
 from vtable.diagnose.campaign import Campaign
@@ -168,7 +169,10 @@ class TableModel:
         (RMS over the groups of the normalised training residual), `flags_` (fitted
         parameters at a bound, effect parameters not identifiable apart from the base),
         `base_` (the spec's `base` table), `notes_`."""
-        campaign = Campaign.of(runs)
+        with threadpool_limits(limits=1, user_api="blas"):
+            return self._fit(Campaign.of(runs))
+
+    def _fit(self, campaign: Campaign) -> TableModel:
         self.campaign_ = campaign
         self.vt = campaign.table
         self.declared = campaign.specimen
@@ -187,10 +191,10 @@ class TableModel:
             declared = np.array([math.log(lay[i].declared) if lay[i].log else lay[i].declared
                                  for i in base])
             best, best_x = np.inf, x0
-            for b in (x0[base], declared):
+            for base_x in (x0[base], declared):
                 for frac in MULTISTART:
                     x = x0.copy()
-                    x[base] = b
+                    x[base] = base_x
                     for i in idx:
                         p = lay[i]
                         if frac is not None:

@@ -24,6 +24,9 @@ import scipy.signal
 from vtable.analytic.virtual_table import mechanics
 from vtable.effects import physics as phys
 from vtable.effects.reduced_kernel import (
+    hold_matrices,
+    linear_system,
+    simulate_linear,
     simulate_reduced,
     simulate_reduced_elements,
     simulate_reduced_python,
@@ -34,6 +37,7 @@ from vtable.params.virtual import VirtualTable, split_rocking, virtual_table
 from vtable.runs.model import Run
 
 SIM_DT = 0.0025  # s: the largest integration step (a run step is divided until below it)
+LINEAR_PATH = True  # step linear models exactly (False: RK4 for every model; for tests)
 
 @dataclass
 class ForceElement:
@@ -260,6 +264,18 @@ class ReducedModel:
         self.storeys, self.h_top = m.storeys, m.h_top
         self.max_step = m.max_step
         self._element(m.elements)
+        #: a linear model is stepped exactly (`reduced_kernel.simulate_linear`)
+        self.linear = (self.elem is None and not np.any(c2) and law.hydraulics.linear
+                       and LINEAR_PATH)
+        if self.linear:
+            self._linear = linear_system(n, self.Minv, K, C, c2, self.bF, ax, self.sp, self.T,
+                                         self.Tp, self.g, self.kp, self.kv, Aw, Wq, Wv, Fw)
+            self._holds: dict[float, tuple] = {}
+
+    def _hold(self, h: float):
+        if h not in self._holds:
+            self._holds[h] = hold_matrices(self._linear[0], self._linear[1], h)
+        return self._holds[h]
 
     def _element(self, elements: list[ForceElement]) -> None:
         self.python = False
@@ -295,7 +311,10 @@ class ReducedModel:
         nq = self.M.shape[0]
         args = (xc, h, nq, self.Minv, self.K, self.C, self.c2, self.bF, self.ax, self.sp,
                 self.T, self.Tp, self.g, self.kp, self.kv, self.Aw, self.Wq, self.Wv, self.Fw)
-        if self.elem is None:
+        if self.linear:
+            Phi, G0, G1 = self._hold(h)
+            Q, Qd, Qdd, F = simulate_linear(xc, nq, *self._linear, Phi, G0, G1)
+        elif self.elem is None:
             Q, Qd, Qdd, F = simulate_reduced(*args)
         else:
             run = simulate_reduced_python if self.python else simulate_reduced_elements

@@ -60,6 +60,12 @@ class HydraulicParams:
         return any((self.supply_pressure, self.friction, self.max_flow, self.spool_lag,
                     self.air_ratio))
 
+    @property
+    def linear(self) -> bool:
+        """Whether the loop is linear (a spool lag is; the orifice, friction, the flow cap
+        and the air law are not)."""
+        return not any((self.supply_pressure, self.friction, self.max_flow, self.air_ratio))
+
     def lumped(self, n: int) -> HydraulicParams:
         """`n` identical actuators acting together as one: areas, volumes, flows, leakage
         and friction add; pressures and gains stay."""
