@@ -1,8 +1,21 @@
-"""The diagnosis loop: for every catalog effect the model lacks, add it, fit its
-parameters together with the base loop (f_o, ξ_o, k_o) and the effects already in the
-model on the training segments of the campaign, score on the held-out segments, rank by
-held-out error plus a parsimony penalty, add the best if it improves the model beyond the
-noise, repeat.
+"""The diagnosis loop: calibrate the base, then for every catalog effect the model lacks,
+add it, fit its parameters together with the whole calibrated base (the servo loop, the
+specimen's modes, damping and mass, the platen's mass, and its centre-of-mass height and
+pitch inertia when the effect lets it pitch: `vtable.diagnose.calibration`) and the effects
+already in the model on the training segments of the campaign, score on the held-out
+segments, rank by held-out error plus a parsimony penalty, add the best that passes the
+selection rule, repeat.
+
+Selection rule (`SELECTION`): a candidate is added only if (1) its held-out error is below
+the current model's by more than max(10 % of the current excess over the noise floor,
+0.2 × the noise floor, 0.002 per parameter) — the current model is itself calibrated, so
+this is what the effect explains that recalibrating the base cannot; noise enters both
+errors alike (err² = floor² + sys²), and 0.2 × floor is well above what refitting a few
+parameters to noise lowers a held-out error by — and (2) its fit is sound: no fitted
+parameter within 1 % of a bound (fitted scale) and no effect parameter correlated beyond
+0.95 with a base parameter or without influence on the data (Gauss-Newton covariance at
+the solution). A candidate failing (2) is flagged in the ranking and not added on that
+evidence; the next sound one may be.
 
 Training = the first 60 % of every run, held out = the last 40 % (`compare.segments`), both
 at the analysis rate (`compare.analysis_run`: runs faster than 200 Hz are anti-alias
@@ -46,7 +59,7 @@ from vtable.diagnose.compare import (
     localisation_text,
     unexplained,
 )
-from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
+from vtable.diagnose.model import BASE_PARAMS, SCREEN, StopRequestedError, TableModel
 from vtable.effects.physics import Physics, nominal_open_loop
 from vtable.effects.registry import get as effect
 from vtable.effects.registry import names as registered
@@ -56,6 +69,11 @@ from vtable.runs.model import Run
 __all__ = ["BASE_PARAMS", "Candidate", "Diagnoser", "Diagnosis", "DiagnosisInterrupted",
            "Round", "Stage", "check_campaign", "diagnose", "localise"]
 
+SELECTION = ("an effect is added when its held-out error beats the calibrated current "
+             "model's by more than max(0.1 x (error - noise floor), 0.2 x noise floor, 0.002 "
+             "per parameter) and its fit is sound: no parameter within 1 % of a bound, no "
+             "effect parameter correlated beyond 0.95 with a base parameter or without "
+             "influence on the data")
 PENALTY = 0.002  # held-out error charged per added parameter
 WORKERS = min(2, os.cpu_count() or 1)
 MIN_GAIN = 0.10  # an effect must remove 10 % of the excess over the noise floor ...
@@ -90,6 +108,8 @@ class Candidate:
     physics: Physics = field(repr=False)
     flags: list[str] = field(default_factory=list)
     predictions: dict | None = field(default=None, repr=False)
+    screened: bool = False  # no start on its grid lowered the training cost: not refined
+    cost: float = float("nan")  # the fit's training cost (residuals and priors)
 
     @property
     def score(self) -> float:
@@ -145,7 +165,7 @@ class Diagnosis:
             "rounds": [{"ranking": [{"effect": c.effect, "error_after": c.error_after,
                                      "train_error": c.train_error, "params": c.params,
                                      "n_params": c.n_params, "evidence": c.evidence,
-                                     "flags": c.flags}
+                                     "flags": c.flags, "screened": c.screened}
                                     for c in r.ranking],
                         "added": r.added, "error": r.error, "error_before": r.before,
                         "skipped": r.skipped}
@@ -161,6 +181,7 @@ class Diagnosis:
             "notes": self.notes,
             "error_definition": ERROR_DEFINITION,
             "unexplained_rule": UNEXPLAINED_RULE,
+            "selection_rule": SELECTION,
         }
 
 
@@ -218,17 +239,16 @@ class Diagnoser:
         self._stop = threading.Event()
 
     def model(self, start: Physics, multistart: str | None = None,
-              free: str = "all") -> TableModel:
+              baseline: float | None = None) -> TableModel:
         """The estimator the loop fits (sharing this diagnosis's stop flag)."""
         return TableModel(start=start, multistart=multistart, stop=self._stop,
-                          calibration=self.calibration, free=free)
+                          calibration=self.calibration, baseline=baseline)
 
     def fit(self, ph: Physics, multistart: str | None = None,
-            free: str = "all") -> tuple[Physics, float, list[str]]:
-        """Fit `ph` (see `TableModel`); returns the fitted physics, the training error and
-        the fit's flags (at a bound, not identifiable)."""
-        m = self.model(ph, multistart, free).fit(self.campaign)
-        return m.physics_, m.train_error_, m.flags_
+            baseline: float | None = None) -> TableModel:
+        """Fit `ph` (see `TableModel`): the fitted estimator (`physics_`, `train_error_`,
+        `flags_`, `cost_`, `screened_`)."""
+        return self.model(ph, multistart, baseline).fit(self.campaign)
 
     def _inapplicable(self, ph: Physics) -> str:
         """Why a model cannot be built for this campaign's table (an effect needing a
@@ -316,8 +336,9 @@ class Diagnoser:
         steps = 1 + self.max_rounds * len(self.catalog)
         done = 0
         progress(done, steps, "fitting the starting model")
-        current, _, start_flags = self.fit(self.start)
-        self.notes += [f"starting model: {f}" for f in start_flags]
+        fitted = self.fit(self.start)
+        current, cost = fitted.physics_, fitted.cost_
+        self.notes += [f"starting model: {f}" for f in fitted.flags_]
         self.start_fitted = current
         st.current = current
         st.stages.append(Stage("start", current, self.predict(current)))
@@ -341,10 +362,9 @@ class Diagnoser:
             cmp_cur = self._detail(st)
             ranking: list[Candidate] = []
 
-            def trial(name: str, base: Physics = current, free: str = "loop",
-                      multistart: str | None = None) -> Candidate:
-                start = base if base.has(name) else base.with_effect(name)
-                cand, train, flags = self.fit(start, multistart=multistart, free=free)
+            def trial(name: str, base: Physics = current, baseline: float = cost) -> Candidate:
+                m = self.fit(base.with_effect(name), multistart=name, baseline=baseline)
+                cand, train, flags = m.physics_, m.train_error_, m.flags_
                 try:
                     pred = self.predict(cand)
                 except VtableError as exc:  # the fit found no model it could build
@@ -353,15 +373,15 @@ class Diagnoser:
                                      [f"no valid model found: {exc}"], None)
                 err = compare(pred, self.runs, scored="held", floor=self.floor).error
                 return Candidate(name, dict(cand.effects[name]), err, train, "",
-                                 len(effect(name).params), cand, flags, pred)
+                                 len(effect(name).params), cand, flags, pred, m.screened_,
+                                 m.cost_)
 
             # candidates are independent: fit them on both cores (the kernel releases the
             # GIL); on a stop, pending fits are cancelled and running ones end at their next
             # simulation
             pool = ThreadPoolExecutor(max_workers=WORKERS)
             try:
-                futures = {pool.submit(trial, name, free="all", multistart=name): name
-                           for name in todo}
+                futures = {pool.submit(trial, name): name for name in todo}
                 for fut in as_completed(futures):
                     ranking.append(fut.result())
                     done += 1
@@ -386,7 +406,7 @@ class Diagnoser:
                     c.predictions = None  # only the added model's predictions are kept
             if gain > needed and not best.flags:
                 st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
-                current, err = best.physics, best.error_after
+                current, err, cost = best.physics, best.error_after, best.cost
                 st.current, st.err, st.cmp = current, err, None
                 st.stages.append(Stage(f"{len(st.stages)}_{best.effect}", current,
                                        best.predictions))
@@ -460,6 +480,9 @@ class Diagnoser:
 def _evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
     if not np.isfinite(c.error_after):
         return "; ".join(c.flags)
+    if c.screened:
+        return (f"screened out: no start on its parameter grid lowered the training cost by "
+                f"{SCREEN:.0%} (held-out error {err:.2%} -> {c.error_after:.2%} unrefined)")
     worst = cmp.worst_groups(2)
     where = ", ".join(g for g, _ in worst)
     band = cmp.worst_band(worst[0][0]) if worst else None

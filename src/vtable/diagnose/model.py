@@ -1,11 +1,15 @@
 """`TableModel`: a scikit-learn-style estimator over the reduced model — the primitive the
 diagnosis loop is built from.
 
-`TableModel(effects).fit(runs)` fits the base loop (f_o, ξ_o, k_o) and the effects'
-parameters by bounded least squares on the training segments of the campaign (the first
-60 % of every run, at the analysis rate), on the fitted scale (logarithmic for log
-parameters); `score` / `comparison` evaluate the held-out segments; `predictions` keeps
-what the fitted model predicts for every run of the campaign.
+`TableModel(effects).fit(runs)` fits the calibrated base (`vtable.diagnose.calibration`:
+the servo loop (f_o, ξ_o, k_o), the specimen's modal frequencies, damping and mass, the
+platen's mass, and its centre-of-mass height and pitch inertia when the model pitches;
+bounded around the runs' declarations, with weak priors) and the effects' parameters by
+bounded least squares on the training segments of the campaign (the first 60 % of every
+run, at the analysis rate), on the fitted scale (logarithmic for log parameters); `score`
+/ `comparison` evaluate the held-out segments; `predictions` keeps what the fitted model
+predicts for every run of the campaign. `flags_` says which fitted parameters sit at a
+bound and which effect parameters the data cannot tell apart from the base.
 """
 
 from __future__ import annotations
@@ -33,6 +37,7 @@ AT_BOUND = 0.01  # a fitted value within 1 % of its range (fitted scale) of a bo
 #: an effect parameter this correlated with a base parameter is not identifiable apart
 #: from the base (the fit could trade one for the other)
 MAX_CORRELATION = 0.95
+SCREEN = 0.01  # a candidate's grid must lower the training cost by 1 % to be refined
 #: the base loop's fitted parameters: name -> (JSON key "owner.param", unit, lower, upper)
 BASE_PARAMS = LOOP
 MULTISTART = (0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95, None)  # fractions of a range; None: as is
@@ -51,8 +56,8 @@ def _effect_param(name: str, p) -> BaseParam:
         eff[name][p.name] = v
         return dataclasses.replace(ph, effects=eff)
 
-    return BaseParam(f"{name}.{p.name}", p.unit, float("nan"), p.lower, p.upper, p.log, None,
-                     f"effect:{name}", get, put)
+    return BaseParam(f"{name}.{p.name}", p.unit, float(p.default), p.lower, p.upper, p.log,
+                     None, f"effect:{name}", get, put)
 
 
 def pitches(ph: Physics, vt) -> bool:
@@ -87,21 +92,23 @@ class TableModel:
         (`StopRequestedError`).
     calibration
         The calibration's bounds and priors (default `Calibration()`).
-    free
-        "all": every base parameter is fitted with the effects; "loop": the servo loop and
-        the platen's pitch parameters only, the specimen and the platen mass held at the
-        start's values (the diagnosis's screening of candidates).
+    baseline
+        The training cost (sum of squared residuals and priors) of the model without the
+        `multistart` effect: when no start on the effect's grid lowers it by `SCREEN` (a
+        relative 1 %), the least-squares refinement is skipped and `screened_` is set (the
+        diagnosis's screening of candidates; their fits then stand where the grid left
+        them, and cannot clear the selection margin).
     """
 
     def __init__(self, effects: Sequence[str] = (), *, start: Physics | None = None,
                  multistart: str | None = None, stop: threading.Event | None = None,
-                 calibration: Calibration | None = None, free: str = "all") -> None:
-        if free not in ("all", "loop"):
-            raise ValueError(f"free: expected 'all' or 'loop', got {free!r}")
+                 calibration: Calibration | None = None,
+                 baseline: float | None = None) -> None:
         self.effects = tuple(effects)
         self.start, self.multistart, self.stop = start, multistart, stop
         self.calibration = calibration or Calibration()
-        self.free = free
+        self.baseline = baseline
+        self.screened_ = False
         self.physics_: Physics | None = None
         self.vt = None  # the campaign's table, known when fitting
         self.declared = None  # the campaign's declared specimen, known when fitting
@@ -113,10 +120,7 @@ class TableModel:
                            self.vt, self.calibration, pitch=pitches(ph, self.vt))
 
     def _layout(self, ph: Physics) -> list[BaseParam]:
-        base = self.base_params(ph)
-        if self.free == "loop":
-            base = [p for p in base if p.group in ("loop", "pitch")]
-        return base + [_effect_param(name, p) for name in ph.effects
+        return self.base_params(ph) + [_effect_param(name, p) for name in ph.effects
                        for p in effect(name).params]
 
     @staticmethod
@@ -185,9 +189,10 @@ class TableModel:
         x0 = self._pack(start, lay)
         if self.multistart:
             idx = [i for i, p in enumerate(lay) if p.group == f"effect:{self.multistart}"]
-            base = [i for i, p in enumerate(lay) if not p.group.startswith("effect:")]
-            # the start's base (calibrated before the effect was there, it may have absorbed
-            # some of it) and the declaration itself (the table's nominal loop)
+            base = [i for i, p in enumerate(lay) if p.group != f"effect:{self.multistart}"]
+            # the start's base and effects (fitted before this effect was there, they may
+            # have absorbed some of it) and the declaration itself (the table's nominal
+            # loop, the effects already in the model at their defaults)
             declared = np.array([math.log(lay[i].declared) if lay[i].log else lay[i].declared
                                  for i in base])
             best, best_x = np.inf, x0
@@ -205,19 +210,31 @@ class TableModel:
                     if c < best:
                         best, best_x = c, x
             x0 = best_x
+            if self.baseline is not None and best >= self.baseline * (1 - SCREEN):
+                return self._done(campaign, start, lay, x0, self._cost(x0, start, lay, campaign),
+                                  None, screened=True)
         lo = np.array([math.log(p.lower) if p.log else p.lower for p in lay])
         hi = np.array([math.log(p.upper) if p.log else p.upper for p in lay])
         x0 = np.clip(x0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         sol = scipy.optimize.least_squares(
             lambda x: self._cost(x, start, lay, campaign), x0,
             bounds=(lo, hi), diff_step=1e-4, xtol=1e-6, ftol=1e-8, max_nfev=40)
-        self.physics_ = self._unpack(sol.x, start, lay)
+        return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac)
+
+    def _done(self, campaign: Campaign, start: Physics, lay, x, fun, jac,
+              screened: bool = False) -> TableModel:
+        self.physics_ = self._unpack(x, start, lay)
         n_data = campaign.n_target
-        self.train_error_ = float(np.sqrt(np.sum(sol.fun[:n_data] ** 2)
-                                          / len(campaign.targets)))
+        self.cost_ = float(np.sum(fun**2))
+        self.train_error_ = float(np.sqrt(np.sum(fun[:n_data] ** 2) / len(campaign.targets)))
         self.layout_ = lay
-        self.correlations_ = _correlations(sol.jac, sol.fun, len(lay))
-        self.flags_ = self.at_bounds(self.physics_) + self._unidentified(lay)
+        self.screened_ = screened
+        if screened:
+            self.correlations_ = np.full((len(lay), len(lay)), np.nan)
+            self.flags_ = []
+        else:
+            self.correlations_ = _correlations(jac, fun, len(lay))
+            self.flags_ = self.at_bounds(self.physics_) + self._unidentified(lay)
         self.base_ = self.base_table(self.physics_)
         self.notes_ = list(campaign.notes)
         return self
