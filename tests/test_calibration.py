@@ -87,3 +87,31 @@ def test_bad_calibration_is_one_line(spec, msg, capsys, tmp_path):
     code = main(["compare", str(tmp_path / "none.toml"), "--calibrate", spec])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and msg in err
+
+
+def test_a_vtable_simulate_campaign_adds_only_the_virtual_tables_physics(tmp_path, capsys):
+    """Issue 12: `vtable diagnose` on three runs made with `vtable simulate` (as the README
+    shows; noise-free) adds the virtual table's own physics — its pitch system and the
+    Table B.5 RC filter — and nothing it lacks; the noise floor is the model's resolution,
+    said in a note, and the final error is consistent with it."""
+    calls = [["--command", "random", "--band", "0", "25", "--peak", "0.05", "--duration",
+              "11", "--seed", "1"],
+             ["--command", "random", "--band", "0", "25", "--peak", "0.15", "--duration",
+              "11", "--seed", "2"],
+             ["--command", "earthquake", "--peak", "4"]]
+    paths = []
+    for i, args in enumerate(calls):
+        stem = tmp_path / f"r{i}"
+        assert main(["simulate", "--specimen", "sdof_frame", *args, "--out", str(stem)]) == 0
+        paths.append(str(stem.with_suffix(".toml")))
+    capsys.readouterr()
+    out = tmp_path / "d.json"
+    assert main(["diagnose", *paths, "--json", str(out)]) == 0
+    d = json.loads(out.read_text())
+    assert sorted(d["final_effects"]) == ["force_feedback_filter", "pitch_flexibility"], \
+        d["verdict"]
+    assert d["noise_floor"] == pytest.approx(0.005)
+    assert any("below what the reduced model resolves" in n for n in d["notes"])
+    assert d["unexplained"] is None and d["final_error"] < 0.01, d["verdict"]
+    rc = d["final_params"]["force_feedback_filter"]["rc"]
+    assert rc == pytest.approx(0.01, rel=0.1)  # Table B.5's RC
