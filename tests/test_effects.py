@@ -47,12 +47,53 @@ def test_reduced_model_agrees_with_the_virtual_table(name):
     for cmd in (random, quake):
         run = virtual_run(ph, cmd)
         pred = ReducedModel(ph).predict(run)
+        # an SDOF frame's floor 1 is its top mass; the table writes floors for buildings
+        assert set(pred) - set(run.channels) == {"floor1_acc", "floor1_disp"}
+        assert np.array_equal(pred["floor1_acc"], pred["acc_n_ne"])
+        assert np.array_equal(pred["floor1_disp"], pred["pot_n_sw"])
         for ch, yhat in pred.items():
+            if ch.startswith("floor"):
+                continue
             y = run.channel(ch)
             if not np.any(y):
                 continue
             err = np.sqrt(np.mean((yhat - y) ** 2) / np.mean(y**2))
             assert err < 0.02, (name, cmd.name, ch, err)
+
+
+#: a 3-storey shear building: 3 x 25 kip at 110/160/210 in, storeys 120/100/80 kip/in
+BUILDING = {"kind": "shear_building", "weights_kip": [25.0, 25.0, 25.0],
+            "heights_in": [110.0, 160.0, 210.0], "stiffnesses_kip_per_in": [120.0, 100.0, 80.0],
+            "damping": 0.02}
+
+
+@pytest.mark.parametrize("effects", [{}, {"pitch_flexibility": {}}])
+def test_reduced_model_predicts_a_buildings_floors_as_the_virtual_table(effects):
+    """floorK = x_t + h_K θ + Σ_{i≤K} x_s,i (reduced model) against the MuJoCo table's
+    sensors on each storey body; with pitch_flexibility the h_K θ term is exercised."""
+    from vtable.params.specimen import specimen_from_dict
+
+    ph = Physics(nominal_open_loop(), specimen_from_dict(BUILDING, "building"), effects)
+    random, _, quake = campaign_commands()
+    floors = {f"floor{k}_{w}" for k in (1, 2, 3) for w in ("acc", "disp")}
+    for cmd in (random, quake):
+        run = virtual_run(ph, cmd)
+        pred = ReducedModel(ph).predict(run)
+        assert floors <= set(run.channels) and floors <= set(pred)
+        assert not any(c.startswith("floor4") for c in (*run.channels, *pred))
+        rms = {}
+        for ch in sorted(floors):
+            y = run.channel(ch)
+            rms[ch] = np.sqrt(np.mean(y**2))
+            err = np.sqrt(np.mean((pred[ch] - y) ** 2)) / rms[ch]
+            assert err < 0.02, (effects, cmd.name, ch, err)
+        # the floors are distinct signals, growing upwards (first mode)
+        assert rms["floor1_disp"] < rms["floor2_disp"] < rms["floor3_disp"]
+        assert np.sqrt(np.mean((run.channel("floor1_acc") - run.channel("floor3_acc")) ** 2)) \
+            > 0.2 * rms["floor3_acc"]
+        # the top floor is the top-mass instrument (its corner: second order in θ apart)
+        assert np.allclose(run.channel("floor3_acc"), run.channel("acc_n_ne"), rtol=0,
+                           atol=1e-4 * rms["floor3_acc"])
 
 
 def test_effect_parameters_are_checked():

@@ -23,7 +23,13 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from vtable import units
-from vtable.diagnose.compare import GROUP_UNITS, GROUPS, group_prediction, group_signal, short
+from vtable.diagnose.compare import (
+    GROUP_UNITS,
+    group_prediction,
+    group_signal,
+    run_groups,
+    short,
+)
 from vtable.viz.recording import rrd_file
 
 #: how a unit is written in view and series names
@@ -66,7 +72,7 @@ def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis")
             name = short(run.name)
             times = [rr.TimeColumn("time", duration=run.time - run.time[0])]
             views = []
-            for g in GROUPS:
+            for g in run_groups(run):
                 y = group_signal(run, g)
                 if y is None:
                     continue

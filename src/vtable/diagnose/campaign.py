@@ -10,11 +10,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vtable.diagnose.compare import (
-    GROUPS,
     analysis_run,
     campaign_notes,
     group_signal,
     noise_floor,
+    run_groups,
     segments,
 )
 from vtable.errors import VtableError
@@ -53,9 +53,9 @@ def check_campaign(runs: Sequence[Run]) -> list[Run]:
         if len(a.time) < 512:
             raise VtableError(f"{r.name}: {len(a.time)} samples ({r.duration:.2f} s) at "
                               f"{a.fs:.4g} Hz is shorter than one 512-sample analysis frame")
-        if not any(group_signal(a, g) is not None for g in GROUPS if g != "pitch"):
+        if not any(group_signal(a, g) is not None for g in run_groups(a) if g != "pitch"):
             raise VtableError(f"{r.name}: none of the response channels the model predicts "
-                              f"({', '.join(c for g in GROUPS.values() for c in g)})")
+                              f"({', '.join(c for g in run_groups(a).values() for c in g)})")
         out.append(a)
     return out
 
@@ -85,7 +85,7 @@ class Campaign:
         targets = []
         for r in a:
             tr, _ = segments(r)
-            for g in GROUPS:
+            for g in run_groups(r):
                 y = group_signal(r, g)
                 if y is not None:
                     yt = y[tr][::2]

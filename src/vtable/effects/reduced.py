@@ -61,6 +61,7 @@ class ReducedAssembly:
         self.storeys = [names[5 + i] for i in range(len(slides))]
         self.active = ["x", *self.storeys]
         self.h_top = float(pos[slides[-1].name][2]) if slides else 0.0
+        self.h_floors = [float(pos[b.name][2]) for b in slides]  # h_K, from the bottom
         self.extra: dict[str, float] = {}  # added DOFs: name -> mass
         self.springs: list[tuple[str, str | None, float, float]] = []
         self.loops: list[tuple[str, float, float, float, float]] = []
@@ -334,6 +335,12 @@ class ReducedModel:
         if slides:
             out["acc_n_ne"] = Qdd[:, x] + self.h_top * th_a + drift_a
             out["pot_n_sw"] = Q[:, x] + self.h_top * th + drift
+        # every floor K (an SDOF frame's floor 1 is its top mass): the slides chain
+        # (`params.bodies.specimen_bodies`), so floor K moves by x + h_K θ + Σ_{i≤K} x_s,i
+        for k, h_k in enumerate(self.assembly.h_floors, 1):
+            below = slides[:k]
+            out[f"floor{k}_acc"] = Qdd[:, x] + h_k * th_a + Qdd[:, below].sum(axis=1)
+            out[f"floor{k}_disp"] = Q[:, x] + h_k * th + Q[:, below].sum(axis=1)
         for fn in self.assembly.filters:
             out = {k: fn(v, 1.0 / h) for k, v in out.items()}
         out = {k: v[::up] for k, v in out.items()}

@@ -160,7 +160,7 @@ JOINT_KIND = {"x": {"type": _J.mjJNT_SLIDE, "axis": [1, 0, 0]},
 def compile_table(ts: TableSpec) -> BuiltModel:
     """Add the force actuators (one per tendon of `ts.force_actuators`, in order), the pit
     pressure after them, the sensors (every force actuator's length, then velocity, then
-    the top-mass instruments), and compile."""
+    the top-mass instruments, then a shear building's floors), and compile."""
     s = ts.spec.copy()
     s.assets = dict(ts.assets)
     for a in ts.force_actuators:
@@ -182,6 +182,13 @@ def compile_table(ts: TableSpec) -> BuiltModel:
         for site in ("sw", "se"):
             s.add_sensor(name=f"top_{site}_pos", type=mujoco.mjtSensor.mjSENS_FRAMEPOS,
                          objname=f"{b}_{site}", objtype=mujoco.mjtObj.mjOBJ_SITE)
+    if isinstance(ts.specimen, ShearBuilding):  # each floor's frame (format floorK_acc/_disp)
+        for k, jn in enumerate(ts.structure_joints, 1):
+            for what, kind in (("acc", mujoco.mjtSensor.mjSENS_FRAMELINACC),
+                               ("pos", mujoco.mjtSensor.mjSENS_FRAMEPOS)):
+                s.add_sensor(name=f"floor{k}_{what}", type=kind,
+                             objname=jn.replace("x_s", "storey"),
+                             objtype=mujoco.mjtObj.mjOBJ_BODY)
     try:
         model = s.compile()
     except ValueError as e:

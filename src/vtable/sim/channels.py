@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from vtable.params.specimen import ShearBuilding
 from vtable.runs.model import FORMAT_UNITS, Run
 from vtable.sim.simulator import SimResult
 
@@ -50,6 +51,11 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
         for site in ("sw", "se"):
             x = res.sensor(f"top_{site}_pos")[:, 0]
             si[f"pot_n_{site}"] = x - x[0] if len(x) else x
+    if isinstance(b.specimen, ShearBuilding):  # every floor, from the bottom
+        for k in range(1, len(b.structure_joints) + 1):
+            si[f"floor{k}_acc"] = res.sensor(f"floor{k}_acc")[:, 0]
+            x = res.sensor(f"floor{k}_pos")[:, 0]
+            si[f"floor{k}_disp"] = x - x[0] if len(x) else x
     out = dict(si)
     extra_units: dict[str, str] = {k: FORMAT_UNITS[k] for k in si}
     if full_state:
