@@ -108,7 +108,7 @@ class Candidate:
     physics: Physics = field(repr=False)
     flags: list[str] = field(default_factory=list)
     predictions: dict | None = field(default=None, repr=False)
-    screened: bool = False  # no start on its grid lowered the training cost: not refined
+    screened: bool = False  # its first fit steps lowered the training cost < 1 %: stopped
     cost: float = float("nan")  # the fit's training cost (residuals and priors)
 
     @property
@@ -481,8 +481,9 @@ def _evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
     if not np.isfinite(c.error_after):
         return "; ".join(c.flags)
     if c.screened:
-        return (f"screened out: no start on its parameter grid lowered the training cost by "
-                f"{SCREEN:.0%} (held-out error {err:.2%} -> {c.error_after:.2%} unrefined)")
+        return (f"screened out: its first least-squares steps from the best start on its "
+                f"grid lowered the training cost by less than {SCREEN:.0%} (held-out error "
+                f"{err:.2%} -> {c.error_after:.2%}, not refined further)")
     worst = cmp.worst_groups(2)
     where = ", ".join(g for g, _ in worst)
     band = cmp.worst_band(worst[0][0]) if worst else None

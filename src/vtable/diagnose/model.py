@@ -37,7 +37,8 @@ AT_BOUND = 0.01  # a fitted value within 1 % of its range (fitted scale) of a bo
 #: an effect parameter this correlated with a base parameter is not identifiable apart
 #: from the base (the fit could trade one for the other)
 MAX_CORRELATION = 0.95
-SCREEN = 0.01  # a candidate's grid must lower the training cost by 1 % to be refined
+SCREEN = 0.01  # a candidate must lower the training cost by 1 % in its first steps ...
+SCREEN_STEPS = 3  # ... (least-squares iterations from the best start) to be refined further
 #: the base loop's fitted parameters: name -> (JSON key "owner.param", unit, lower, upper)
 BASE_PARAMS = LOOP
 MULTISTART = (0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95, None)  # fractions of a range; None: as is
@@ -94,10 +95,10 @@ class TableModel:
         The calibration's bounds and priors (default `Calibration()`).
     baseline
         The training cost (sum of squared residuals and priors) of the model without the
-        `multistart` effect: when no start on the effect's grid lowers it by `SCREEN` (a
-        relative 1 %), the least-squares refinement is skipped and `screened_` is set (the
-        diagnosis's screening of candidates; their fits then stand where the grid left
-        them, and cannot clear the selection margin).
+        `multistart` effect: when `SCREEN_STEPS` least-squares iterations from the best
+        start do not lower it by `SCREEN` (a relative 1 %), the fit stops there and
+        `screened_` is set (the diagnosis's screening of candidates: such a fit cannot
+        clear the selection margin).
     """
 
     def __init__(self, effects: Sequence[str] = (), *, start: Physics | None = None,
@@ -210,15 +211,21 @@ class TableModel:
                     if c < best:
                         best, best_x = c, x
             x0 = best_x
-            if self.baseline is not None and best >= self.baseline * (1 - SCREEN):
-                return self._done(campaign, start, lay, x0, self._cost(x0, start, lay, campaign),
-                                  None, screened=True)
         lo = np.array([math.log(p.lower) if p.log else p.lower for p in lay])
         hi = np.array([math.log(p.upper) if p.log else p.upper for p in lay])
         x0 = np.clip(x0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-        sol = scipy.optimize.least_squares(
-            lambda x: self._cost(x, start, lay, campaign), x0,
-            bounds=(lo, hi), diff_step=1e-4, xtol=1e-6, ftol=1e-8, max_nfev=40)
+
+        def solve(x, nfev):
+            return scipy.optimize.least_squares(
+                lambda x: self._cost(x, start, lay, campaign), x, bounds=(lo, hi),
+                diff_step=1e-4, xtol=1e-6, ftol=1e-8, max_nfev=nfev)
+
+        if self.baseline is not None:  # screening: a few steps first
+            sol = solve(x0, SCREEN_STEPS)
+            if float(np.sum(sol.fun**2)) >= self.baseline * (1 - SCREEN):
+                return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac, screened=True)
+            x0 = sol.x
+        sol = solve(x0, 40)
         return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac)
 
     def _done(self, campaign: Campaign, start: Physics, lay, x, fun, jac,
