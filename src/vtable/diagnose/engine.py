@@ -12,10 +12,11 @@ the current model's by more than max(10 % of the current excess over the noise f
 this is what the effect explains that recalibrating the base cannot; noise enters both
 errors alike (err² = floor² + sys²), and 0.2 × floor is well above what refitting a few
 parameters to noise lowers a held-out error by — and (2) its fit is sound: no fitted
-parameter within 1 % of a bound (fitted scale) and no effect parameter correlated beyond
-0.95 with a base parameter or without influence on the data (Gauss-Newton covariance at
-the solution). A candidate failing (2) is flagged in the ranking and not added on that
-evidence; the next sound one may be.
+effect parameter within 1 % of a bound (fitted scale), correlated beyond 0.95 with a base
+parameter, or without influence on the data (Gauss-Newton covariance at the solution). A
+candidate failing (2) is flagged in the ranking and not added on that evidence; the next
+sound one may be. Base parameters at a bound are flagged too but do not block: they say
+the model still lacks something.
 
 Training = the first 60 % of every run, held out = the last 40 % (`compare.segments`), both
 at the analysis rate (`compare.analysis_run`: runs faster than 200 Hz are anti-alias
@@ -71,9 +72,9 @@ __all__ = ["BASE_PARAMS", "Candidate", "Diagnoser", "Diagnosis", "DiagnosisInter
 
 SELECTION = ("an effect is added when its held-out error beats the calibrated current "
              "model's by more than max(0.1 x (error - noise floor), 0.2 x noise floor, 0.002 "
-             "per parameter) and its fit is sound: no parameter within 1 % of a bound, no "
-             "effect parameter correlated beyond 0.95 with a base parameter or without "
-             "influence on the data")
+             "per parameter) and its fit is sound: none of its own parameters within 1 % of a "
+             "bound, correlated beyond 0.95 with a base parameter, or without influence on "
+             "the data")
 PENALTY = 0.002  # held-out error charged per added parameter
 WORKERS = min(2, os.cpu_count() or 1)
 MIN_GAIN = 0.10  # an effect must remove 10 % of the excess over the noise floor ...
@@ -110,6 +111,14 @@ class Candidate:
     predictions: dict | None = field(default=None, repr=False)
     screened: bool = False  # its first fit steps lowered the training cost < 1 %: stopped
     cost: float = float("nan")  # the fit's training cost (residuals and priors)
+
+    @property
+    def blocking(self) -> list[str]:
+        """The flags on the candidate's own parameters (at a bound, not identifiable, no
+        valid model): it is not added on that evidence. Flags on base parameters (a
+        calibrated value at its bound) are reported but do not block: they say the model
+        still lacks something, not that this effect is wrong."""
+        return [f for f in self.flags if f.startswith((f"{self.effect}.", "no valid model"))]
 
     @property
     def score(self) -> float:
@@ -396,7 +405,7 @@ class Diagnoser:
                 needed = max(MIN_GAIN * (err - self.floor), FLOOR_GAIN * self.floor,
                              PENALTY * c.n_params)
                 best, gain = c, err - c.error_after
-                if gain <= needed or not c.flags:
+                if gain <= needed or not c.blocking:
                     break  # sorted: no later candidate gains more; or this one is sound
             ranking.sort(key=lambda c: c.score)
             for c in ranking:
@@ -404,7 +413,7 @@ class Diagnoser:
             for c in ranking:
                 if c is not best:
                     c.predictions = None  # only the added model's predictions are kept
-            if gain > needed and not best.flags:
+            if gain > needed and not best.blocking:
                 st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
                 current, err, cost = best.physics, best.error_after, best.cost
                 st.current, st.err, st.cmp = current, err, None
@@ -415,10 +424,10 @@ class Diagnoser:
                 st.rounds.append(Round(ranking, None, err, err, skipped))
                 best = max(ranking, key=lambda c: err - c.error_after)
                 gain = err - best.error_after
-                if gain > needed and best.flags:
+                if gain > needed and best.blocking:
                     reason = (f"the best candidate ({best.effect}) would lower the held-out "
                               f"error by {gain:.2%} but is not added on that evidence: "
-                              + "; ".join(best.flags))
+                              + "; ".join(best.blocking))
                 else:
                     reason = (f"the best candidate ({best.effect}) would lower the held-out "
                               f"error by {gain:.2%}, less than the {needed:.2%} the noise "
