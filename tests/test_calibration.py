@@ -19,6 +19,7 @@ import truth
 from vtable.cli import main
 from vtable.diagnose.calibration import Calibration
 from vtable.errors import VtableError
+from vtable.runs import read_run
 
 F_S, XI_S, W_S = 2.87, 0.01, 68.4  # the truth's SDOF frame (Table 5.1's frame, nominal)
 
