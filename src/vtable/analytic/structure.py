@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import scipy.linalg
 import scipy.optimize
@@ -51,9 +53,18 @@ def storey_stiffnesses(masses: np.ndarray, frequencies_hz: np.ndarray) -> np.nda
 
 
 def building_stiffnesses(b: ShearBuilding) -> np.ndarray:
-    """Storey stiffnesses k_1 .. k_n: given, or from the fixed-base frequencies."""
-    return (np.asarray(b.stiffnesses, dtype=float) if b.stiffnesses is not None
-            else storey_stiffnesses(b.masses, np.asarray(b.frequencies)))
+    """Storey stiffnesses k_1 .. k_n: given, or from the fixed-base frequencies (solved once
+    per masses and frequencies: the bodies and the damping matrix both need them)."""
+    if b.stiffnesses is not None:
+        return np.asarray(b.stiffnesses, dtype=float)
+    return np.array(_storey_stiffnesses_cached(tuple(map(float, b.masses)),
+                                               tuple(map(float, b.frequencies))))
+
+
+@functools.lru_cache(maxsize=64)
+def _storey_stiffnesses_cached(masses: tuple[float, ...],
+                               frequencies_hz: tuple[float, ...]) -> tuple[float, ...]:
+    return tuple(storey_stiffnesses(np.array(masses), np.array(frequencies_hz)))
 
 
 def building_matrices(b: ShearBuilding) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
