@@ -211,3 +211,88 @@ def test_shear_building_on_the_virtual_table(vt):
         near = min(lin.oscillatory, key=lambda m: abs(m.eigenvalue - mode.eigenvalue))
         assert near.f_hz == pytest.approx(mode.f_hz, rel=0.01)
     assert an.first.f_hz < 3.0  # the first coupled mode is below the fixed-base 3 Hz
+
+
+#: a 3-storey building whose storeys are far from stiffness-proportional damping's ξ
+BUILDING_3 = {"weights_kip": [20.0, 20.0, 15.0], "heights_in": [90.0, 150.0, 210.0],
+              "damping": 0.02, "frequencies_hz": [3.0, 8.0, 12.0]}
+
+
+def _fixed_base_modes(M, K, C):
+    """Frequencies (Hz) and damping ratios of M q̈ + C q̇ + K q = 0, ascending."""
+    n = len(M)
+    A = np.block([[np.zeros((n, n)), np.eye(n)],
+                  [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
+    lam = np.linalg.eigvals(A)
+    lam = lam[lam.imag > 0]
+    lam = lam[np.argsort(np.abs(lam))]
+    return np.abs(lam) / (2 * np.pi), -lam.real / np.abs(lam)
+
+
+def test_a_buildings_damping_is_xi_in_every_fixed_base_mode(vt):
+    """The slide block of `mechanics` (slab locked) damps every fixed-base mode at ξ, not
+    ξ in the first and more above (stiffness-proportional storey dampers gave 2.67 ξ and
+    4.0 ξ here); the drift damping matrix is Lᵀ C_u L of the modal C_u."""
+    from vtable.analytic.structure import building_matrices
+    from vtable.analytic.virtual_table import mechanics
+    from vtable.params import ShearBuilding
+    from vtable.params.bodies import specimen_bodies, specimen_damping
+
+    b = ShearBuilding.from_dict(BUILDING_3)
+    M, K, C, _, names, _, _ = mechanics(vt, b)
+    assert names[5:] == ["x_s1", "x_s2", "x_s3"]
+    s = slice(5, None)
+    f, zeta = _fixed_base_modes(M[s, s], K[s, s], C[s, s])
+    assert f == pytest.approx([3.0, 8.0, 12.0], rel=1e-9)
+    assert np.abs(zeta - 0.02).max() < 1e-9
+    # the drift matrix is the modal one seen through u = L d: same power for any velocity
+    _, _, C_u = building_matrices(b)
+    L = np.tril(np.ones((3, 3)))
+    d_dot = np.array([0.3, -1.1, 0.7])
+    assert d_dot @ specimen_damping(b) @ d_dot == pytest.approx(
+        (L @ d_dot) @ C_u @ (L @ d_dot), rel=1e-12)
+    assert np.allclose(C[s, s], specimen_damping(b), rtol=0, atol=0)  # nothing else on it
+    assert np.min(np.linalg.eigvalsh(specimen_damping(b))) > 0
+    # the old stiffness-proportional storey dampers c_j = 2ξ/ω₁ k_j: ξ only in mode 1
+    k = np.array([body.stiffness for body in specimen_bodies(b)])
+    w1 = 2 * np.pi * 3.0
+    C_old = np.diag(2 * 0.02 / w1 * k)
+    _, zeta_old = _fixed_base_modes(M[s, s], K[s, s], C_old)
+    assert zeta_old[0] == pytest.approx(0.02, rel=1e-6)
+    assert zeta_old[1] > 0.05 and zeta_old[2] > 0.075
+    # a SDOF frame: [[c_s]]
+    sdof = presets.specimen("sdof_frame")
+    assert specimen_damping(sdof) == pytest.approx(np.array([[sdof.damping_coefficient]]))
+
+
+def test_the_mujoco_building_is_damped_by_the_same_matrix(vt):
+    """MuJoCo's passive force on the storey slides is -C_d ḋ (fixed tendons λ_k v_k v_kᵀ),
+    the SDOF keeps its joint damping, and the linearized closed loop's modes carry the
+    analytic model's damping ratios."""
+    from vtable.params import ShearBuilding
+    from vtable.params.bodies import specimen_damping
+
+    b = ShearBuilding.from_dict(BUILDING_3)
+    built = build(vt, b, with_meshes=False)
+    m = built.model
+    d = mujoco.MjData(m)
+    dofs = [m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)]
+            for j in built.structure_joints]
+    assert not m.dof_damping[dofs].any()
+    C_mj = np.zeros((3, 3))
+    for i, dof in enumerate(dofs):
+        mujoco.mj_resetData(m, d)
+        d.qvel[dof] = 1.0
+        mujoco.mj_forward(m, d)
+        C_mj[:, i] = -d.qfrc_passive[dofs]
+    C_d = specimen_damping(b)
+    assert np.abs(C_mj - C_d).max() < 1e-9 * np.abs(C_d).max()
+    sdof = build(vt, presets.specimen("sdof_frame"), with_meshes=False).model
+    assert sdof.dof_damping[-1] == pytest.approx(presets.specimen("sdof_frame")
+                                                 .damping_coefficient, rel=1e-12)
+    assert sdof.ntendon == len(vt.actuators)
+    lin = linearize(built, dt=1e-3).modes()
+    an = VirtualTableModel(vt, b).modes()
+    for mode in an.oscillatory:
+        near = min(lin.oscillatory, key=lambda x: abs(x.eigenvalue - mode.eigenvalue))
+        assert near.damping == pytest.approx(mode.damping, rel=0.01, abs=0.002)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import scipy.linalg
 import scipy.optimize
@@ -50,12 +52,27 @@ def storey_stiffnesses(masses: np.ndarray, frequencies_hz: np.ndarray) -> np.nda
     return np.exp(sol.x)
 
 
+def building_stiffnesses(b: ShearBuilding) -> np.ndarray:
+    """Storey stiffnesses k_1 .. k_n: given, or from the fixed-base frequencies (solved once
+    per masses and frequencies: the bodies and the damping matrix both need them)."""
+    if b.stiffnesses is not None:
+        return np.asarray(b.stiffnesses, dtype=float)
+    return np.array(_storey_stiffnesses_cached(tuple(map(float, b.masses)),
+                                               tuple(map(float, b.frequencies))))
+
+
+@functools.lru_cache(maxsize=64)
+def _storey_stiffnesses_cached(masses: tuple[float, ...],
+                               frequencies_hz: tuple[float, ...]) -> tuple[float, ...]:
+    return tuple(storey_stiffnesses(np.array(masses), np.array(frequencies_hz)))
+
+
 def building_matrices(b: ShearBuilding) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """M, K and the modal damping matrix C = M Φ diag(2ξω) Φᵀ M (every mode at ξ)."""
+    """M, K and the modal damping matrix C = M Φ diag(2ξω) Φᵀ M (every mode at ξ), in the
+    storeys' displacements relative to the base (`params.bodies.specimen_damping` gives C
+    on the storey drifts the multibody chain uses)."""
     M = np.diag(b.masses)
-    k = (np.asarray(b.stiffnesses) if b.stiffnesses is not None
-         else storey_stiffnesses(b.masses, np.asarray(b.frequencies)))
-    K = stiffness_matrix(k)
+    K = stiffness_matrix(building_stiffnesses(b))
     w, phi = fixed_base_modes(M, K)
     C = M @ phi @ np.diag(2 * b.damping * w) @ phi.T @ M
     return M, K, C

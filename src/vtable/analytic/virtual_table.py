@@ -21,7 +21,12 @@ import numpy as np
 
 from vtable.analytic.base import LinearModel
 from vtable.controllers import DOFS, LinearController, standard_controllers
-from vtable.params.bodies import slab_body, slab_frame_positions, specimen_bodies
+from vtable.params.bodies import (
+    slab_body,
+    slab_frame_positions,
+    specimen_bodies,
+    specimen_damping,
+)
 from vtable.params.specimen import NoSpecimen, Specimen
 from vtable.params.virtual import VirtualTable
 from vtable.units import G
@@ -47,7 +52,9 @@ def mechanics(vt: VirtualTable, specimen: Specimen, *, gravity: bool = True,
               com_offset: bool = True, body_inertia: bool = True):
     """Small-motion mass, stiffness and damping matrices of the slab (x, z, φ, θ, ψ) and
     the specimen's slides, and the actuators' extension Jacobian; also used by the reduced
-    model of the diagnosis. Returns (M, K, C, Ja, coordinate names, slide bodies)."""
+    model of the diagnosis. The slide block of C is the specimen's full damping matrix
+    (`params.bodies.specimen_damping`: a building's modal damping couples its storeys).
+    Returns (M, K, C, Ja, coordinate names, slide bodies, slab-frame positions)."""
     bodies = specimen_bodies(specimen)
     sb = slab_body(vt)
     pos = slab_frame_positions(bodies)
@@ -81,9 +88,9 @@ def mechanics(vt: VirtualTable, specimen: Specimen, *, gravity: bool = True,
             i = slides.index(b)
             chain = [*chain, i]
             K[5 + i, 5 + i] += b.stiffness
-            Cd[5 + i, 5 + i] += b.damping
         add_body(b.mass, r, b.inertia if body_inertia else (0.0, 0.0, 0.0),
                  chain if b.joint else [])
+    Cd[5:, 5:] += specimen_damping(specimen)
     if gravity:  # the pit-pressure force, world vertical at the bottom-face centre
         z_p = vt.pivot_depth - vt.table.geometry.thickness
         weight = (sb.mass + sum(b.mass for b in bodies)) * G

@@ -3,12 +3,13 @@
 Both the MJCF builder and the analytic linear model of the virtual table read this list:
 masses, centres of mass, principal inertias and the specimen's slide joints. Positions
 are in the slab frame, whose origin is the centre of the horizontal actuator line
-(29.7 in below the table top, §4.2.1).
+(29.7 in below the table top, §4.2.1). The specimen's damping is not on the bodies: it is
+one matrix on the slides, `specimen_damping` (a building's modal damping couples its
+storeys), which both models read.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +25,8 @@ MASS_BLOCK = np.array([2.0, 1.6, 0.6])  # m: a lumped storey mass drawn (and its
 class Body:
     """A rigid body: `pos` of its frame relative to its parent's frame, centre of mass
     `com` in its own frame, principal `inertia` about the centre of mass (kg m²), and an
-    optional slide joint along the slab's x with stiffness and damping."""
+    optional slide joint along the slab's x with its spring `stiffness` (the storey's
+    k_j). The slide's damping is not here: see `specimen_damping`."""
 
     name: str
     parent: str
@@ -34,7 +36,6 @@ class Body:
     inertia: tuple[float, float, float]
     joint: str | None = None
     stiffness: float = 0.0
-    damping: float = 0.0
     size: tuple[float, ...] = ()
 
 
@@ -71,23 +72,54 @@ def specimen_bodies(spec: Specimen) -> list[Body]:
     if isinstance(spec, SDOFSpecimen):
         return [Body("top_mass", "slab", (0.0, 0.0, spec.height), spec.mass, (0.0, 0.0, 0.0),
                      _box_inertia(spec.mass, MASS_BLOCK), joint="x_s",
-                     stiffness=spec.stiffness, damping=spec.damping_coefficient)]
+                     stiffness=spec.stiffness)]
     if isinstance(spec, ShearBuilding):
-        from vtable.analytic.structure import stiffness_matrix, storey_stiffnesses
+        from vtable.analytic.structure import building_stiffnesses
 
-        m = spec.masses
-        k = (np.asarray(spec.stiffnesses) if spec.stiffnesses is not None
-             else storey_stiffnesses(m, np.asarray(spec.frequencies)))
-        w1 = math.sqrt(np.linalg.eigvals(np.linalg.solve(np.diag(m), stiffness_matrix(k)))
-                       .real.min())
-        c = 2 * spec.damping / w1 * k  # stiffness-proportional: ξ in the first mode
+        k = building_stiffnesses(spec)
         out, parent, z_prev = [], "slab", 0.0
-        for j, (mj, hj, kj, cj) in enumerate(zip(m, spec.heights, k, c, strict=True), 1):
+        for j, (mj, hj, kj) in enumerate(zip(spec.masses, spec.heights, k, strict=True), 1):
             out.append(Body(f"storey{j}", parent, (0.0, 0.0, hj - z_prev), float(mj),
                             (0.0, 0.0, 0.0), _box_inertia(float(mj), MASS_BLOCK),
-                            joint=f"x_s{j}", stiffness=float(kj), damping=float(cj)))
+                            joint=f"x_s{j}", stiffness=float(kj)))
             parent, z_prev = f"storey{j}", hj
         return out
+    raise VtableError(f"unsupported specimen {type(spec).__name__}")
+
+
+def specimen_damping(spec: Specimen) -> np.ndarray:
+    """The specimen's damping matrix C_d on its slide coordinates (N s/m), in the order of
+    the slide joints of `specimen_bodies`; the one source of the specimen's damping for the
+    MuJoCo table (`mjcf.builder`) and the analytic and reduced models
+    (`analytic.virtual_table.mechanics`).
+
+    A SDOF frame: [[c_s]]. A shear building: the slides chain (storey j's joint is its
+    drift d_j relative to storey j-1), so the storeys' displacements relative to the table
+    are u = L d with L lower-triangular ones, and the modal damping C_u = M Φ diag(2ξω) Φᵀ M
+    of `analytic.structure.building_matrices` (ξ in every fixed-base mode) becomes
+    C_d = Lᵀ C_u L. A bare table or a rigid block: an empty (0, 0) matrix.
+
+    Parameters
+    ----------
+    spec : Specimen
+        The specimen.
+
+    Returns
+    -------
+    numpy.ndarray
+        Symmetric, positive semi-definite (n_slides, n_slides) matrix.
+    """
+    if isinstance(spec, SDOFSpecimen):
+        return np.array([[spec.damping_coefficient]])
+    if isinstance(spec, ShearBuilding):
+        from vtable.analytic.structure import building_matrices
+
+        _, _, C_u = building_matrices(spec)
+        L = np.tril(np.ones_like(C_u))
+        C_d = L.T @ C_u @ L
+        return (C_d + C_d.T) / 2
+    if isinstance(spec, NoSpecimen | RigidBlock):
+        return np.zeros((0, 0))
     raise VtableError(f"unsupported specimen {type(spec).__name__}")
 
 
