@@ -97,7 +97,7 @@ def m_extra_column(csv, toml, r):
     return "".join(out), toml, True, ["lab_thermo"], "extra column"
 
 
-UNKNOWN_AT = ("top", "table", "command", "control", "units", "newtable")
+UNKNOWN_AT = ("top", "command", "control", "units", "newtable")
 
 
 def m_unknown_key(csv, toml, r):
@@ -113,8 +113,14 @@ def m_unknown_key(csv, toml, r):
         toml = toml.replace("horizontal = {", f"horizontal = {{ {key} = 1,", 1)
     else:
         toml = toml.replace(f"[{where}]\n", f"[{where}]\n{key} = 1\n", 1)
-    # [table] is read by the models: an unknown key there is an error (issue 11)
-    return csv, toml, where != "table", [key], f"unknown key in {where}"
+    return csv, toml, True, [key], f"unknown key in {where}"
+
+
+def m_unknown_table_key(csv, toml, r):
+    """[table] is read by the models: an unknown key there is an error (issue 11)."""
+    key = f"zz_{r.randint(0, 999)}"
+    return (csv, toml.replace("[table]\n", f"[table]\n{key} = 1\n", 1), False, [key],
+            "unknown key in table")
 
 
 def m_mm_unit(csv, toml, r):
@@ -317,7 +323,7 @@ VALID = [m_bom, m_crlf, m_seven_digits, m_trailing_blank, m_extra_column, m_unkn
          m_mm_unit, m_nan_cell, m_no_specimen]
 INVALID = [m_bad_number, m_truncate, m_delimiter, m_time_back, m_time_repeat, m_lost_sample,
            m_wrong_dimension, m_unknown_unit, m_bad_specimen, m_unknown_specimen_key,
-           m_bad_table, m_bad_command, m_bad_control, m_malformed_toml, m_format, m_non_utf8,
+           m_bad_table, m_unknown_table_key, m_bad_command, m_bad_control, m_malformed_toml, m_format, m_non_utf8,
            m_header, m_short]
 
 
