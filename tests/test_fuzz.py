@@ -323,7 +323,8 @@ VALID = [m_bom, m_crlf, m_seven_digits, m_trailing_blank, m_extra_column, m_unkn
          m_mm_unit, m_nan_cell, m_no_specimen]
 INVALID = [m_bad_number, m_truncate, m_delimiter, m_time_back, m_time_repeat, m_lost_sample,
            m_wrong_dimension, m_unknown_unit, m_bad_specimen, m_unknown_specimen_key,
-           m_bad_table, m_unknown_table_key, m_bad_command, m_bad_control, m_malformed_toml, m_format, m_non_utf8,
+           m_bad_table, m_unknown_table_key, m_bad_command, m_bad_control, m_malformed_toml,
+           m_format, m_non_utf8,
            m_header, m_short]
 
 
