@@ -8,8 +8,8 @@ The base parameters of a campaign (`base_params`):
   through eq 6.16 is a design value, not a measurement);
 - each specimen mode's fixed-base frequency (declared ± `Calibration.frequency`), the
   specimen's damping ratio (declared ×/÷ `Calibration.damping`, one ratio for every mode as
-  the run format declares it) and its mass (± `Calibration.mass`, every storey scaled
-  alike; the frequencies are held, so the stiffnesses follow);
+  the run format declares it) and its mass (± `Calibration.mass`; a building's storeys
+  each on their own; the frequencies are held, so the stiffnesses follow);
 - the platen's mass (± `Calibration.mass`);
 - when the model lets the platen pitch: the platen's centre-of-mass height above the
   horizontal actuator line (anywhere from the line itself to `Calibration.com_height` ×
@@ -42,6 +42,7 @@ from vtable.params.specimen import (
     specimen_frequencies,
 )
 from vtable.params.virtual import VirtualTable
+from vtable.units import G
 
 #: the servo loop's bounds: name -> (JSON key, unit, lower, upper)
 LOOP = {"f_o": ("servo_loop.f_o_hz", "Hz", 1.0, 100.0),
@@ -148,6 +149,14 @@ def _with_frequency(spec, i: int, f: float):
     return dataclasses.replace(spec, stiffnesses=None, frequencies=tuple(fs))
 
 
+def _frequency_form(spec):
+    """A building declared by storey stiffnesses, as its fixed-base frequencies (held when a
+    storey's mass is calibrated: the frequencies are what the calibration moves)."""
+    if spec.stiffnesses is None:
+        return spec
+    return dataclasses.replace(spec, stiffnesses=None, frequencies=tuple(_frequencies(spec)))
+
+
 def _mass_of(spec) -> float:
     return float(spec.mass)
 
@@ -192,7 +201,23 @@ def _specimen_params(spec, cal: Calibration) -> list[BaseParam]:
             out.append(BaseParam("specimen.damping", "1", xi, xi / cal.damping,
                                  min(xi * cal.damping, 0.99), True,
                                  math.log(cal.damping) / 2 or None, "specimen", get_xi, put_xi))
-    if isinstance(spec, SDOFSpecimen | ShearBuilding | RigidBlock):
+    if isinstance(spec, ShearBuilding) and spec.n > 1:  # each storey's mass on its own
+        for j, w0 in enumerate(spec.weights):
+            m0 = w0 / G
+
+            def get_s(ph: Physics, j: int = j) -> float:
+                return float(ph.specimen.masses[j])
+
+            def put_s(ph: Physics, v: float, j: int = j) -> Physics:
+                sp = _frequency_form(ph.specimen)
+                w = list(sp.weights)
+                w[j] = v * G
+                return dataclasses.replace(ph, specimen=dataclasses.replace(sp, weights=tuple(w)))
+
+            out.append(BaseParam(f"specimen.storey{j + 1}.mass_kg", "kg", m0,
+                                 m0 * (1 - cal.mass), m0 * (1 + cal.mass), False,
+                                 m0 * cal.mass / 2 or None, "specimen", get_s, put_s))
+    elif isinstance(spec, SDOFSpecimen | ShearBuilding | RigidBlock):
         m0 = _mass_of(spec)
 
         def get_m(ph: Physics) -> float:
