@@ -116,3 +116,28 @@ def test_a_vtable_simulate_campaign_adds_only_the_virtual_tables_physics(tmp_pat
     assert d["unexplained"] is None and d["final_error"] < 0.01, d["verdict"]
     rc = d["final_params"]["force_feedback_filter"]["rc"]
     assert rc == pytest.approx(0.01, rel=0.1)  # Table B.5's RC
+
+
+def test_a_buildings_storey_masses_are_calibrated_each_with_its_frequencies_held():
+    """Each storey's mass is a base parameter (±10 %); moving one keeps the fixed-base
+    frequencies (the stiffnesses follow) and the other storeys' masses."""
+    from vtable.diagnose.calibration import base_params
+    from vtable.effects.physics import Physics, nominal_open_loop
+    from vtable.params.specimen import ShearBuilding, specimen_frequencies
+    from vtable.params.virtual import virtual_table
+
+    kip, inch = 4448.2216, 0.0254
+    b = ShearBuilding(weights=(25 * kip,) * 3, heights=(110 * inch, 160 * inch, 210 * inch),
+                      damping=0.02, stiffnesses=(120 * kip / inch, 100 * kip / inch,
+                                                 80 * kip / inch))
+    vt = virtual_table()
+    ps = {p.key: p for p in base_params(b, vt, Calibration(), pitch=False)}
+    m0 = 25 * kip / 9.80665
+    for j in (1, 2, 3):
+        p = ps[f"specimen.storey{j}.mass_kg"]
+        assert (p.lower, p.declared, p.upper) == pytest.approx((0.9 * m0, m0, 1.1 * m0))
+    assert "specimen.mass_kg" not in ps
+    ph = ps["specimen.storey2.mass_kg"].set(Physics(nominal_open_loop(vt), b), 1.08 * m0)
+    assert list(ph.specimen.masses) == pytest.approx([m0, 1.08 * m0, m0])
+    assert specimen_frequencies(ph.specimen) == pytest.approx(specimen_frequencies(b),
+                                                              rel=1e-9)
