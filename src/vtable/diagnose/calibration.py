@@ -137,14 +137,10 @@ def _loop_param(name: str, declared: float) -> BaseParam:
     return BaseParam(key, unit, declared, lo, hi, True, None, "loop", get, put)
 
 
-def _frequencies(spec) -> list[float]:
-    return list(specimen_frequencies(spec))
-
-
 def _with_frequency(spec, i: int, f: float):
     if isinstance(spec, SDOFSpecimen):
         return dataclasses.replace(spec, frequency=f)
-    fs = _frequencies(spec)
+    fs = list(specimen_frequencies(spec))
     fs[i] = f
     return dataclasses.replace(spec, stiffnesses=None, frequencies=tuple(fs))
 
@@ -154,7 +150,8 @@ def _frequency_form(spec):
     storey's mass is calibrated: the frequencies are what the calibration moves)."""
     if spec.stiffnesses is None:
         return spec
-    return dataclasses.replace(spec, stiffnesses=None, frequencies=tuple(_frequencies(spec)))
+    return dataclasses.replace(spec, stiffnesses=None,
+                               frequencies=tuple(specimen_frequencies(spec)))
 
 
 def _mass_of(spec) -> float:
@@ -175,13 +172,13 @@ def _specimen_params(spec, cal: Calibration) -> list[BaseParam]:
     if isinstance(spec, NoSpecimen):
         return out
     if isinstance(spec, SDOFSpecimen | ShearBuilding):
-        fs = _frequencies(spec)
+        fs = list(specimen_frequencies(spec))
         for i, f0 in enumerate(fs):
             key = ("specimen.frequency_hz" if isinstance(spec, SDOFSpecimen)
                    else f"specimen.mode{i + 1}.frequency_hz")
 
             def get(ph: Physics, i: int = i) -> float:
-                return _frequencies(ph.specimen)[i]
+                return float(specimen_frequencies(ph.specimen)[i])
 
             def put(ph: Physics, v: float, i: int = i) -> Physics:
                 return dataclasses.replace(ph, specimen=_with_frequency(ph.specimen, i, v))

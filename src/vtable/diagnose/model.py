@@ -240,7 +240,7 @@ class TableModel:
             self.correlations_ = np.full((len(lay), len(lay)), np.nan)
             self.flags_ = []
         else:
-            self.correlations_ = _correlations(jac, fun, len(lay))
+            self.correlations_ = _correlations(jac, len(lay))
             self.flags_ = self.at_bounds(self.physics_) + self._unidentified(lay)
         self.base_ = self.base_table(self.physics_)
         self.notes_ = list(campaign.notes)
@@ -310,7 +310,7 @@ class TableModel:
                 for p in self.base_params(ph)}
 
 
-def _correlations(jac: np.ndarray, fun: np.ndarray, n: int) -> np.ndarray:
+def _correlations(jac: np.ndarray, n: int) -> np.ndarray:
     """Correlation matrix of the fitted parameters (Gauss-Newton: cov ∝ (JᵀJ)⁻¹); a
     parameter the residual does not depend on gets NaN on its diagonal."""
     J = np.asarray(jac, dtype=float)
