@@ -270,7 +270,8 @@ def test_null_case_is_consistent_and_flags_fits_at_a_bound():
     by = {c.effect: c for c in d.rounds[0].ranking}
     # no friction in the data: screened out (its first steps do not lower the cost) ...
     assert by["actuator_friction"].screened
-    assert by["actuator_friction"].error_after > d.start_error - 0.2 * d.noise_floor
+    g = by["actuator_friction"].gain
+    assert by["actuator_friction"].failing() and g.gain < 0.2 * g.systematic + 1e-12
     # ... and fitted to the end, it sits at its lower bound (0.01 kip), flagged
     from vtable.diagnose.model import TableModel
 

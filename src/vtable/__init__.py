@@ -21,6 +21,7 @@ def _numba_cache_dir() -> str:
     for base in (home, tempfile.gettempdir()):
         d = _os.path.join(base, "vtable", "numba") if base == home else \
             _os.path.join(base, f"vtable-numba-{_os.getuid() if hasattr(_os, 'getuid') else 0}")
+        d = _os.path.join(d, _sources_stamp())
         try:
             _os.makedirs(d, exist_ok=True)
             if _os.access(d, _os.W_OK):
@@ -28,6 +29,26 @@ def _numba_cache_dir() -> str:
         except OSError:
             continue
     return ""
+
+
+def _sources_stamp() -> str:
+    """A stamp of the package's numba kernels' sources: numba checks a cached kernel against
+    its own file only, not the kernels it calls from other modules (the servo law in
+    `vtable.hydraulics` inside the reduced model's kernel), so a changed kernel source gets
+    a fresh cache folder."""
+    import hashlib
+
+    root = _os.path.dirname(_os.path.abspath(__file__))
+    h = hashlib.sha256(__version__.encode())
+    for dirpath, dirnames, files in _os.walk(root):
+        dirnames[:] = sorted(d for d in dirnames if d != "__pycache__")
+        for f in sorted(files):
+            if f.endswith(".py"):
+                with open(_os.path.join(dirpath, f), "rb") as fh:
+                    text = fh.read()
+                if b"njit" in text:
+                    h.update(f"{dirpath[len(root):]}/{f}".encode() + text)
+    return h.hexdigest()[:12]
 
 
 _cache = _numba_cache_dir()

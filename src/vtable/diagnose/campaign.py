@@ -12,6 +12,7 @@ import numpy as np
 from vtable.diagnose.compare import (
     analysis_run,
     campaign_notes,
+    group_noise,
     group_signal,
     noise_floor,
     run_groups,
@@ -97,6 +98,13 @@ class Campaign:
                          "with the multibody table); that is the noise floor used")
             floor = MODEL_RESOLUTION
         return cls(list(runs), a, notes, floor, targets)
+
+    @property
+    def noise(self) -> dict[str, dict[str, float]]:
+        """Each run's channel groups' sensor noise σ per sample (`compare.group_noise`)."""
+        if not hasattr(self, "_noise"):
+            self._noise = {r.name: group_noise(r) for r in self.runs}
+        return self._noise
 
     @property
     def specimen(self):

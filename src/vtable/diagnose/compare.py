@@ -269,43 +269,146 @@ class Comparison:
 PAIRS = (("h1_disp", "h3_disp"), ("acc_n_ne", "acc_n_nw"), ("pot_n_sw", "pot_n_se"))
 
 
-def noise_floor(runs: list[Run], f_min: float = 50.0) -> float:
-    """The error the sensor noise alone would cost: mean over runs and groups of
-    σ_noise/RMS(group signal).
+def channel_noise(run: Run, f_min: float = 50.0) -> dict[str, float]:
+    """Each group channel's sensor noise σ (absolute, the channel's unit), stationary over
+    the run.
 
-    The noise is estimated from redundant sensors (H1 and H3 displacements, the two top
-    accelerometers, the two potentiometers): σ = std(a - b)/√2, relative to each sensor's
-    RMS; a group averaging m sensors has σ/√m. Groups without a pair take the median
-    relative noise of the pairs; with no pair at all, the spectrum above `f_min` (where the
+    From redundant sensors (H1 and H3 displacements, the two top accelerometers, the two
+    potentiometers): σ = std(a - b)/√2 for both. A channel without a pair takes the median
+    relative noise σ/RMS of the pairs times its own RMS (a sensor's noise is a fraction of
+    the range it is set to); with no pair at all, the spectrum above `f_min` (where the
     response is negligible) gives σ² = mean PSD × bandwidth.
     """
     import scipy.signal
 
+    sigma: dict[str, float] = {}
+    rel: list[float] = []
+    for a, b in PAIRS:
+        if all(run.has(c) and not run.missing.get(c) for c in (a, b)):
+            ya, yb = run.channels[a], run.channels[b]
+            rms = np.sqrt(0.5 * (np.mean(ya**2) + np.mean(yb**2)))
+            if rms > 0:
+                s = float(np.std(ya - yb) / np.sqrt(2))
+                sigma[a] = sigma[b] = s
+                rel.append(s / rms)
+    fallback = float(np.median(rel)) if rel else None
+    for chans in run_groups(run).values():
+        for c in chans:
+            if c in sigma or not run.has(c) or run.missing.get(c):
+                continue
+            y = run.channels[c]
+            if fallback is not None:
+                sigma[c] = fallback * float(np.sqrt(np.mean(y**2)))
+                continue
+            f, P = scipy.signal.welch(y, fs=run.fs, nperseg=min(512, len(y)))
+            hi = f >= f_min
+            if hi.any():
+                sigma[c] = float(np.sqrt(np.mean(P[hi]) * run.fs / 2))
+    return sigma
+
+
+def group_noise(run: Run, f_min: float = 50.0) -> dict[str, float]:
+    """Each channel group's noise σ per sample (the group's unit): its m sensors averaged,
+    √(Σ σ_c²)/m with each σ_c from `channel_noise`."""
+    sigma = channel_noise(run, f_min)
+    out = {}
+    for g, chans in run_groups(run).items():
+        used = [c for c in chans if c in sigma and run.has(c) and not run.missing.get(c)]
+        if used:
+            out[g] = float(np.sqrt(sum(sigma[c] ** 2 for c in used)) / len(used))
+    return out
+
+
+def noise_floor(runs: list[Run], scored: str = "held", f_min: float = 50.0) -> float:
+    """The error the sensor noise alone would cost, measured as the error is: the mean
+    over runs and groups of σ_group / RMS(group signal) on the scored segments ("held":
+    the held-out last 40 % of every run, "train", or "all"), σ_group from `group_noise`.
+
+    The noise is stationary but the signal is not: an earthquake's decaying tail, held out,
+    carries the same noise on a weaker signal, so its floor is higher than the whole run's.
+    """
     vals = []
     for r in runs:
-        rel: dict[str, float] = {}  # first sensor of a pair -> its relative noise
-        for a, b in PAIRS:
-            if all(r.has(c) and not r.missing.get(c) for c in (a, b)):
-                ya, yb = r.channels[a], r.channels[b]
-                rms = np.sqrt(0.5 * (np.mean(ya**2) + np.mean(yb**2)))
-                if rms > 0:
-                    rel[a] = float(np.std(ya - yb) / np.sqrt(2) / rms)
-        fallback = float(np.median(list(rel.values()))) if rel else None
-        for g, chans in run_groups(r).items():
+        sl = dict(zip(("train", "held"), segments(r), strict=True)).get(scored, slice(None))
+        for g, s in group_noise(r, f_min).items():
             y = group_signal(r, g)
             if y is None:
                 continue
-            m = sum(1 for c in chans if r.has(c) and not r.missing.get(c))
-            if fallback is not None:
-                pair = [v for a, v in rel.items() if a in chans]
-                vals.append((pair[0] if pair else fallback) / np.sqrt(m))
-                continue
-            f, P = scipy.signal.welch(y, fs=r.fs, nperseg=min(512, len(y)))
-            hi = f >= f_min
-            if hi.any():
-                sigma = np.sqrt(np.mean(P[hi]) * r.fs / 2)
-                vals.append(min(sigma / np.sqrt(np.mean(y**2)), 1.0))
+            rms = float(np.sqrt(np.mean(y[sl] ** 2)))
+            vals.append(min(s / rms, 1.0) if rms > 0 else 1.0)
     return float(np.mean(vals)) if vals else 0.0
+
+
+@dataclass(frozen=True)
+class Gain:
+    """What a candidate model gains over the current one on the held-out segments, on the
+    squared scale where sensor noise and a systematic error add (`held_out_gain`).
+
+    `e2_current`, `e2_candidate`: the mean over runs and groups of the squared NRMS error;
+    `f2`: the sensor noise alone on the same scale; `se`: the standard deviation of the
+    gain that the held-out noise itself produces, for these two predictions.
+    """
+
+    e2_current: float
+    e2_candidate: float
+    f2: float
+    se: float
+
+    @property
+    def gain(self) -> float:
+        return self.e2_current - self.e2_candidate
+
+    @property
+    def z(self) -> float:
+        """The gain in standard errors of the noise (a likelihood-ratio z statistic)."""
+        return self.gain / self.se if self.se > 0 else (np.inf if self.gain > 0 else 0.0)
+
+    @property
+    def systematic(self) -> float:
+        """The current model's systematic residual, e² - floor² (≥ 0)."""
+        return max(self.e2_current - self.f2, 0.0)
+
+    @property
+    def share(self) -> float:
+        """The share of the current systematic residual the candidate removes."""
+        return self.gain / self.systematic if self.systematic > 0 else np.inf
+
+
+def held_out_gain(current: dict[str, dict[str, np.ndarray]],
+                  candidate: dict[str, dict[str, np.ndarray]], runs: list[Run],
+                  noise: dict[str, dict[str, float]]) -> Gain:
+    """`Gain` of `candidate`'s predictions over `current`'s on the held-out segments.
+
+    For a run and group with held-out measurement y = s + n (n white, σ per sample from
+    `noise`), the squared NRMS of a prediction ŷ is ||y - ŷ||²/||y||². Both predictions
+    were fitted on the training segments, so the held-out noise is independent of them and
+    the difference of the two squared errors is its systematic part plus 2 n·(ŷ_c - ŷ)/||y||²,
+    a Gaussian term of variance 4 σ² ||ŷ_c - ŷ||²/||y||⁴: summed over groups, that is the
+    noise's share of the gain, `se`.
+    """
+    e_cur, e_cand, f2, var = [], [], [], 0.0
+    for r in runs:
+        _, ho = segments(r)
+        sig = noise.get(r.name, {})
+        for g in run_groups(r):
+            y = group_signal(r, g)
+            a = group_prediction(current[r.name], r, g)
+            b = group_prediction(candidate[r.name], r, g)
+            if y is None or a is None or b is None:
+                continue
+            y, a, b = y[ho], a[ho], b[ho]
+            yy = float(np.sum(y**2))
+            if not yy > 0:
+                continue
+            e_cur.append(nrms(a, y) ** 2)
+            e_cand.append(nrms(b, y) ** 2)
+            s = sig.get(g, 0.0)
+            f2.append(s**2 * len(y) / yy)
+            d = b - a
+            var += 4 * s**2 * float(np.sum(d**2)) / yy**2 if np.all(np.isfinite(d)) else 0.0
+    k = max(len(e_cur), 1)
+    return Gain(float(np.sum(e_cur)) / k, float(np.sum(e_cand)) / k, float(np.sum(f2)) / k,
+                float(np.sqrt(var)) / k)
 
 
 def compare(pred: dict[str, dict[str, np.ndarray]], runs: list[Run], *, scored: str = "held",
@@ -327,7 +430,7 @@ def compare(pred: dict[str, dict[str, np.ndarray]], runs: list[Run], *, scored: 
         per_run[r.name] = errs
         all_errs += list(errs.values())
     cmp = Comparison(float(np.mean(all_errs)), per_run,
-                     noise_floor(runs) if floor is None else floor)
+                     noise_floor(runs, scored) if floor is None else floor)
     if detail:
         _localise(cmp, pred, runs)
     return cmp

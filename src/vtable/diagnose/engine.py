@@ -3,22 +3,31 @@ add it, fit its parameters together with the whole calibrated base (the servo lo
 specimen's modes, damping and mass, the platen's mass, and its centre-of-mass height and
 pitch inertia when the effect lets it pitch: `vtable.diagnose.calibration`) and the effects
 already in the model on the training segments of the campaign, score on the held-out
-segments, rank by held-out error plus a parsimony penalty, add the best that passes the
-selection rule, repeat. Nonlinear candidates (an order of magnitude costlier to simulate)
-are screened: if a few least-squares steps from their best start do not lower the training
-cost by 1 %, their fit stops there (`TableModel`'s `baseline`).
+segments, rank by held-out gain, add the best that passes the selection rule, repeat.
+Nonlinear candidates (an order of magnitude costlier to simulate) are screened: if a few
+least-squares steps from their best start do not lower the training cost by 1 %, their fit
+stops there (`TableModel`'s `baseline`).
 
-Selection rule (`SELECTION`): a candidate is added only if (1) its held-out error is below
-the current model's by more than max(10 % of the current excess over the noise floor,
-0.2 × the noise floor, 0.002 per parameter) — the current model is itself calibrated, so
-this is what the effect explains that recalibrating the base cannot; noise enters both
-errors alike (err² = floor² + sys²), and 0.2 × floor is well above what refitting a few
-parameters to noise lowers a held-out error by — and (2) its fit is sound: no fitted
-effect parameter within 1 % of a bound (fitted scale), correlated beyond 0.95 with a base
-parameter, or without influence on the data (Gauss-Newton covariance at the solution). A
-candidate failing (2) is flagged in the ranking and not added on that evidence; the next
-sound one may be. Base parameters at a bound are flagged too but do not block: they say
-the model still lacks something.
+Selection rule (`SELECTION`), on the held-out segments and on the squared scale where
+sensor noise and a systematic error add (e² = mean over runs and channel groups of the
+squared NRMS error; the noise alone costs f², the current model's systematic residual is
+e² - f²; `compare.held_out_gain`). A candidate is added only if its gain e²_current -
+e²_candidate
+
+1. exceeds `Z_NOISE` (5) standard errors of what the held-out noise produces between the two
+   predictions: both were fitted on the training segments, so the held-out noise enters the
+   gain only as 2 n·(ŷ_c - ŷ)/||y||², Gaussian with a variance the noise σ of every group
+   gives (a likelihood-ratio test against the noise floor; white noise at the analysis rate);
+2. removes at least `MIN_SHARE` (20 %) of the current model's systematic residual: the
+   current model is itself calibrated, so this is what the effect explains that recalibrating
+   the base cannot, and a small patch of a model-form difference is not a missing effect;
+3. is at least (0.5 %)², what the reduced model cannot resolve (`MODEL_RESOLUTION`);
+
+and (4) its fit is sound: no fitted effect parameter within 1 % of a bound (fitted scale),
+correlated beyond 0.95 with a base parameter, or without influence on the data
+(Gauss-Newton covariance at the solution). A candidate failing (4) is flagged in the
+ranking and not added on that evidence; the next sound one may be. Base parameters at a
+bound are flagged too but do not block: they say the model still lacks something.
 
 Training = the first 60 % of every run, held out = the last 40 % (`compare.segments`), both
 at the analysis rate (`compare.analysis_run`: runs faster than 200 Hz are anti-alias
@@ -53,12 +62,14 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from vtable.diagnose.calibration import Calibration
-from vtable.diagnose.campaign import Campaign, check_campaign
+from vtable.diagnose.campaign import MODEL_RESOLUTION, Campaign, check_campaign
 from vtable.diagnose.compare import (
     NOISE_FACTOR,
     UNEXPLAINED_RULE,
     Comparison,
+    Gain,
     compare,
+    held_out_gain,
     localisation_text,
     unexplained,
 )
@@ -72,15 +83,22 @@ from vtable.runs.model import Run
 __all__ = ["BASE_PARAMS", "Candidate", "Diagnoser", "Diagnosis", "DiagnosisInterrupted",
            "Round", "Stage", "check_campaign", "diagnose", "localise"]
 
-SELECTION = ("an effect is added when its held-out error beats the calibrated current "
-             "model's by more than max(0.1 x (error - noise floor), 0.2 x noise floor, 0.002 "
-             "per parameter) and its fit is sound: none of its own parameters within 1 % of a "
-             "bound, correlated beyond 0.95 with a base parameter, or without influence on "
-             "the data")
-PENALTY = 0.002  # held-out error charged per added parameter
+Z_NOISE = 5.0  # the held-out gain must stand 5 standard errors above what noise produces ...
+MIN_SHARE = 0.2  # ... remove 20 % of the current model's systematic residual (squared) ...
+#: ... and at least the square of what the reduced model resolves (`MODEL_RESOLUTION`)
+MIN_GAIN_SQ = MODEL_RESOLUTION**2
+SELECTION = (f"an effect is added when, on the held-out last 40 % of every run and on the "
+             f"scale where sensor noise and a systematic error add (the mean over runs and "
+             f"channel groups of the squared NRMS error), its gain over the calibrated "
+             f"current model (1) exceeds {Z_NOISE:g} standard errors of what the held-out "
+             f"noise alone produces between the two predictions (a likelihood-ratio test "
+             f"against the noise floor), (2) removes at least {MIN_SHARE:.0%} of the current "
+             f"model's systematic residual (error^2 - floor^2) and (3) at least "
+             f"({MODEL_RESOLUTION:.1%})^2, what the reduced model itself cannot resolve; and "
+             "its fit is sound: none of its own parameters within 1 % of a bound, correlated "
+             "beyond 0.95 with a base parameter, or without influence on the data. The best "
+             "such candidate (largest gain) is added")
 WORKERS = min(2, os.cpu_count() or 1)
-MIN_GAIN = 0.10  # an effect must remove 10 % of the excess over the noise floor ...
-FLOOR_GAIN = 0.2  # ... and at least 0.2 x the noise floor
 ERROR_DEFINITION = ("mean over runs and channel groups of the normalised RMS error "
                     "||model - measured|| / ||measured|| on the held-out last 40 % of every "
                     "run, at the analysis rate (runs faster than 200 Hz anti-alias filtered and "
@@ -113,6 +131,7 @@ class Candidate:
     predictions: dict | None = field(default=None, repr=False)
     screened: bool = False  # its first fit steps lowered the training cost < 1 %: stopped
     cost: float = float("nan")  # the fit's training cost (residuals and priors)
+    gain: Gain | None = None  # its held-out gain over the current model (`SELECTION`)
 
     @property
     def blocking(self) -> list[str]:
@@ -124,7 +143,25 @@ class Candidate:
 
     @property
     def score(self) -> float:
-        return self.error_after + PENALTY * self.n_params
+        """The ranking's key: the held-out mean squared NRMS error (`Gain.e2_candidate`)."""
+        return self.gain.e2_candidate if self.gain is not None else float("inf")
+
+    def failing(self) -> list[str]:
+        """The statistical criteria of `SELECTION` this candidate's gain does not meet."""
+        g = self.gain
+        if g is None:
+            return ["no valid model"]
+        out = []
+        if not g.z > Z_NOISE:
+            out.append(f"its gain is {g.z:.1f} standard errors of the noise (needs "
+                       f"{Z_NOISE:g})")
+        if not g.gain >= MIN_SHARE * g.systematic:
+            out.append(f"it removes {max(g.share, 0):.0%} of the systematic residual (needs "
+                       f"{MIN_SHARE:.0%})")
+        if not g.gain >= MIN_GAIN_SQ:
+            out.append(f"its gain ({_rms(g.gain)} in RMS terms) is below the reduced model's "
+                       f"resolution ({MODEL_RESOLUTION:.1%})")
+        return out
 
 
 @dataclass
@@ -176,7 +213,8 @@ class Diagnosis:
             "rounds": [{"ranking": [{"effect": c.effect, "error_after": c.error_after,
                                      "train_error": c.train_error, "params": c.params,
                                      "n_params": c.n_params, "evidence": c.evidence,
-                                     "flags": c.flags, "screened": c.screened}
+                                     "flags": c.flags, "screened": c.screened,
+                                     "gain": _gain_json(c)}
                                     for c in r.ranking],
                         "added": r.added, "error": r.error, "error_before": r.before,
                         "skipped": r.skipped}
@@ -394,9 +432,11 @@ class Diagnoser:
                                      len(effect(name).params), cand,
                                      [f"no valid model found: {exc}"], None)
                 err = compare(pred, self.runs, scored="held", floor=self.floor).error
+                gain = held_out_gain(st.stages[-1].predictions, pred, self.runs,
+                                     self.campaign.noise)
                 return Candidate(name, dict(cand.effects[name]), err, train, "",
                                  len(effect(name).params), cand, flags, pred, m.screened_,
-                                 m.cost_)
+                                 m.cost_, gain)
 
             # candidates are independent: fit them on both cores (the kernel releases the
             # GIL); on a stop, pending fits are cancelled and running ones end at their next
@@ -411,22 +451,15 @@ class Diagnoser:
             finally:
                 pool.shutdown(wait=True, cancel_futures=True)
             ranking.sort(key=lambda c: c.score)
-            # SELECTION: the best candidate that clears the margin and whose fit is sound (no
-            # parameter at a bound, none entangled with the base) is added
-            best, gain, needed = ranking[0], 0.0, 0.0
-            for c in ranking:
-                needed = max(MIN_GAIN * (err - self.floor), FLOOR_GAIN * self.floor,
-                             PENALTY * c.n_params)
-                best, gain = c, err - c.error_after
-                if gain <= needed or not c.blocking:
-                    break  # sorted: no later candidate gains more; or this one is sound
-            ranking.sort(key=lambda c: c.score)
+            # SELECTION: the candidate with the largest held-out gain that passes the
+            # statistical criteria and whose fit is sound (no parameter at a bound, none
+            # entangled with the base) is added
+            best = next((c for c in ranking if not c.failing() and not c.blocking), None)
             for c in ranking:
                 c.evidence = _evidence(c, err, self.floor, cmp_cur)
-            for c in ranking:
                 if c is not best:
                     c.predictions = None  # only the added model's predictions are kept
-            if gain > needed and not best.blocking:
+            if best is not None:
                 st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
                 current, err, cost = best.physics, best.error_after, best.cost
                 st.current, st.err, st.cmp = current, err, None
@@ -435,17 +468,21 @@ class Diagnoser:
                 progress(done, steps, f"round {k} done: added {best.effect}")
             else:
                 st.rounds.append(Round(ranking, None, err, err, skipped))
-                best = max(ranking, key=lambda c: err - c.error_after)
-                gain = err - best.error_after
-                if gain > needed and best.blocking:
-                    reason = (f"the best candidate ({best.effect}) would lower the held-out "
-                              f"error by {gain:.2%} but is not added on that evidence: "
-                              + "; ".join(best.blocking))
+                top = ranking[0]
+                what = (f"the best candidate ({top.effect}) would change the held-out error "
+                        f"{err:.2%} -> {top.error_after:.2%}")
+                if top.failing():
+                    reason = f"{what}, not a gain the noise cannot produce: " + \
+                        "; ".join(top.failing())
                 else:
-                    reason = (f"the best candidate ({best.effect}) would lower the held-out "
-                              f"error by {gain:.2%}, less than the {needed:.2%} the noise "
-                              f"floor ({self.floor:.1%}) and the parsimony penalty require, "
-                              "with the base recalibrated")
+                    reason = (f"{what}, but it is not added on that evidence: "
+                              + "; ".join(top.blocking))
+                passing = [c for c in ranking if not c.failing()]
+                if passing and top.failing():
+                    reason += ("; the candidates whose gain would count are not sound fits: "
+                               + "; ".join(f"{c.effect}: {'; '.join(c.blocking)}"
+                                           for c in passing))
+                reason += " (the base recalibrated with every candidate)"
                 progress(done, steps, f"round {k} done: nothing added")
                 break
         if not reason:
@@ -499,6 +536,20 @@ class Diagnoser:
                                interrupted=True)
 
 
+def _rms(v: float) -> str:
+    """A gain on the squared scale as the RMS error it stands for."""
+    return f"{np.sign(v) * np.sqrt(abs(v)):.2%}"
+
+
+def _gain_json(c: Candidate) -> dict[str, float] | None:
+    g = c.gain
+    if g is None:
+        return None
+    return {"mean_sq_error_before": g.e2_current, "mean_sq_error_after": g.e2_candidate,
+            "mean_sq_noise": g.f2, "gain": g.gain, "noise_se": g.se, "z": g.z,
+            "share_of_systematic": g.share, "passes": not c.failing()}
+
+
 def _evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
     if not np.isfinite(c.error_after):
         return "; ".join(c.flags)
@@ -509,12 +560,14 @@ def _evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
     worst = cmp.worst_groups(2)
     where = ", ".join(g for g, _ in worst)
     band = cmp.worst_band(worst[0][0]) if worst else None
-    removed = (err - c.error_after) / max(err - floor, 1e-12)
+    g = c.gain
+    removed = f"{max(g.share, 0.0):.0%}" if g is not None and np.isfinite(g.share) else "all"
+    z = f", {g.z:.1f} standard errors of the noise" if g is not None else ""
     params = ", ".join(f"{k} = {v:.3g} {p.unit}" for (k, v), p in
                        zip(c.params.items(), effect(c.effect).params, strict=True))
     return (f"residual concentrated in {where}" + (f" at {band[0]}" if band else "")
-            + f"; adding {c.effect} removes {removed:.0%} of it (held-out error {err:.2%} -> "
-              f"{c.error_after:.2%}); fitted {params}")
+            + f"; adding {c.effect} removes {removed} of its systematic part (held-out error "
+              f"{err:.2%} -> {c.error_after:.2%}{z}); fitted {params}")
 
 
 def diagnose(runs: Sequence[Run], start_effects: Sequence[str] = (), **kw) -> Diagnosis:

@@ -42,6 +42,7 @@ SCREEN_STEPS = 3  # ... (least-squares iterations from the best start) to be ref
 #: the base loop's fitted parameters: name -> (JSON key "owner.param", unit, lower, upper)
 BASE_PARAMS = LOOP
 MULTISTART = (0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95, None)  # fractions of a range; None: as is
+RIVAL = 10.0  # base starts whose best grid cost is within this factor of the best are refined
 
 
 class StopRequestedError(Exception):
@@ -192,12 +193,17 @@ class TableModel:
             idx = [i for i, p in enumerate(lay) if p.group == f"effect:{self.multistart}"]
             base = [i for i, p in enumerate(lay) if p.group != f"effect:{self.multistart}"]
             # the start's base and effects (fitted before this effect was there, they may
-            # have absorbed some of it) and the declaration itself (the table's nominal
-            # loop, the effects already in the model at their defaults)
+            # have absorbed some of it), and the start's calibrated specimen and table with
+            # the declared loop and the effects already in the model at their defaults (an
+            # effect of the servo loop that the fitted loop, or an earlier effect, absorbed)
             declared = np.array([math.log(lay[i].declared) if lay[i].log else lay[i].declared
                                  for i in base])
-            best, best_x = np.inf, x0
-            for base_x in (x0[base], declared):
+            reset = np.array([lay[i].group == "loop" or lay[i].group.startswith("effect:")
+                              for i in base])
+            mixed = np.where(reset, declared, x0[base])
+            starts: list[tuple[float, np.ndarray]] = []  # the best of each base start
+            for base_x in (x0[base], mixed):
+                best, best_x = np.inf, x0
                 for frac in MULTISTART:
                     x = x0.copy()
                     x[base] = base_x
@@ -210,16 +216,40 @@ class TableModel:
                     c = float(np.sum(self._cost(x, start, lay, campaign) ** 2))
                     if c < best:
                         best, best_x = c, x
-            x0 = best_x
+                starts.append((best, best_x))
+            c_min = min(c for c, _ in starts)
+            # a grid on the effect alone is coarse: every base start whose best grid point
+            # comes within RIVAL x the best gets a few least-squares steps before one wins
+            rivals = [x for c, x in starts if c <= RIVAL * c_min]
+            x0 = min(starts, key=lambda s: s[0])[1]
+        else:
+            rivals = []
         lo = np.array([math.log(p.lower) if p.log else p.lower for p in lay])
         hi = np.array([math.log(p.upper) if p.log else p.upper for p in lay])
-        x0 = np.clip(x0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
 
         def solve(x, nfev):
+            x = np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
             return scipy.optimize.least_squares(
                 lambda x: self._cost(x, start, lay, campaign), x, bounds=(lo, hi),
                 diff_step=1e-4, xtol=1e-6, ftol=1e-8, max_nfev=nfev)
 
+        if len(rivals) > 1:  # the effect's own parameters refined from each rival
+            eff = np.array([p.group == f"effect:{self.multistart}" for p in lay])
+
+            def refine(x):
+                def cost(xe):
+                    z = x.copy()
+                    z[eff] = xe
+                    return self._cost(z, start, lay, campaign)
+
+                sol = scipy.optimize.least_squares(cost, x[eff], bounds=(lo[eff], hi[eff]),
+                                                   diff_step=1e-4, max_nfev=SCREEN_STEPS)
+                z = x.copy()
+                z[eff] = sol.x
+                return float(np.sum(sol.fun**2)), z
+
+            x0 = min((refine(np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)))
+                      for x in rivals), key=lambda r: r[0])[1]
         if self.baseline is not None:  # screening: a few steps first
             sol = solve(x0, SCREEN_STEPS)
             if float(np.sum(sol.fun**2)) >= self.baseline * (1 - SCREEN):

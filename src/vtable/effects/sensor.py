@@ -6,17 +6,27 @@ analog response, the result does not depend on the simulation rate."""
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 import scipy.signal
 
 ORDER = 4
 
 
+@lru_cache(maxsize=64)
+def _response(nfft: int, fs: float, cutoff_hz: float) -> np.ndarray:
+    """The analog filter's response on the FFT's frequencies (read-only: shared)."""
+    b, a = scipy.signal.butter(ORDER, 2 * np.pi * cutoff_hz, analog=True)
+    w = 2 * np.pi * np.fft.rfftfreq(nfft, 1.0 / fs)
+    _, H = scipy.signal.freqs(b, a, worN=w)
+    H.flags.writeable = False
+    return H
+
+
 def sensor_filter(x: np.ndarray, fs: float, cutoff_hz: float) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     n = len(x)
     nfft = 1 << int(np.ceil(np.log2(2 * n)))
-    b, a = scipy.signal.butter(ORDER, 2 * np.pi * cutoff_hz, analog=True)
-    w = 2 * np.pi * np.fft.rfftfreq(nfft, 1.0 / fs)
-    _, H = scipy.signal.freqs(b, a, worN=w)
+    H = _response(nfft, float(fs), float(cutoff_hz))
     return np.fft.irfft(np.fft.rfft(x, nfft) * H, nfft)[:n]

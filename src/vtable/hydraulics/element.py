@@ -7,7 +7,8 @@ q_v (spool lag). The DOF law (`law.ServoLaw`) gives the drive:
   drive = T G [(q_c - q) - k_p P̄_f - k_v q̇],  q = T⁺x,  P̄ = T⁺P        (eqs 6.1-6.4)
   q = k_t·drive, lagged by τ (spool_lag), clipped at ±max_flow, times
       √(1 - sign(q) P_L/P_s) with a supply pressure P_s (orifice flow, eq C.14)
-  (V/4β_e) Ṗ_L = q - k_ct P_L - A v,  1/β_e = 1/β + r/(1.4 P) (air_ratio, eq C.10)
+  (V/4β_e) Ṗ_L = q - k_ct P_L - A v,  β_e = (β₁ + β₂)/2 with 1/β_i = 1/β + r/(1.4 P_i)
+      for the chambers at P_s/2 ± P_L/2 (air_ratio, eqs C.6-C.11)
   F = A P_L - F_r tanh(v/v_ε)                                             (eq C.12)
 
 `HydraulicParams` names every constant; `vector()` lays them out for the kernel, and the
@@ -122,7 +123,9 @@ def servo_rates(z, x, v, qc, T, Tp, g, kp, kv, sp, dz, force):
         if sp[_AIR] > 0:
             p1 = max(0.5 * sp[_PMEAN] + 0.5 * P[i], 0.0) + ATM
             p2 = max(0.5 * sp[_PMEAN] - 0.5 * P[i], 0.0) + ATM
-            beta = 1.0 / (1.0 / sp[_BETA] + sp[_AIR] / 1.4 * 0.5 * (1.0 / p1 + 1.0 / p2))
+            # each chamber (V/2) its own modulus, eqs C.6-C.11: Ṗ_L = (2/V)(β₁ + β₂)·flow
+            beta = 0.5 / (1.0 / sp[_BETA] + sp[_AIR] / (1.4 * p1)) + \
+                0.5 / (1.0 / sp[_BETA] + sp[_AIR] / (1.4 * p2))
         dP = 4.0 * beta / sp[_V] * (q - sp[_KCT] * P[i] - sp[_A] * v[i])
         dz[i, 0] = dP
         dz[i, 1] = (-z[i, 1] / sp[_RC] + dP) if sp[_RC] > 0 else 0.0
