@@ -85,19 +85,24 @@ __all__ = ["BASE_PARAMS", "Candidate", "Diagnoser", "Diagnosis", "DiagnosisInter
 
 Z_NOISE = 5.0  # the held-out gain must stand 5 standard errors above what noise produces ...
 MIN_SHARE = 0.2  # ... remove 20 % of the current model's systematic residual (squared) ...
-#: ... and at least the square of what the reduced model resolves (`MODEL_RESOLUTION`)
+#: ... and at least the square of what the reduced model resolves (`MODEL_RESOLUTION`) ...
 MIN_GAIN_SQ = MODEL_RESOLUTION**2
+NOISE_SHARE = 0.05  # ... and 5 % of what the sensor noise alone costs (f²)
 SELECTION = (f"an effect is added when, on the held-out last 40 % of every run and on the "
              f"scale where sensor noise and a systematic error add (the mean over runs and "
              f"channel groups of the squared NRMS error), its gain over the calibrated "
              f"current model (1) exceeds {Z_NOISE:g} standard errors of what the held-out "
              f"noise alone produces between the two predictions (a likelihood-ratio test "
              f"against the noise floor), (2) removes at least {MIN_SHARE:.0%} of the current "
-             f"model's systematic residual (error^2 - floor^2) and (3) at least "
-             f"({MODEL_RESOLUTION:.1%})^2, what the reduced model itself cannot resolve; and "
+             f"model's systematic residual (error^2 - floor^2) and (3) is at least "
+             f"({MODEL_RESOLUTION:.1%})^2, what the reduced model itself cannot resolve, and "
+             f"{NOISE_SHARE:.0%} of what the noise alone costs (floor^2): refitting the base "
+             "and an effect to other noise moves a held-out error by less; and "
              "its fit is sound: none of its own parameters within 1 % of a bound, correlated "
              "beyond 0.95 with a base parameter, or without influence on the data. The best "
-             "such candidate (largest gain) is added")
+             "such candidate (largest gain) is added. After each addition every effect added "
+             "earlier is tested the same way against the model without it (refitted) and "
+             "removed when it no longer passes")
 WORKERS = min(2, os.cpu_count() or 1)
 ERROR_DEFINITION = ("mean over runs and channel groups of the normalised RMS error "
                     "||model - measured|| / ||measured|| on the held-out last 40 % of every "
@@ -148,20 +153,27 @@ class Candidate:
 
     def failing(self) -> list[str]:
         """The statistical criteria of `SELECTION` this candidate's gain does not meet."""
-        g = self.gain
-        if g is None:
-            return ["no valid model"]
-        out = []
-        if not g.z > Z_NOISE:
-            out.append(f"its gain is {g.z:.1f} standard errors of the noise (needs "
-                       f"{Z_NOISE:g})")
-        if not g.gain >= MIN_SHARE * g.systematic:
-            out.append(f"it removes {max(g.share, 0):.0%} of the systematic residual (needs "
-                       f"{MIN_SHARE:.0%})")
-        if not g.gain >= MIN_GAIN_SQ:
-            out.append(f"its gain ({_rms(g.gain)} in RMS terms) is below the reduced model's "
-                       f"resolution ({MODEL_RESOLUTION:.1%})")
-        return out
+        return failing(self.gain)
+
+
+def failing(g: Gain | None) -> list[str]:
+    """The statistical criteria of `SELECTION` a held-out gain does not meet (empty: it
+    passes)."""
+    if g is None:
+        return ["no valid model"]
+    out = []
+    if not g.z > Z_NOISE:
+        out.append(f"its gain is {g.z:.1f} standard errors of the noise (needs {Z_NOISE:g})")
+    if not g.gain >= MIN_SHARE * g.systematic:
+        out.append(f"it removes {max(g.share, 0):.0%} of the systematic residual (needs "
+                   f"{MIN_SHARE:.0%})")
+    if not g.gain >= MIN_GAIN_SQ:
+        out.append(f"its gain ({_rms(g.gain)} in RMS terms) is below the reduced model's "
+                   f"resolution ({MODEL_RESOLUTION:.1%})")
+    if not g.gain >= NOISE_SHARE * g.f2:
+        out.append(f"its gain is {max(g.gain, 0) / g.f2:.0%} of what the noise alone costs "
+                   f"(needs {NOISE_SHARE:.0%})" if g.f2 > 0 else "no noise estimate")
+    return out
 
 
 @dataclass
@@ -171,6 +183,8 @@ class Round:
     error: float
     before: float
     skipped: dict[str, str] = field(default_factory=dict)  # effect -> why it cannot apply
+    #: effects added earlier and removed after this round's addition: effect -> why
+    removed: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass
@@ -199,7 +213,9 @@ class Diagnosis:
         if self.start_error is None:
             return []
         h = [("start", self.start_error)]
-        h += [(r.added, r.error) for r in self.rounds if r.added]
+        for r in self.rounds:
+            if r.added:
+                h.append((r.added + "".join(f" - {e}" for e in r.removed), r.error))
         return h
 
     def to_json(self) -> dict[str, Any]:
@@ -216,8 +232,8 @@ class Diagnosis:
                                      "flags": c.flags, "screened": c.screened,
                                      "gain": _gain_json(c)}
                                     for c in r.ranking],
-                        "added": r.added, "error": r.error, "error_before": r.before,
-                        "skipped": r.skipped}
+                        "added": r.added, "removed": r.removed, "error": r.error,
+                        "error_before": r.before, "skipped": r.skipped}
                        for r in self.rounds],
             "final_effects": self.final_effects,
             "final_params": {k: v for k, v in self.final.effects.items()},
@@ -288,16 +304,18 @@ class Diagnoser:
         self._stop = threading.Event()
 
     def model(self, start: Physics, multistart: str | None = None,
-              baseline: float | None = None) -> TableModel:
+              baseline: float | None = None, seed: dict[str, float] | None = None
+              ) -> TableModel:
         """The estimator the loop fits (sharing this diagnosis's stop flag)."""
         return TableModel(start=start, multistart=multistart, stop=self._stop,
-                          calibration=self.calibration, baseline=baseline)
+                          calibration=self.calibration, baseline=baseline, seed=seed)
 
     def fit(self, ph: Physics, multistart: str | None = None,
-            baseline: float | None = None) -> TableModel:
+            baseline: float | None = None, seed: dict[str, float] | None = None
+            ) -> TableModel:
         """Fit `ph` (see `TableModel`): the fitted estimator (`physics_`, `train_error_`,
         `flags_`, `cost_`, `screened_`)."""
-        return self.model(ph, multistart, baseline).fit(self.campaign)
+        return self.model(ph, multistart, baseline, seed).fit(self.campaign)
 
     def _inapplicable(self, ph: Physics) -> str:
         """Why a model cannot be built for this campaign's table (an effect needing a
@@ -403,6 +421,7 @@ class Diagnoser:
         st.cmp0 = self._detail(st)
         st.err = st.start_err = err = st.cmp0.error
         reason = ""
+        seeds: dict[str, dict[str, float]] = {}  # each candidate's last fitted parameters
         for k in range(1, self.max_rounds + 1):
             todo, skipped = [], {}
             for e in self.catalog:
@@ -423,7 +442,8 @@ class Diagnoser:
                 start = base.with_effect(name)
                 # linear models fit in a second: only the costly nonlinear ones are screened
                 m = self.fit(start, multistart=name,
-                             baseline=None if self._linear(start) else baseline)
+                             baseline=None if self._linear(start) else baseline,
+                             seed=seeds.get(name))
                 cand, train, flags = m.physics_, m.train_error_, m.flags_
                 try:
                     pred = self.predict(cand)
@@ -451,6 +471,7 @@ class Diagnoser:
             finally:
                 pool.shutdown(wait=True, cancel_futures=True)
             ranking.sort(key=lambda c: c.score)
+            seeds.update({c.effect: c.params for c in ranking if not c.screened})
             # SELECTION: the candidate with the largest held-out gain that passes the
             # statistical criteria and whose fit is sound (no parameter at a bound, none
             # entangled with the base) is added
@@ -460,12 +481,23 @@ class Diagnoser:
                 if c is not best:
                     c.predictions = None  # only the added model's predictions are kept
             if best is not None:
-                st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
+                rnd = Round(ranking, best.effect, best.error_after, err, skipped)
+                st.rounds.append(rnd)
                 current, err, cost = best.physics, best.error_after, best.cost
                 st.current, st.err, st.cmp = current, err, None
                 st.stages.append(Stage(f"{len(st.stages)}_{best.effect}", current,
                                        best.predictions))
                 progress(done, steps, f"round {k} done: added {best.effect}")
+                for e in [e for e in current.effects
+                          if e != best.effect and e not in self.start.effects]:
+                    drop = self._without(e, current, st.stages[-1].predictions)
+                    if drop is not None:
+                        current, err, cost, why, pred = drop
+                        rnd.removed[e] = why
+                        rnd.error = err
+                        st.current, st.err, st.cmp = current, err, None
+                        st.stages.append(Stage(f"{len(st.stages)}_without_{e}", current, pred))
+                        progress(done, steps, f"round {k}: removed {e}")
             else:
                 st.rounds.append(Round(ranking, None, err, err, skipped))
                 top = ranking[0]
@@ -491,6 +523,26 @@ class Diagnoser:
         progress(steps, steps, "done")
         return self._diagnosis(st, final_cmp, reason)
 
+    def _without(self, name: str, current: Physics, pred: dict):
+        """Backward step: refit `current` without the effect `name` (warm-started from the
+        current values); when `current`'s held-out gain over it no longer passes
+        `SELECTION`'s criteria, the effect goes: (model, error, cost, why, predictions);
+        else None."""
+        m = self.fit(current.without(name))
+        try:
+            p = self.predict(m.physics_)
+        except VtableError:
+            return None
+        g = held_out_gain(p, pred, self.runs, self.campaign.noise)
+        fails = failing(g)
+        if not fails:
+            return None
+        err = compare(p, self.runs, scored="held", floor=self.floor).error
+        why = (f"no longer needed once the later effects are in: without it (base "
+               f"recalibrated) the held-out error is {err:.2%}; keeping it is not a gain the "
+               "noise cannot produce: " + "; ".join(fails))
+        return m.physics_, err, m.cost_, why, p
+
     def _diagnosis(self, st: _State, final_cmp: Comparison | None, reason: str,
                    interrupted: bool = False) -> Diagnosis:
         current = st.current or self.start
@@ -508,9 +560,12 @@ class Diagnoser:
             parts.append(f"interrupted after round {len(st.rounds)}"
                          + ("" if err is not None else ", before the starting model was fitted")
                          + "; the diagnosis is incomplete")
+        removed = [e for r in st.rounds for e in r.removed]
         if added:
-            parts.append(f"added {', '.join(added)}: held-out error {st.start_err:.2%} -> "
-                         f"{err:.2%} (noise floor {floor:.2%})")
+            parts.append(f"added {', '.join(added)}"
+                         + (f" (later removed: {', '.join(removed)})" if removed else "")
+                         + f": held-out error {st.start_err:.2%} -> {err:.2%} (noise floor "
+                           f"{floor:.2%})")
         if err is not None:
             if unexp is None:
                 lead = "no missing effect" if not added else "no further missing effect"

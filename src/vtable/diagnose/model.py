@@ -100,14 +100,18 @@ class TableModel:
         start do not lower it by `SCREEN` (a relative 1 %), the fit stops there and
         `screened_` is set (the diagnosis's screening of candidates: such a fit cannot
         clear the selection margin).
+    seed
+        The `multistart` effect's parameters where an earlier fit of it ended (its units):
+        one more start (the diagnosis passes the previous round's).
     """
 
     def __init__(self, effects: Sequence[str] = (), *, start: Physics | None = None,
                  multistart: str | None = None, stop: threading.Event | None = None,
                  calibration: Calibration | None = None,
-                 baseline: float | None = None) -> None:
+                 baseline: float | None = None, seed: dict[str, float] | None = None) -> None:
         self.effects = tuple(effects)
         self.start, self.multistart, self.stop = start, multistart, stop
+        self.seed = seed
         self.calibration = calibration or Calibration()
         self.baseline = baseline
         self.screened_ = False
@@ -193,39 +197,51 @@ class TableModel:
             idx = [i for i, p in enumerate(lay) if p.group == f"effect:{self.multistart}"]
             base = [i for i, p in enumerate(lay) if p.group != f"effect:{self.multistart}"]
             # the start's base and effects (fitted before this effect was there, they may
-            # have absorbed some of it), and the start's calibrated specimen and table with
-            # the declared loop and the effects already in the model at their defaults (an
-            # effect of the servo loop that the fitted loop, or an earlier effect, absorbed)
+            # have absorbed some of it), and the same with the declared loop (an effect of
+            # the servo loop that the fitted loop absorbed)
             declared = np.array([math.log(lay[i].declared) if lay[i].log else lay[i].declared
                                  for i in base])
-            reset = np.array([lay[i].group == "loop" or lay[i].group.startswith("effect:")
-                              for i in base])
-            mixed = np.where(reset, declared, x0[base])
+            mixed = np.where([lay[i].group == "loop" for i in base], declared, x0[base])
+            points = []  # the effect's parameters across their ranges (fitted scale) ...
+            for frac in MULTISTART:
+                v = x0[idx].copy()
+                if frac is not None:
+                    for k, i in enumerate(idx):
+                        p = lay[i]
+                        a, b = ((math.log(p.lower), math.log(p.upper)) if p.log
+                                else (p.lower, p.upper))
+                        v[k] = a + frac * (b - a)
+                points.append(v)
+            if self.seed:  # ... and where an earlier fit of the effect ended
+                v = np.array([math.log(self.seed[lay[i].key.split(".", 1)[1]]) if lay[i].log
+                              else self.seed[lay[i].key.split(".", 1)[1]] for i in idx])
+                points.append(v)
             starts: list[tuple[float, np.ndarray]] = []  # the best of each base start
             for base_x in (x0[base], mixed):
                 best, best_x = np.inf, x0
-                for frac in MULTISTART:
+                for v in points:
                     x = x0.copy()
                     x[base] = base_x
-                    for i in idx:
-                        p = lay[i]
-                        if frac is not None:
-                            a, b = ((math.log(p.lower), math.log(p.upper)) if p.log
-                                    else (p.lower, p.upper))
-                            x[i] = a + frac * (b - a)
+                    x[idx] = v
                     c = float(np.sum(self._cost(x, start, lay, campaign) ** 2))
                     if c < best:
                         best, best_x = c, x
                 starts.append((best, best_x))
+        lo = np.array([math.log(p.lower) if p.log else p.lower for p in lay])
+        hi = np.array([math.log(p.upper) if p.log else p.upper for p in lay])
+        if self.multistart:
+            # a grid on the effect alone is coarse (an effect the loop absorbed has a sharp
+            # valley across it): each base start's best grid point is refined in the
+            # effect's own parameters, and every one that comes within RIVAL x the best
+            # gets a few least-squares steps in all parameters before one wins
+            eff = np.zeros(len(lay), dtype=bool)
+            eff[idx] = True
+            starts = [self._refine(x, eff, lo, hi, start, lay, campaign) for _, x in starts]
             c_min = min(c for c, _ in starts)
-            # a grid on the effect alone is coarse: every base start whose best grid point
-            # comes within RIVAL x the best gets a few least-squares steps before one wins
             rivals = [x for c, x in starts if c <= RIVAL * c_min]
             x0 = min(starts, key=lambda s: s[0])[1]
         else:
             rivals = []
-        lo = np.array([math.log(p.lower) if p.log else p.lower for p in lay])
-        hi = np.array([math.log(p.upper) if p.log else p.upper for p in lay])
 
         def solve(x, nfev):
             x = np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
@@ -233,30 +249,37 @@ class TableModel:
                 lambda x: self._cost(x, start, lay, campaign), x, bounds=(lo, hi),
                 diff_step=1e-4, xtol=1e-6, ftol=1e-8, max_nfev=nfev)
 
-        if len(rivals) > 1:  # the effect's own parameters refined from each rival
-            eff = np.array([p.group == f"effect:{self.multistart}" for p in lay])
-
-            def refine(x):
-                def cost(xe):
-                    z = x.copy()
-                    z[eff] = xe
-                    return self._cost(z, start, lay, campaign)
-
-                sol = scipy.optimize.least_squares(cost, x[eff], bounds=(lo[eff], hi[eff]),
-                                                   diff_step=1e-4, max_nfev=SCREEN_STEPS)
-                z = x.copy()
-                z[eff] = sol.x
-                return float(np.sum(sol.fun**2)), z
-
-            x0 = min((refine(np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)))
-                      for x in rivals), key=lambda r: r[0])[1]
-        if self.baseline is not None:  # screening: a few steps first
+        if len(rivals) > 1:  # a few steps from each rival; the best goes on
+            sol = min((solve(x, SCREEN_STEPS) for x in rivals),
+                      key=lambda s: float(np.sum(s.fun**2)))
+            if self.baseline is not None and \
+                    float(np.sum(sol.fun**2)) >= self.baseline * (1 - SCREEN):
+                return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac, screened=True)
+            x0 = sol.x
+        elif self.baseline is not None:  # screening: a few steps first
             sol = solve(x0, SCREEN_STEPS)
             if float(np.sum(sol.fun**2)) >= self.baseline * (1 - SCREEN):
                 return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac, screened=True)
             x0 = sol.x
         sol = solve(x0, 40)
         return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac)
+
+    def _refine(self, x: np.ndarray, eff: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                start: Physics, lay, campaign: Campaign) -> tuple[float, np.ndarray]:
+        """A few least-squares steps in the parameters `eff` only, the rest held at `x`:
+        (cost, the refined x)."""
+        x = np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+
+        def cost(xe):
+            z = x.copy()
+            z[eff] = xe
+            return self._cost(z, start, lay, campaign)
+
+        sol = scipy.optimize.least_squares(cost, x[eff], bounds=(lo[eff], hi[eff]),
+                                           diff_step=1e-4, max_nfev=SCREEN_STEPS)
+        z = x.copy()
+        z[eff] = sol.x
+        return float(np.sum(sol.fun**2)), z
 
     def _done(self, campaign: Campaign, start: Physics, lay, x, fun, jac,
               screened: bool = False) -> TableModel:
