@@ -224,9 +224,17 @@ def group_signal(run: Run, group: str) -> np.ndarray | None:
 
 
 def group_prediction(pred: dict[str, np.ndarray], run: Run, group: str) -> np.ndarray | None:
+    """The model's prediction of a group: its channels averaged as `group_signal` averages
+    the measured ones (one array predicted for several sensors counts once per sensor)."""
     chans = [c for c in run_groups(run).get(group, ())
              if run.has(c) and not run.missing.get(c) and c in pred]
-    return np.mean([pred[c] for c in chans], axis=0) if chans else None
+    if not chans:
+        return None
+    arrays = [pred[c] for c in chans]
+    first = arrays[0]
+    if all(a is first for a in arrays):  # the lumped model predicts one for all
+        return first
+    return np.mean(arrays, axis=0)
 
 
 def segments(run: Run) -> tuple[slice, slice]:
