@@ -88,7 +88,10 @@ class _GroupUnits(dict):
 #: the unit each group is shown in (the run format's unit of its channels)
 GROUP_UNITS: dict[str, str] = _GroupUnits({g: FORMAT_UNITS[c[0]] for g, c in GROUPS.items()})
 BANDS = ((0.0, 2.0), (2.0, 5.0), (5.0, 10.0), (10.0, 20.0), (20.0, 30.0))
-HELD_OUT = 0.4  # the last 40 % of every run is held out from fitting
+HELD_OUT = 0.4  # the last 40 % of every run is held out from fitting ...
+#: ... and the fits use at most the first 30 s of each run: a few parameters do not need
+#: more, and every simulated second costs the fits time (a 165 s run trains on 30 s)
+TRAIN_MAX_S = 30.0
 ANALYSIS_FS = 200.0  # Hz: faster runs are anti-alias filtered and resampled to this rate
 MIN_FS = 100.0  # Hz: slower runs cannot resolve the bands and the noise floor
 NOISE_FACTOR = 2.0  # a final error <= 2 x the noise floor is consistent with the noise
@@ -238,10 +241,11 @@ def group_prediction(pred: dict[str, np.ndarray], run: Run, group: str) -> np.nd
 
 
 def segments(run: Run) -> tuple[slice, slice]:
-    """Training (first 60 %) and held-out (last 40 %) samples of a run."""
+    """Training (the first 60 %, at most `TRAIN_MAX_S`) and held-out (the last 40 %)
+    samples of a run."""
     n = len(run.time)
     cut = round(n * (1 - HELD_OUT))
-    return slice(0, cut), slice(cut, n)
+    return slice(0, min(cut, round(TRAIN_MAX_S * run.fs) + 1)), slice(cut, n)
 
 
 def nrms(yhat: np.ndarray, y: np.ndarray) -> float:

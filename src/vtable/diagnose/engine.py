@@ -21,7 +21,9 @@ e²_candidate
 2. removes at least `MIN_SHARE` (20 %) of the current model's systematic residual: the
    current model is itself calibrated, so this is what the effect explains that recalibrating
    the base cannot, and a small patch of a model-form difference is not a missing effect;
-3. is at least (0.5 %)², what the reduced model cannot resolve (`MODEL_RESOLUTION`);
+3. is at least 5 % of what the noise alone costs (f²; the reduced model's resolution,
+   (0.5 %)², counts as noise where the sensors are quieter: `MODEL_RESOLUTION`): refitting
+   the base and an effect to other noise moves a held-out error by less;
 
 and (4) its fit is sound: no fitted effect parameter within 1 % of a bound (fitted scale),
 correlated beyond 0.95 with a base parameter, or without influence on the data
@@ -53,6 +55,7 @@ from __future__ import annotations
 import os
 import queue
 import threading
+import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -85,9 +88,10 @@ __all__ = ["BASE_PARAMS", "Candidate", "Diagnoser", "Diagnosis", "DiagnosisInter
 
 Z_NOISE = 5.0  # the held-out gain must stand 5 standard errors above what noise produces ...
 MIN_SHARE = 0.2  # ... remove 20 % of the current model's systematic residual (squared) ...
-#: ... and at least the square of what the reduced model resolves (`MODEL_RESOLUTION`) ...
-MIN_GAIN_SQ = MODEL_RESOLUTION**2
-NOISE_SHARE = 0.05  # ... and 5 % of what the sensor noise alone costs (f²)
+#: ... and be 5 % of what the noise alone costs (f²), the reduced model's own resolution
+#: (`MODEL_RESOLUTION`, a floor below which it cannot tell physics from its approximations)
+#: counting as noise when the sensors are quieter
+NOISE_SHARE = 0.05
 SELECTION = (f"an effect is added when, on the held-out last 40 % of every run and on the "
              f"scale where sensor noise and a systematic error add (the mean over runs and "
              f"channel groups of the squared NRMS error), its gain over the calibrated "
@@ -95,9 +99,9 @@ SELECTION = (f"an effect is added when, on the held-out last 40 % of every run a
              f"noise alone produces between the two predictions (a likelihood-ratio test "
              f"against the noise floor), (2) removes at least {MIN_SHARE:.0%} of the current "
              f"model's systematic residual (error^2 - floor^2) and (3) is at least "
-             f"({MODEL_RESOLUTION:.1%})^2, what the reduced model itself cannot resolve, and "
-             f"{NOISE_SHARE:.0%} of what the noise alone costs (floor^2): refitting the base "
-             "and an effect to other noise moves a held-out error by less; and "
+             f"{NOISE_SHARE:.0%} of what the noise alone costs (floor^2; at least "
+             f"({MODEL_RESOLUTION:.1%})^2, what the reduced model cannot resolve): refitting "
+             "the base and an effect to other noise moves a held-out error by less; and "
              "its fit is sound: none of its own parameters within 1 % of a bound, correlated "
              "beyond 0.95 with a base parameter, or without influence on the data. The best "
              "such candidate (largest gain) is added. After each addition every effect added "
@@ -167,12 +171,12 @@ def failing(g: Gain | None) -> list[str]:
     if not g.gain >= MIN_SHARE * g.systematic:
         out.append(f"it removes {max(g.share, 0):.0%} of the systematic residual (needs "
                    f"{MIN_SHARE:.0%})")
-    if not g.gain >= MIN_GAIN_SQ:
-        out.append(f"its gain ({_rms(g.gain)} in RMS terms) is below the reduced model's "
-                   f"resolution ({MODEL_RESOLUTION:.1%})")
-    if not g.gain >= NOISE_SHARE * g.f2:
-        out.append(f"its gain is {max(g.gain, 0) / g.f2:.0%} of what the noise alone costs "
-                   f"(needs {NOISE_SHARE:.0%})" if g.f2 > 0 else "no noise estimate")
+    f2 = max(g.f2, MODEL_RESOLUTION**2)
+    if not g.gain >= NOISE_SHARE * f2:
+        out.append(f"its gain is {max(g.gain, 0) / f2:.0%} of what the noise alone costs "
+                   f"(needs {NOISE_SHARE:.0%})" + ("" if g.f2 >= f2 else
+                                                   f"; the noise taken at the reduced model's "
+                                                   f"resolution, {MODEL_RESOLUTION:.1%}"))
     return out
 
 
@@ -284,8 +288,13 @@ class Diagnoser:
     def __init__(self, runs: Sequence[Run], start_effects: Sequence[str] = (),
                  catalog: Sequence[str] | None = None,
                  progress: Callable[[int, int, str], None] | None = None,
-                 max_rounds: int = 4, calibration: Calibration | None = None) -> None:
+                 max_rounds: int = 4, calibration: Calibration | None = None,
+                 workers: int | None = None) -> None:
         self.campaign = Campaign.of(runs)
+        self.vt = self.campaign.table  # made once here, sent to the workers with the campaign
+        self.workers = WORKERS if workers is None else max(1, int(workers))
+        self._procs = None
+        self._file = None  # the campaign pickled for the worker processes
         self.source_runs, self.runs = self.campaign.source_runs, self.campaign.runs
         for e in start_effects:
             effect(e)
@@ -316,6 +325,49 @@ class Diagnoser:
         """Fit `ph` (see `TableModel`): the fitted estimator (`physics_`, `train_error_`,
         `flags_`, `cost_`, `screened_`)."""
         return self.model(ph, multistart, baseline, seed).fit(self.campaign)
+
+    def _fit_here(self, start: Physics, name: str, baseline: float | None,
+                  seed: dict[str, float] | None) -> tuple:
+        """`workers._fit` in this process."""
+        t0 = time.thread_time()
+        m = self.fit(start, multistart=name, baseline=baseline, seed=seed)
+        try:
+            pred: Any = self.predict(m.physics_)
+        except VtableError as exc:
+            pred = exc
+        return (m.physics_, m.train_error_, m.flags_, m.cost_, m.screened_, pred,
+                time.thread_time() - t0)
+
+    def _campaign_file(self):
+        if self._file is None:
+            from vtable.diagnose.workers import CampaignFile
+
+            self.campaign.noise  # noqa: B018 (computed before pickling, with the table)
+            self._file = CampaignFile(self.campaign)
+        return self._file
+
+    def _pool(self):
+        """The worker processes for this diagnosis's candidates (`workers.CandidatePool`),
+        or None: one worker, or an effect registered from code (not from a file another
+        process can load)."""
+        from vtable.effects.registry import is_user, source_file
+
+        if self.workers < 2:
+            return None
+        files = []
+        for e in self.catalog:
+            if is_user(e):
+                f = source_file(e)
+                if f is None:
+                    return None
+                files.append(f)
+        from vtable.diagnose.workers import CandidatePool
+
+        pool = CandidatePool.get(self.workers, tuple(sorted(set(files))))
+        if self._procs is None:  # this diagnosis's first round: a stop left from before goes
+            pool.stop.clear()
+        self._procs = pool
+        return pool
 
     def _inapplicable(self, ph: Physics) -> str:
         """Why a model cannot be built for this campaign's table (an effect needing a
@@ -374,20 +426,35 @@ class Diagnoser:
                     continue
                 self.progress(*item)
         except KeyboardInterrupt:
-            self._stop.set()
+            self._halt()
             worker.join()
             self._stop.clear()
+            self._close_file()
             raise DiagnosisInterrupted(self._partial(st)) from None
         except BaseException:  # a failing progress callback: stop the fits, then report it
-            self._stop.set()
+            self._halt()
             worker.join()
             self._stop.clear()
+            self._close_file()
             raise
         worker.join()
+        self._close_file()
         if st.error is not None:
             raise st.error
         assert st.result is not None
         return st.result
+
+    def _close_file(self) -> None:
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+
+    def _halt(self) -> None:
+        """Stop the fits: this process's and the worker processes' (at their next
+        simulation)."""
+        self._stop.set()
+        if self._procs is not None:
+            self._procs.stop.set()
 
     def _loop(self, st: _State, post: Callable[[tuple[int, int, str]], None]) -> None:
         try:
@@ -411,6 +478,7 @@ class Diagnoser:
         steps = 1 + self.max_rounds * len(self.catalog)
         done = 0
         progress(done, steps, "fitting the starting model")
+        self._pool()  # the workers start while this process fits the starting model
         fitted = self.fit(self.start)
         current, cost = fitted.physics_, fitted.cost_
         self.notes += [f"starting model: {f}" for f in fitted.flags_]
@@ -422,7 +490,11 @@ class Diagnoser:
         st.err = st.start_err = err = st.cmp0.error
         reason = ""
         seeds: dict[str, dict[str, float]] = {}  # each candidate's last fitted parameters
-        for k in range(1, self.max_rounds + 1):
+        spent: dict[str, float] = {}  # each candidate's last fit's CPU seconds
+        backward: list[str] = []  # effects added before the last one: tested without each
+        k = 0
+        while k < self.max_rounds:
+            k += 1
             todo, skipped = [], {}
             for e in self.catalog:
                 if current.has(e):
@@ -432,44 +504,59 @@ class Diagnoser:
                     skipped[e] = why
                 else:
                     todo.append(e)
-            if not todo:
+            if not todo and not backward:
                 reason = "every catalog effect is in the model"
                 break
             cmp_cur = self._detail(st)
-            ranking: list[Candidate] = []
 
-            def trial(name: str, base: Physics = current, baseline: float = cost) -> Candidate:
-                start = base.with_effect(name)
-                # linear models fit in a second: only the costly nonlinear ones are screened
-                m = self.fit(start, multistart=name,
-                             baseline=None if self._linear(start) else baseline,
-                             seed=seeds.get(name))
-                cand, train, flags = m.physics_, m.train_error_, m.flags_
-                try:
-                    pred = self.predict(cand)
-                except VtableError as exc:  # the fit found no model it could build
+            def judged(name: str, fitted: tuple) -> Candidate:
+                """The candidate a fit (`workers._fit`'s tuple) makes, scored held out."""
+                cand, train, flags, cost_, screened, pred, secs = fitted
+                spent[name] = secs
+                if isinstance(pred, Exception):  # the fit found no model it could build
                     return Candidate(name, dict(cand.effects[name]), float("inf"), train, "",
                                      len(effect(name).params), cand,
-                                     [f"no valid model found: {exc}"], None)
+                                     [f"no valid model found: {pred}"], None)
                 err = compare(pred, self.runs, scored="held", floor=self.floor).error
                 gain = held_out_gain(st.stages[-1].predictions, pred, self.runs,
                                      self.campaign.noise)
                 return Candidate(name, dict(cand.effects[name]), err, train, "",
-                                 len(effect(name).params), cand, flags, pred, m.screened_,
-                                 m.cost_, gain)
+                                 len(effect(name).params), cand, flags, pred, screened,
+                                 cost_, gain)
 
-            # candidates are independent: fit them on both cores (the kernel releases the
-            # GIL); on a stop, pending fits are cancelled and running ones end at their next
-            # simulation
-            pool = ThreadPoolExecutor(max_workers=WORKERS)
-            try:
-                futures = {pool.submit(trial, name): name for name in todo}
-                for fut in as_completed(futures):
-                    ranking.append(fut.result())
-                    done += 1
-                    progress(done, steps, f"round {k}: tried {futures[fut]}")
-            finally:
-                pool.shutdown(wait=True, cancel_futures=True)
+            def task(name: str, base: Physics = current, baseline: float = cost) -> tuple:
+                start = base.with_effect(name)
+                # linear models fit in a second: only the costly nonlinear ones are screened
+                return (start, name, None if self._linear(start) else baseline,
+                        seeds.get(name))
+
+            # the backward step for the last addition (each earlier effect left out, the
+            # model refitted) runs beside this round's candidates: a removal, rare, makes
+            # the round start again from the smaller model. The costliest fits go first
+            # (what each took last round; nonlinear ones before linear ones in the first),
+            # so that no long fit starts last on an idle core.
+            todo.sort(key=lambda e: -spent.get(e, 0.0 if self._linear(current.with_effect(e))
+                                               else 1.0))
+            jobs = [(("without", e), (current.without(e), None, None, None)) for e in backward]
+            jobs += [(("add", e), task(e)) for e in todo]
+            ranking: list[Candidate] = []
+            left: dict[str, tuple] = {}
+            for (kind, name), fitted in self._dispatch(jobs):
+                if kind == "without":
+                    left[name] = fitted
+                    continue
+                ranking.append(judged(name, fitted))
+                done += 1
+                progress(done, steps, f"round {k}: tried {name}")
+            dropped = self._backward(st, backward, left, progress, done, steps, k)
+            backward = []
+            if dropped is not None:
+                current, err, cost = dropped
+                k -= 1  # this round's candidates were fitted to the larger model: again
+                continue
+            if not ranking:
+                reason = "every catalog effect is in the model"
+                break
             ranking.sort(key=lambda c: c.score)
             seeds.update({c.effect: c.params for c in ranking if not c.screened})
             # SELECTION: the candidate with the largest held-out gain that passes the
@@ -481,23 +568,14 @@ class Diagnoser:
                 if c is not best:
                     c.predictions = None  # only the added model's predictions are kept
             if best is not None:
-                rnd = Round(ranking, best.effect, best.error_after, err, skipped)
-                st.rounds.append(rnd)
+                st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
                 current, err, cost = best.physics, best.error_after, best.cost
                 st.current, st.err, st.cmp = current, err, None
                 st.stages.append(Stage(f"{len(st.stages)}_{best.effect}", current,
                                        best.predictions))
                 progress(done, steps, f"round {k} done: added {best.effect}")
-                for e in [e for e in current.effects
-                          if e != best.effect and e not in self.start.effects]:
-                    drop = self._without(e, current, st.stages[-1].predictions)
-                    if drop is not None:
-                        current, err, cost, why, pred = drop
-                        rnd.removed[e] = why
-                        rnd.error = err
-                        st.current, st.err, st.cmp = current, err, None
-                        st.stages.append(Stage(f"{len(st.stages)}_without_{e}", current, pred))
-                        progress(done, steps, f"round {k}: removed {e}")
+                backward = [e for e in current.effects
+                            if e != best.effect and e not in self.start.effects]
             else:
                 st.rounds.append(Round(ranking, None, err, err, skipped))
                 top = ranking[0]
@@ -517,31 +595,65 @@ class Diagnoser:
                 reason += " (the base recalibrated with every candidate)"
                 progress(done, steps, f"round {k} done: nothing added")
                 break
+        if backward:  # the rounds ran out right after an addition
+            left = dict((name, fitted) for (_, name), fitted in self._dispatch(
+                [(("without", e), (current.without(e), None, None, None)) for e in backward]))
+            self._backward(st, backward, left, progress, done, steps, k)
         if not reason:
             reason = f"stopped after {self.max_rounds} rounds"
         final_cmp = self._detail(st)
         progress(steps, steps, "done")
         return self._diagnosis(st, final_cmp, reason)
 
-    def _without(self, name: str, current: Physics, pred: dict):
-        """Backward step: refit `current` without the effect `name` (warm-started from the
-        current values); when `current`'s held-out gain over it no longer passes
-        `SELECTION`'s criteria, the effect goes: (model, error, cost, why, predictions);
-        else None."""
-        m = self.fit(current.without(name))
+    def _dispatch(self, jobs: list[tuple[Any, tuple]]):
+        """Run fits (key, (start, multistart effect, baseline, seed)) on every core and
+        yield (key, `workers._fit`'s tuple) as each finishes: in the worker processes, or
+        in threads when a user's effect cannot be loaded in another process. On a stop,
+        pending fits are cancelled and running ones end at their next simulation."""
+        if not jobs:
+            return
+        pool = self._pool()
+        threads = None if pool is not None else ThreadPoolExecutor(max_workers=WORKERS)
+        futures: dict = {}
         try:
-            p = self.predict(m.physics_)
-        except VtableError:
-            return None
-        g = held_out_gain(p, pred, self.runs, self.campaign.noise)
-        fails = failing(g)
-        if not fails:
-            return None
-        err = compare(p, self.runs, scored="held", floor=self.floor).error
-        why = (f"no longer needed once the later effects are in: without it (base "
-               f"recalibrated) the held-out error is {err:.2%}; keeping it is not a gain the "
-               "noise cannot produce: " + "; ".join(fails))
-        return m.physics_, err, m.cost_, why, p
+            for key, args in jobs:
+                fut = (pool.fit(self._campaign_file().path, *args, self.calibration)
+                       if pool is not None else threads.submit(self._fit_here, *args))
+                futures[fut] = key
+            for fut in as_completed(futures):
+                yield futures[fut], fut.result()
+        finally:
+            if threads is not None:
+                threads.shutdown(wait=True, cancel_futures=True)
+            for fut in futures:
+                fut.cancel()
+
+    def _backward(self, st: _State, names: list[str], fitted: dict[str, tuple],
+                  progress, done: int, steps: int, k: int):
+        """The backward step: the current model against each fit without one of `names`;
+        the first effect whose keeping is not a gain `SELECTION` would count is removed
+        (recorded in the last round). Returns (model, error, cost) after a removal, else
+        None."""
+        pred_cur = st.stages[-1].predictions
+        for name in names:
+            physics, _, _, cost, _, pred, _ = fitted[name]
+            if isinstance(pred, Exception):
+                continue
+            fails = failing(held_out_gain(pred, pred_cur, self.runs, self.campaign.noise))
+            if not fails:
+                continue
+            err = compare(pred, self.runs, scored="held", floor=self.floor).error
+            rnd = st.rounds[-1]
+            rnd.removed[name] = (
+                f"no longer needed once the later effects are in: without it (base "
+                f"recalibrated) the held-out error is {err:.2%}; keeping it is not a gain "
+                "the noise cannot produce: " + "; ".join(fails))
+            rnd.error = err
+            st.current, st.err, st.cmp = physics, err, None
+            st.stages.append(Stage(f"{len(st.stages)}_without_{name}", physics, pred))
+            progress(done, steps, f"round {k}: removed {name}")
+            return physics, err, cost
+        return None
 
     def _diagnosis(self, st: _State, final_cmp: Comparison | None, reason: str,
                    interrupted: bool = False) -> Diagnosis:
@@ -589,11 +701,6 @@ class Diagnoser:
         """The diagnosis of the rounds that finished, without another simulation."""
         return self._diagnosis(st, st.cmp if st.current is not None else None, "",
                                interrupted=True)
-
-
-def _rms(v: float) -> str:
-    """A gain on the squared scale as the RMS error it stands for."""
-    return f"{np.sign(v) * np.sqrt(abs(v)):.2%}"
 
 
 def _gain_json(c: Candidate) -> dict[str, float] | None:

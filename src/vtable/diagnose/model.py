@@ -42,7 +42,7 @@ SCREEN_STEPS = 3  # ... (least-squares iterations from the best start) to be ref
 #: the base loop's fitted parameters: name -> (JSON key "owner.param", unit, lower, upper)
 BASE_PARAMS = LOOP
 MULTISTART = (0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95, None)  # fractions of a range; None: as is
-RIVAL = 10.0  # base starts whose best grid cost is within this factor of the best are refined
+RIVAL = 10.0  # base starts whose refined grid cost is within this factor of the best go on
 
 
 class StopRequestedError(Exception):
@@ -201,7 +201,8 @@ class TableModel:
             # the servo loop that the fitted loop absorbed)
             declared = np.array([math.log(lay[i].declared) if lay[i].log else lay[i].declared
                                  for i in base])
-            mixed = np.where([lay[i].group == "loop" for i in base], declared, x0[base])
+            loop = np.array([lay[i].group == "loop" for i in base])
+            mixed = np.where(loop, declared, x0[base])
             points = []  # the effect's parameters across their ranges (fitted scale) ...
             for frac in MULTISTART:
                 v = x0[idx].copy()
@@ -217,7 +218,9 @@ class TableModel:
                               else self.seed[lay[i].key.split(".", 1)[1]] for i in idx])
                 points.append(v)
             starts: list[tuple[float, np.ndarray]] = []  # the best of each base start
-            for base_x in (x0[base], mixed):
+            # (a fitted loop within 2 % of the declared one is a start of its own already)
+            near = not loop.any() or np.max(np.abs(mixed - x0[base])[loop]) < 0.02
+            for base_x in (x0[base],) if near else (x0[base], mixed):
                 best, best_x = np.inf, x0
                 for v in points:
                     x = x0.copy()

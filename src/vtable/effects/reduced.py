@@ -271,6 +271,8 @@ class ReducedModel:
         self.Minv = np.linalg.inv(M)
         law = group_law(self.vt, "horizontal", m.servo).lumped("x")
         self.T, self.Tp, self.g, self.kp, self.kv = law.kernel()
+        if self.T.shape != (1, 1):  # the kernel steps one lumped actuator on one DOF
+            raise RuntimeError(f"the reduced model's actuator law is {self.T.shape}, not 1 x 1")
         self.sp = law.hydraulics.vector()
         self.storeys, self.h_top = m.storeys, m.h_top
         self.max_step = m.max_step
@@ -340,7 +342,7 @@ class ReducedModel:
         th = Q[:, ip] if ip is not None else np.zeros(n)
         th_a = Qdd[:, ip] if ip is not None else np.zeros(n)
         na = self.assembly.n_actuators
-        out = {"avg_hdisp": Q @ self.ax, "h_vel": Qd[:, x], "avg_hacc": Qdd[:, x],
+        out = {"avg_hdisp": Q @ self.ax, "h_vel": Qd @ self.ax, "avg_hacc": Qdd[:, x],
                "pitch_disp": th, "pitch_acc": th_a, "h1_force": F / na}
         if slides:
             out["acc_n_ne"] = Qdd[:, x] + self.h_top * th_a + drift_a
@@ -349,10 +351,17 @@ class ReducedModel:
         # (`params.bodies.specimen_bodies`), so floor K moves by x + h_K θ + Σ_{i≤K} x_s,i
         for k, h_k in enumerate(self.assembly.h_floors, 1):
             below = slides[:k]
+            if k == len(slides):  # the top floor is the top-mass instruments' quantity
+                out[f"floor{k}_acc"], out[f"floor{k}_disp"] = out["acc_n_ne"], out["pot_n_sw"]
+                continue
             out[f"floor{k}_acc"] = Qdd[:, x] + h_k * th_a + Qdd[:, below].sum(axis=1)
             out[f"floor{k}_disp"] = Q[:, x] + h_k * th + Q[:, below].sum(axis=1)
-        for fn in self.assembly.filters:
-            out = {k: fn(v, 1.0 / h) for k, v in out.items()}
+        for fn in self.assembly.filters:  # each distinct signal once (zeros stay zeros)
+            done: dict[int, np.ndarray] = {}
+            for k, v in out.items():
+                if id(v) not in done:
+                    done[id(v)] = fn(v, 1.0 / h) if np.any(v) else v
+                out[k] = done[id(v)]
         out = {k: v[::up] for k, v in out.items()}
         force = out.pop("h1_force")
         for a in self.vt.group("horizontal"):  # the lumped actuator stands for each

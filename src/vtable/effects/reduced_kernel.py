@@ -1,6 +1,7 @@
 """The reduced model's integrator (numba): generalized coordinates q with mass, stiffness
 and damping matrices, one equivalent horizontal actuator stepped by the hydraulic element
-(`vtable.hydraulics.element.servo_rates`), auxiliary linear states w (other control loops:
+(`vtable.hydraulics.element`: `dof_error` and `actuator_rates`, the law the actuator
+groups' `servo_rates` applies too), auxiliary linear states w (other control loops:
 ẇ = Aw w + Wq q + Wv q̇, generalized force Fw w), quadratic dampers c₂|q̇|q̇, and force
 elements with states z (`elem(q, q̇, z, p, f, ż)` adds generalized forces to f).
 
@@ -25,59 +26,57 @@ import numpy as np
 import scipy.linalg
 from numba import njit
 
-from vtable.hydraulics.element import servo_rates
+from vtable.hydraulics.element import actuator_rates, dof_error, fed_back_pressure
 
 
 def work_size(nq: int) -> int:
     """Length of `_rates`'s scratch array."""
-    return 7 + nq
+    return nq
 
 
 @njit(cache=True)
 def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, fe, dy,
            ws):
     """Rates of the main state y = [q, q̇, servo (3), w] with extra generalized forces fe;
-    returns the actuator force. `ws`: scratch of `work_size(nq)` (no allocation per call:
-    this runs four times per step)."""
-    q = y[:nq]
-    qd = y[nq:2 * nq]
-    z = y[2 * nq:2 * nq + 3].reshape(1, 3)
+    returns the actuator force. The equivalent actuator is one lumped actuator on one DOF
+    (T, Tp 1 x 1): its drive is `dof_error`, its rates `actuator_rates`. `ws`: scratch of
+    `work_size(nq)` (no allocation, no array views: this runs four times per step)."""
     na = Aw.shape[0]
-    w = y[2 * nq + 3:2 * nq + 3 + na]
-    xa, va, qcv, force = ws[0:1], ws[1:2], ws[2:3], ws[3:4]
-    dz = ws[4:7].reshape(1, 3)
-    rhs = ws[7:7 + nq]
-    xa[0] = 0.0
-    va[0] = 0.0
+    s0 = 2 * nq
+    xa = 0.0
+    va = 0.0
     for i in range(nq):
-        xa[0] += ax[i] * q[i]
-        va[0] += ax[i] * qd[i]
-    qcv[0] = xc
-    servo_rates(z, xa, va, qcv, T, Tp, g, kp, kv, sp, dz, force)
+        xa += ax[i] * y[i]
+        va += ax[i] * y[nq + i]
+    t = Tp[0, 0]
+    p_fb = fed_back_pressure(y[s0], y[s0 + 1], sp)
+    drive = T[0, 0] * dof_error(xc, t * xa, t * p_fb, t * va, g[0], kp[0], kv[0])
+    dP, dPf, dqv, force = actuator_rates(y[s0], y[s0 + 1], y[s0 + 2], drive, va, sp)
     for i in range(nq):
-        s = bF[i] * force[0] + fe[i]
+        r = bF[i] * force + fe[i]
         for j in range(nq):
-            s -= K[i, j] * q[j] + C[i, j] * qd[j]
+            r -= K[i, j] * y[j] + C[i, j] * y[nq + j]
         for j in range(na):
-            s += Fw[i, j] * w[j]
-        s -= c2[i] * abs(qd[i]) * qd[i]
-        rhs[i] = s
+            r += Fw[i, j] * y[s0 + 3 + j]
+        r -= c2[i] * abs(y[nq + i]) * y[nq + i]
+        ws[i] = r
     for i in range(nq):
-        dy[i] = qd[i]
+        dy[i] = y[nq + i]
         acc = 0.0
         for j in range(nq):
-            acc += Minv[i, j] * rhs[j]
+            acc += Minv[i, j] * ws[j]
         dy[nq + i] = acc
-    for i in range(3):
-        dy[2 * nq + i] = dz[0, i]
+    dy[s0] = dP
+    dy[s0 + 1] = dPf
+    dy[s0 + 2] = dqv
     for a in range(na):
-        s = 0.0
+        r = 0.0
         for b in range(na):
-            s += Aw[a, b] * w[b]
+            r += Aw[a, b] * y[s0 + 3 + b]
         for j in range(nq):
-            s += Wq[a, j] * q[j] + Wv[a, j] * qd[j]
-        dy[2 * nq + 3 + a] = s
-    return force[0]
+            r += Wq[a, j] * y[j] + Wv[a, j] * y[nq + j]
+        dy[s0 + 3 + a] = r
+    return force
 
 
 @njit(cache=True, nogil=True)
@@ -87,7 +86,7 @@ def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, A
     n = xc.shape[0]
     ny = 2 * nq + 3 + Aw.shape[0]
     fe = np.zeros(nq)
-    ws = np.zeros(7 + nq)
+    ws = np.zeros(nq)  # work_size(nq)
     y = np.zeros(ny)
     yt = np.empty(ny)
     Q, Qd, Qdd, F = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq)), np.empty(n)
@@ -95,7 +94,10 @@ def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, A
     for k in range(n):
         F[k] = _rates(y, xc[k], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
                       Fw, fe, k1, ws)
-        Q[k], Qd[k], Qdd[k] = y[:nq], y[nq:2 * nq], k1[nq:2 * nq]
+        for i in range(nq):
+            Q[k, i] = y[i]
+            Qd[k, i] = y[nq + i]
+            Qdd[k, i] = k1[nq + i]
         if k == n - 1:
             break
         xm = 0.5 * (xc[k] + xc[k + 1])
@@ -127,7 +129,7 @@ def _element_rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, 
     dze = np.zeros(ne)
     elem(y[:nq], y[nq:2 * nq], y[m:], pe, fe, dze)
     force = _rates(y[:m], xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
-                   fe, dy[:m], np.zeros(7 + nq))
+                   fe, dy[:m], np.zeros(nq))  # work_size(nq)
     for k in range(ne):
         dy[m + k] = dze[k]
     return force

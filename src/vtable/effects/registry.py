@@ -74,6 +74,7 @@ def register(effect: Effect) -> Effect:
                           "with a built-in effect; choose another name")
     _add(effect, _SOURCE.get("file", where))
     _USER.add(effect.name)
+    _FILES.pop(effect.name, None)  # load_file records it again when it is loading one
     _SOURCE.setdefault("registered", []).append(effect.name)
     return effect
 
@@ -146,4 +147,15 @@ def load_file(path: str | Path) -> list[str]:
         _SOURCE.clear()
     if not done:
         raise VtableError(f"{p}: registers no effect (call vtable.effects.register(...))")
+    for name in done:
+        _FILES[name] = str(p.resolve())
     return done
+
+
+_FILES: dict[str, str] = {}  # user effect -> the file that registered it
+
+
+def source_file(name: str) -> str | None:
+    """The file a user's effect was loaded from (`load_file`); None for the catalog's and
+    for one registered from code (another process cannot load it again)."""
+    return _FILES.get(name)

@@ -1,14 +1,16 @@
 """The measurement chain's anti-aliasing filter (report §2.3: 100 Hz analog low-pass
 before sampling), applied the same way to the virtual table's and the reduced model's
 response channels: the analog 4-pole Butterworth (order assumed) applied exactly in the
-frequency domain (zero-padded FFT) at the simulation rate, before decimation. Being the
-analog response, the result does not depend on the simulation rate."""
+frequency domain (an FFT zero-padded by ten periods of the cut-off) at the simulation rate,
+before decimation. Being the analog response, the result does not depend on the simulation
+rate."""
 
 from __future__ import annotations
 
 from functools import lru_cache
 
 import numpy as np
+import scipy.fft
 import scipy.signal
 
 ORDER = 4
@@ -24,9 +26,15 @@ def _response(nfft: int, fs: float, cutoff_hz: float) -> np.ndarray:
     return H
 
 
+#: zero padding, in periods of the cut-off: the filter's slowest poles decay as
+#: exp(-sin(π/8) ω_c t), to 1e-10 of their start in 9.6 periods
+PAD_PERIODS = 10.0
+
+
 def sensor_filter(x: np.ndarray, fs: float, cutoff_hz: float) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     n = len(x)
-    nfft = 1 << int(np.ceil(np.log2(2 * n)))
+    nfft = scipy.fft.next_fast_len(n + max(64, int(np.ceil(PAD_PERIODS * fs / cutoff_hz))),
+                                   real=True)
     H = _response(nfft, float(fs), float(cutoff_hz))
-    return np.fft.irfft(np.fft.rfft(x, nfft) * H, nfft)[:n]
+    return scipy.fft.irfft(scipy.fft.rfft(x, nfft) * H, nfft)[:n]

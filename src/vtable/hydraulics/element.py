@@ -89,47 +89,65 @@ class HydraulicParams:
 
 
 @njit(cache=True)
+def dof_error(qc, q, p, qd, g, kp, kv):
+    """One DOF's drive (eqs 6.1-6.4): g [(q_c - q) - k_p P̄ - k_v q̇]."""
+    return g * ((qc - q) - kp * p - kv * qd)
+
+
+@njit(cache=True)
+def fed_back_pressure(P, Pf, sp):
+    """The pressure the ΔP feedback reads: the RC-filtered P_f when there is an RC filter
+    (eq B.4), else P_L."""
+    return Pf if sp[_RC] > 0 else P
+
+
+@njit(cache=True)
+def actuator_rates(P, Pf, qv, drive, v, sp):
+    """One actuator under its drive (see the module docstring): the rates of its load
+    pressure P_L, its RC-filtered pressure P_f and its valve flow q_v, and its force."""
+    qcmd = sp[_KT] * drive
+    if sp[_TAU] > 0:
+        dqv = (qcmd - qv) / sp[_TAU]
+        q = qv
+    else:
+        dqv = 0.0
+        q = qcmd
+    if sp[_QMAX] > 0:
+        q = min(max(q, -sp[_QMAX]), sp[_QMAX])
+    if sp[_PS] > 0:
+        s = 1.0 - (P if q >= 0 else -P) / sp[_PS]
+        q *= np.sqrt(s) if s > 0 else 0.0
+    beta = sp[_BETA]
+    if sp[_AIR] > 0:
+        p1 = max(0.5 * sp[_PMEAN] + 0.5 * P, 0.0) + ATM
+        p2 = max(0.5 * sp[_PMEAN] - 0.5 * P, 0.0) + ATM
+        # each chamber (V/2) its own modulus, eqs C.6-C.11: Ṗ_L = (2/V)(β₁ + β₂)·flow
+        beta = 0.5 / (1.0 / sp[_BETA] + sp[_AIR] / (1.4 * p1)) + \
+            0.5 / (1.0 / sp[_BETA] + sp[_AIR] / (1.4 * p2))
+    dP = 4.0 * beta / sp[_V] * (q - sp[_KCT] * P - sp[_A] * v)
+    dPf = (-Pf / sp[_RC] + dP) if sp[_RC] > 0 else 0.0
+    force = sp[_A] * P - sp[_FR] * np.tanh(v / sp[_VEPS])
+    return dP, dPf, dqv, force
+
+
+@njit(cache=True)
 def servo_rates(z, x, v, qc, T, Tp, g, kp, kv, sp, dz, force):
-    """Rates dz (n x 3: P_L, P_f, q_v) and forces (n) of a group of n actuators."""
+    """Rates dz (n x 3: P_L, P_f, q_v) and forces (n) of a group of n actuators: each
+    actuator's drive T G e from the DOF errors (`dof_error`), then `actuator_rates`."""
     n, d = T.shape
-    P = z[:, 0]
-    e = np.empty(d)
-    for j in range(d):
-        acc_x = 0.0
-        acc_v = 0.0
-        acc_p = 0.0
-        for i in range(n):
-            acc_x += Tp[j, i] * x[i]
-            acc_v += Tp[j, i] * v[i]
-            acc_p += Tp[j, i] * (z[i, 1] if sp[_RC] > 0 else P[i])
-        e[j] = g[j] * ((qc[j] - acc_x) - kp[j] * acc_p - kv[j] * acc_v)
     for i in range(n):
         drive = 0.0
         for j in range(d):
-            drive += T[i, j] * e[j]
-        qcmd = sp[_KT] * drive
-        if sp[_TAU] > 0:
-            dz[i, 2] = (qcmd - z[i, 2]) / sp[_TAU]
-            q = z[i, 2]
-        else:
-            dz[i, 2] = 0.0
-            q = qcmd
-        if sp[_QMAX] > 0:
-            q = min(max(q, -sp[_QMAX]), sp[_QMAX])
-        if sp[_PS] > 0:
-            s = 1.0 - (P[i] if q >= 0 else -P[i]) / sp[_PS]
-            q *= np.sqrt(s) if s > 0 else 0.0
-        beta = sp[_BETA]
-        if sp[_AIR] > 0:
-            p1 = max(0.5 * sp[_PMEAN] + 0.5 * P[i], 0.0) + ATM
-            p2 = max(0.5 * sp[_PMEAN] - 0.5 * P[i], 0.0) + ATM
-            # each chamber (V/2) its own modulus, eqs C.6-C.11: Ṗ_L = (2/V)(β₁ + β₂)·flow
-            beta = 0.5 / (1.0 / sp[_BETA] + sp[_AIR] / (1.4 * p1)) + \
-                0.5 / (1.0 / sp[_BETA] + sp[_AIR] / (1.4 * p2))
-        dP = 4.0 * beta / sp[_V] * (q - sp[_KCT] * P[i] - sp[_A] * v[i])
-        dz[i, 0] = dP
-        dz[i, 1] = (-z[i, 1] / sp[_RC] + dP) if sp[_RC] > 0 else 0.0
-        force[i] = sp[_A] * P[i] - sp[_FR] * np.tanh(v[i] / sp[_VEPS])
+            acc_x = 0.0
+            acc_v = 0.0
+            acc_p = 0.0
+            for a in range(n):
+                acc_x += Tp[j, a] * x[a]
+                acc_v += Tp[j, a] * v[a]
+                acc_p += Tp[j, a] * fed_back_pressure(z[a, 0], z[a, 1], sp)
+            drive += T[i, j] * dof_error(qc[j], acc_x, acc_p, acc_v, g[j], kp[j], kv[j])
+        dz[i, 0], dz[i, 1], dz[i, 2], force[i] = actuator_rates(z[i, 0], z[i, 1], z[i, 2],
+                                                                drive, v[i], sp)
 
 
 @njit(cache=True)

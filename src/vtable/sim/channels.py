@@ -32,7 +32,10 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
             si[name] = res.joint(joint, "qacc")
     if "pitch" in dofs:
         si["pitch_disp"] = res.joint("pitch")
-    si["h_vel"] = res.joint("x", "qvel")
+    # the actuators' velocity transducers, as their displacements (relative to the reaction
+    # mass; the platen's own velocity on a rigid foundation)
+    vel = {a: res.ext_velocity[:, i] for i, a in enumerate(names)}
+    si["h_vel"] = np.mean([vel[a] for a in hs], axis=0)
     si["acc_cmd"] = res.command_acc
     stabs = [a.name for a in b.vt.group("stabilizer")]
     for i, a in enumerate(vs):

@@ -267,9 +267,13 @@ class Simulator:
         ext_all[:, :n] -= rest
         forces_all = full[:, U]
         out_idx = np.arange(0, n_steps, dec)
+        # the actuators' velocity at t_k as the joints' (rec["qvel"]): the mean of the step
+        # averages around t_k (each row holds the average over the step ending there)
+        ev = ext_all[:, n:]
+        ext_vel = 0.5 * (ev[out_idx] + ev[np.minimum(out_idx + 1, len(ev) - 1)])
         res = SimResult(built=self.built, t=tk[out_idx], qpos=rec["qpos"], qvel=rec["qvel"],
                         qacc=rec["qacc"], forces=forces_all[out_idx].copy(),
-                        extension=ext_all[out_idx, :n], ext_velocity=ext_all[out_idx, n:],
+                        extension=ext_all[out_idx, :n], ext_velocity=ext_vel,
                         sensors=rec["sensors"], commands=cmd[out_idx],
                         command_acc=np.gradient(np.gradient(cmd[:, 0], dt), dt)[out_idx],
                         controller_states=full[out_idx, ns:ns + nz].copy(),

@@ -1,0 +1,159 @@
+"""Candidate fits in worker processes: the diagnosis's candidates are independent, and a
+fit's Python parts (least squares, building the model, residuals) hold the GIL, so threads
+share one core for them; processes use every core.
+
+`CandidatePool(n, files)` keeps `n` spawned workers for the life of the interpreter (one
+pool per set of user effect files, made on first use): each loads those files, ignores
+Ctrl-C (the parent sets the shared stop event instead, which every fit checks between
+simulations) and keeps the last campaign it read (`CampaignFile`: pickled once by the
+parent, so a task carries a path, not the runs). `fit(...)` returns a future of
+(physics, train error, flags, cost, screened, predictions or the error that prevented
+them, CPU seconds).
+"""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import importlib.machinery
+import multiprocessing
+import os
+import pickle
+import signal
+import sys
+import tempfile
+import time
+import uuid
+from concurrent.futures import Future, ProcessPoolExecutor
+from typing import Any
+
+from vtable.diagnose.calibration import Calibration
+from vtable.diagnose.campaign import Campaign
+from vtable.effects.physics import Physics
+
+_POOLS: dict[tuple[int, tuple[str, ...]], CandidatePool] = {}
+
+# -- in the worker ----------------------------------------------------------------------
+_STOP: Any = None
+_CAMPAIGN: tuple[str, Campaign] | None = None
+
+
+def _init(files: tuple[str, ...], stop) -> None:
+    global _STOP
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _STOP = stop
+    from vtable.effects.registry import load_file
+
+    for f in files:
+        load_file(f)
+    _warm_up()
+
+
+def _warm_up() -> None:
+    """Load the reduced model's compiled kernels (linear and nonlinear) from numba's cache
+    while the parent fits its starting model."""
+    import numpy as np
+
+    from vtable.effects.physics import Physics, nominal_open_loop
+    from vtable.effects.reduced import ReducedModel
+    from vtable.params.specimen import NoSpecimen
+
+    t = np.arange(4) * 0.005
+    for effects in ({}, {"actuator_friction": {}}):
+        ReducedModel(Physics(nominal_open_loop(), NoSpecimen(), effects)).simulate(t, 0 * t)
+
+
+def _ping() -> None:
+    """A task that starts a worker."""
+
+
+def _fit(path: str, start: Physics, name: str | None, baseline: float | None,
+         seed: dict[str, float] | None, calibration: Calibration) -> tuple:
+    global _CAMPAIGN
+    from vtable.diagnose.model import TableModel
+    from vtable.errors import VtableError
+
+    t0 = time.process_time()
+    if _CAMPAIGN is None or _CAMPAIGN[0] != path:
+        with open(path, "rb") as f:
+            _CAMPAIGN = (path, pickle.load(f))
+    c = _CAMPAIGN[1]
+    m = TableModel(start=start, multistart=name, stop=_STOP, calibration=calibration,
+                   baseline=baseline, seed=seed).fit(c)
+    try:
+        pred: Any = m.predictions(c)
+    except VtableError as exc:  # the fit found no model it could build
+        pred = exc
+    return (m.physics_, m.train_error_, m.flags_, m.cost_, m.screened_, pred,
+            time.process_time() - t0)
+
+
+# -- in the parent ----------------------------------------------------------------------
+class CandidatePool:
+    """`n` worker processes for candidate fits (see the module docstring)."""
+
+    def __init__(self, n: int, files: tuple[str, ...]) -> None:
+        ctx = multiprocessing.get_context("spawn")
+        self.stop = ctx.Event()
+        self.executor = ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_init,
+                                            initargs=(files, self.stop))
+        # start every worker now (each submit starts one), without the caller's main module:
+        # a spawned process runs the main script again unless it is guarded by
+        # `if __name__ == "__main__"`, and nothing the workers are sent needs it (vtable's
+        # functions and objects; a user's effects come from their files)
+        main = sys.modules["__main__"]
+        spec = getattr(main, "__spec__", None)
+        main.__spec__ = importlib.machinery.ModuleSpec("vtable.__main__", None)
+        try:
+            for _ in range(n):
+                self.executor.submit(_ping)
+        finally:
+            main.__spec__ = spec
+
+    @classmethod
+    def get(cls, n: int, files: tuple[str, ...]) -> CandidatePool:
+        key = (n, files)
+        pool = _POOLS.get(key)
+        if pool is None:
+            pool = _POOLS[key] = cls(n, files)
+        return pool
+
+    def fit(self, campaign: str, start: Physics, name: str | None, baseline: float | None,
+            seed: dict[str, float] | None, calibration: Calibration) -> Future:
+        """A candidate fit on the campaign pickled at `campaign` (`CampaignFile`)."""
+        return self.executor.submit(_fit, campaign, start, name, baseline, seed, calibration)
+
+    def shutdown(self) -> None:
+        self.executor.shutdown(wait=True, cancel_futures=True)
+
+
+class CampaignFile:
+    """A campaign pickled once into a temporary file the workers read (each keeps the last
+    one it read): a task carries its path, not the runs. `close()` removes it."""
+
+    def __init__(self, campaign: Campaign) -> None:
+        # a unique name: a worker recognises the campaign it holds by its path
+        fd, self.path = tempfile.mkstemp(prefix=f"vtable-campaign-{uuid.uuid4().hex}-",
+                                         suffix=".pickle")
+        with os.fdopen(fd, "wb") as f:
+            pickle.dump(campaign, f, protocol=pickle.HIGHEST_PROTOCOL)
+        _FILES.add(self.path)
+
+    def close(self) -> None:
+        _FILES.discard(self.path)
+        with contextlib.suppress(OSError):
+            os.remove(self.path)
+
+
+_FILES: set[str] = set()
+
+
+@atexit.register
+def _close() -> None:
+    for path in list(_FILES):
+        with contextlib.suppress(OSError):
+            os.remove(path)
+    for pool in _POOLS.values():
+        pool.stop.set()
+        pool.shutdown()
+    _POOLS.clear()
