@@ -4,7 +4,7 @@ diagnosed with the full catalog; one line per case and the acceptance totals.
 
     python benchmarks/bench_diagnosis_scorecard.py                  # all 40 cases
     python benchmarks/bench_diagnosis_scorecard.py --quick          # 3 cases, one per kind
-    python benchmarks/bench_diagnosis_scorecard.py --cases backlash_1,null_sdof_elcentro -j 2
+    python benchmarks/bench_diagnosis_scorecard.py --cases backlash_1,null_sdof_elcentro
     python benchmarks/bench_diagnosis_scorecard.py --list
 
 Campaigns and results are cached under $VTABLE_SCORECARD_CACHE (default
@@ -54,15 +54,17 @@ def line(case: sc.Case, r: dict) -> str:
             + (" (cached)" if r.get("cached") else ""))
 
 
-def _run(name: str, fresh: bool) -> tuple[str, dict]:
-    return name, sc.diagnose_case(sc.BY_NAME[name], use_cache=not fresh)
+def _run(name: str, fresh: bool, workers: int | None = None) -> tuple[str, dict]:
+    return name, sc.diagnose_case(sc.BY_NAME[name], use_cache=not fresh, workers=workers)
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", help="comma-separated case names (default: all)")
     ap.add_argument("--quick", action="store_true", help=f"the cases {', '.join(sc.QUICK)}")
-    ap.add_argument("-j", "--jobs", type=int, default=1, help="processes (2 on 2 cores)")
+    ap.add_argument("-j", "--jobs", type=int, default=1,
+                    help="cases side by side (default 1: one at a time, each diagnosis on its "
+                         "two worker processes, so each case's time is a diagnosis's own)")
     ap.add_argument("--fresh", action="store_true", help="ignore cached results")
     ap.add_argument("--json", help="write every result to this file")
     ap.add_argument("--list", action="store_true", help="list the cases and exit")
@@ -89,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     results: dict[str, dict] = {}
     if a.jobs > 1:
         with ProcessPoolExecutor(max_workers=a.jobs) as pool:
-            futs = [pool.submit(_run, n, a.fresh) for n in names]
+            futs = [pool.submit(_run, n, a.fresh, 1) for n in names]
             for f in as_completed(futs):
                 n, r = f.result()
                 results[n] = r

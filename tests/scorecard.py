@@ -264,9 +264,11 @@ def _write_json(path: Path, obj) -> None:
 # diagnosis and the rules
 
 
-def diagnose_case(case: Case, root: Path | None = None, use_cache: bool = True) -> dict:
-    """Generate (or reuse) the case's campaign, diagnose it with the full catalog, judge it.
-    Results are cached per (case, engine source)."""
+def diagnose_case(case: Case, root: Path | None = None, use_cache: bool = True,
+                  workers: int | None = None) -> dict:
+    """Generate (or reuse) the case's campaign, diagnose it with the full catalog (the
+    diagnosis's `workers` processes: its default, two, or one when cases run side by side),
+    judge it. Results are cached per (case, engine source)."""
     root = root or cache_root()
     rpath = _result_path(case, root)
     if use_cache and rpath.exists():
@@ -281,7 +283,7 @@ def diagnose_case(case: Case, root: Path | None = None, use_cache: bool = True) 
 
     runs = [read_run(p) for p in paths]
     t1, c1 = time.perf_counter(), time.process_time()
-    d = Diagnoser(runs).diagnose()
+    d = Diagnoser(runs, workers=workers).diagnose()
     t_diag, c_diag = time.perf_counter() - t1, time.process_time() - c1
     first = d.rounds[0].ranking[0].effect if d.rounds and d.rounds[0].ranking else None
     out = {"case": case.definition(), "hidden": case.hidden, "outside": case.outside,
@@ -299,10 +301,11 @@ def diagnose_case(case: Case, root: Path | None = None, use_cache: bool = True) 
     return out
 
 
-def diagnose_cases(cases: list[Case], jobs: int = 2, root: Path | None = None,
+def diagnose_cases(cases: list[Case], jobs: int = 1, root: Path | None = None,
                    use_cache: bool = True) -> dict[str, dict]:
-    """`diagnose_case` for several cases, the uncached ones in `jobs` processes (spawned:
-    the parent may hold numba's and the engine's threads)."""
+    """`diagnose_case` for several cases: one after the other, each diagnosis on its own
+    worker processes; or the uncached ones in `jobs` processes side by side (spawned: the
+    parent may hold numba's and the engine's threads), each diagnosis then in one."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
@@ -311,7 +314,7 @@ def diagnose_cases(cases: list[Case], jobs: int = 2, root: Path | None = None,
     if len(todo) > 1 and jobs > 1:
         ctx = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=min(jobs, len(todo)), mp_context=ctx) as pool:
-            futs = {c.name: pool.submit(diagnose_case, c, root, use_cache) for c in todo}
+            futs = {c.name: pool.submit(diagnose_case, c, root, use_cache, 1) for c in todo}
             out.update({n: f.result() for n, f in futs.items()})
     else:
         out.update({c.name: diagnose_case(c, root, use_cache) for c in todo})

@@ -106,8 +106,9 @@ XFAIL = {  # what the engine does today on these cases (see the benchmark's tabl
 
 @pytest.fixture(scope="module")
 def subset() -> dict[str, dict]:
-    """The subset's diagnoses: cached, or made in two processes."""
-    return sc.diagnose_cases([sc.BY_NAME[n] for n in sc.QUICK], jobs=2)
+    """The subset's diagnoses: cached, or made one after the other (each on the
+    diagnosis's two worker processes)."""
+    return sc.diagnose_cases([sc.BY_NAME[n] for n in sc.QUICK])
 
 
 @pytest.mark.parametrize("name", [

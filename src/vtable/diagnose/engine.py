@@ -31,8 +31,9 @@ correlated beyond 0.95 with a base parameter, or without influence on the data
 ranking and not added on that evidence; the next sound one may be. Base parameters at a
 bound are flagged too but do not block: they say the model still lacks something.
 
-Training = the first 60 % of every run, held out = the last 40 % (`compare.segments`), both
-at the analysis rate (`compare.analysis_run`: runs faster than 200 Hz are anti-alias
+Training = the first 60 % of every run (at most its first 30 s: a few parameters need no more,
+and every simulated second costs each fit), held out = the last 40 % (`compare.segments`),
+both at the analysis rate (`compare.analysis_run`: runs faster than 200 Hz are anti-alias
 filtered and resampled to 200 Hz; slower ones keep their rate).
 
 The verdict is honest about what is left: the final model's held-out error is compared
@@ -612,8 +613,12 @@ class Diagnoser:
         pending fits are cancelled and running ones end at their next simulation."""
         if not jobs:
             return
+        if self.workers == 1:  # one after the other, here
+            for key, args in jobs:
+                yield key, self._fit_here(*args)
+            return
         pool = self._pool()
-        threads = None if pool is not None else ThreadPoolExecutor(max_workers=WORKERS)
+        threads = None if pool is not None else ThreadPoolExecutor(max_workers=self.workers)
         futures: dict = {}
         try:
             for key, args in jobs:

@@ -6,10 +6,11 @@ the servo loop (f_o, ξ_o, k_o), the specimen's modal frequencies, damping and m
 platen's mass, and its centre-of-mass height and pitch inertia when the model pitches;
 bounded around the runs' declarations, with weak priors) and the effects' parameters by
 bounded least squares on the training segments of the campaign (the first 60 % of every
-run, at the analysis rate), on the fitted scale (logarithmic for log parameters); `score`
-/ `comparison` evaluate the held-out segments; `predictions` keeps what the fitted model
-predicts for every run of the campaign. `flags_` says which fitted parameters sit at a
-bound and which effect parameters the data cannot tell apart from the base.
+run, at most its first 30 s, at the analysis rate), on the fitted scale (logarithmic for
+log parameters); `score` / `comparison` evaluate the held-out segments; `predictions`
+keeps what the fitted model predicts for every run of the campaign. `flags_` says which
+fitted parameters sit at a bound and which effect parameters the data cannot tell apart
+from the base.
 """
 
 from __future__ import annotations
@@ -114,6 +115,8 @@ class TableModel:
         self.seed = seed
         self.calibration = calibration or Calibration()
         self.baseline = baseline
+        self._last = None  # (start, layout, x, physics) last unpacked
+        self._commands: dict = {}  # (run, samples) -> the command the model is driven by
         self.screened_ = False
         self.physics_: Physics | None = None
         self.vt = None  # the campaign's table, known when fitting
@@ -139,6 +142,22 @@ class TableModel:
             ph = p.set(ph, float(np.clip(math.exp(xi) if p.log else xi, p.lower, p.upper)))
         return ph
 
+    def _unpack_fast(self, x: np.ndarray, start: Physics, lay) -> Physics:
+        """`_unpack`, from the last vector unpacked on the same start and layout when there
+        is one: only the parameters that differ are set again (a finite-difference Jacobian
+        moves one at a time; each is set independently of the others)."""
+        last = self._last
+        if last is not None and last[0] is start and last[1] is lay:
+            ph = last[3]
+            for i in np.flatnonzero(x != last[2]):
+                p, xi = lay[i], x[i]
+                ph = p.set(ph, float(np.clip(math.exp(xi) if p.log else xi, p.lower,
+                                             p.upper)))
+        else:
+            ph = self._unpack(x, start, lay)
+        self._last = (start, lay, x.copy(), ph)
+        return ph
+
     def _priors(self, x: np.ndarray, lay, campaign: Campaign) -> np.ndarray:
         lam = self.calibration.prior_weight * campaign.floor * math.sqrt(len(campaign.targets))
         out = [lam * (xi - (math.log(p.declared) if p.log else p.declared)) / p.prior
@@ -154,7 +173,10 @@ class TableModel:
             if self.stop is not None and self.stop.is_set():
                 raise StopRequestedError
             n = segments(r)[0].stop if train_only else len(r.time)
-            out[r.name] = model.simulate(r.time[:n], r.channel("h_span")[:n])
+            key = (r.name, n)
+            if key not in self._commands:  # one array per segment: its interpolation is kept
+                self._commands[key] = (r.time[:n], r.channel("h_span")[:n])
+            out[r.name] = model.simulate(*self._commands[key])
         return out
 
     def _residuals(self, ph: Physics, campaign: Campaign) -> np.ndarray:
@@ -162,15 +184,23 @@ class TableModel:
             pred = self._predict(ph, campaign, train_only=True)
         except VtableError:
             return np.full(campaign.n_target, 10.0)
-        res = []
-        for r, g, y, norm in campaign.targets:
-            yhat = group_prediction(pred[r.name], r, g)[: segments(r)[0].stop][::2]
+        out = np.empty(campaign.n_target)
+        k = 0
+        for (r, g, y, norm), stop in zip(campaign.targets, self._stops(campaign), strict=True):
+            yhat = group_prediction(pred[r.name], r, g)[:stop:2]
             e = (yhat - y) / norm
-            res.append(np.where(np.isfinite(e), e, 10.0 / math.sqrt(len(e))))
-        return np.concatenate(res)
+            out[k:k + len(e)] = np.where(np.isfinite(e), e, 10.0 / math.sqrt(len(e)))
+            k += len(e)
+        return out
+
+    def _stops(self, campaign: Campaign) -> list[int]:
+        """Each target's end of training (samples), worked out once per campaign."""
+        if getattr(self, "_stops_of", (None,))[0] is not campaign:
+            self._stops_of = (campaign, [segments(r)[0].stop for r, *_ in campaign.targets])
+        return self._stops_of[1]
 
     def _cost(self, x, start, lay, campaign) -> np.ndarray:
-        return np.concatenate([self._residuals(self._unpack(x, start, lay), campaign),
+        return np.concatenate([self._residuals(self._unpack_fast(x, start, lay), campaign),
                                self._priors(x, lay, campaign)])
 
     # -- the estimator -----------------------------------------------------------------
@@ -241,7 +271,9 @@ class TableModel:
             eff[idx] = True
             starts = [self._refine(x, eff, lo, hi, start, lay, campaign) for _, x in starts]
             c_min = min(c for c, _ in starts)
-            rivals = [x for c, x in starts if c <= RIVAL * c_min]
+            rivals = [x for c, x in sorted(starts, key=lambda s: s[0]) if c <= RIVAL * c_min]
+            if self.baseline is not None:  # a screened (costly) candidate: the best start
+                rivals = rivals[:1]
             x0 = min(starts, key=lambda s: s[0])[1]
         else:
             rivals = []

@@ -17,6 +17,7 @@ import atexit
 import contextlib
 import importlib.machinery
 import multiprocessing
+import multiprocessing.util
 import os
 import pickle
 import signal
@@ -115,6 +116,10 @@ class CandidatePool:
         key = (n, files)
         pool = _POOLS.get(key)
         if pool is None:
+            if not _POOLS:
+                # multiprocessing's own exit hook runs this before it waits for child
+                # processes (in a process that is itself a worker, atexit never runs)
+                multiprocessing.util.Finalize(None, shutdown, exitpriority=100)
             pool = _POOLS[key] = cls(n, files)
         return pool
 
@@ -148,12 +153,17 @@ class CampaignFile:
 _FILES: set[str] = set()
 
 
+def shutdown() -> None:
+    """End every worker pool (a later diagnosis starts new workers)."""
+    for pool in _POOLS.values():
+        pool.stop.set()
+        pool.shutdown()
+    _POOLS.clear()
+
+
 @atexit.register
 def _close() -> None:
     for path in list(_FILES):
         with contextlib.suppress(OSError):
             os.remove(path)
-    for pool in _POOLS.values():
-        pool.stop.set()
-        pool.shutdown()
-    _POOLS.clear()
+    shutdown()

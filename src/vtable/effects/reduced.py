@@ -55,9 +55,8 @@ class ReducedAssembly:
     slides ("x_s", "x_s1", ...), and what effects add."""
 
     def __init__(self, ph: phys.Physics, vt: VirtualTable) -> None:
-        vt = ph.on_table(vt)
+        vt, (M, K, C, _, names, slides, pos) = _mechanics(ph, vt)
         self.vt, self.specimen = vt, ph.specimen
-        M, K, C, _, names, slides, pos = mechanics(vt, ph.specimen)
         self._full = (M, K, C, list(names))
         self.storeys = [names[5 + i] for i in range(len(slides))]
         self.active = ["x", *self.storeys]
@@ -180,6 +179,28 @@ class ReducedAssembly:
         return order, ix, M, K, C
 
 
+_MECHANICS: dict = {}
+
+
+def _mechanics(ph: phys.Physics, vt: VirtualTable):
+    """(`ph.on_table(vt)`, its `mechanics` with `ph`'s specimen), kept for the last few
+    (table, calibrated table values, specimen): a fit builds the model hundreds of times,
+    most of them with the same table and specimen (held with the result, so their ids stay
+    their own). The matrices are read-only."""
+    key = (id(vt), tuple(sorted(ph.table.items())), id(ph.specimen))
+    hit = _MECHANICS.get(key)
+    if hit is not None and hit[0] is vt and hit[1] is ph.specimen:
+        return hit[2], hit[3]
+    vt_on = ph.on_table(vt)
+    mech = mechanics(vt_on, ph.specimen)
+    for a in mech[:3]:
+        a.flags.writeable = False
+    if len(_MECHANICS) >= 16:
+        _MECHANICS.pop(next(iter(_MECHANICS)))
+    _MECHANICS[key] = (vt, ph.specimen, vt_on, mech)
+    return vt_on, mech
+
+
 def _storey_masses(spec) -> list[float]:
     from vtable.params.specimen import SDOFSpecimen, ShearBuilding
 
@@ -197,6 +218,27 @@ def _interpolator(up: int) -> np.ndarray:
     h = scipy.signal.firwin(20 * up + 1, 1.0 / up, window=("kaiser", 5.0))
     h.flags.writeable = False
     return h
+
+
+_UPSAMPLED: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _upsampled(x_c: np.ndarray, n: int, up: int) -> np.ndarray:
+    """The command interpolated band-limited onto the integration step (`resample_poly`),
+    kept for the last few command arrays (a fit drives the model by the same array
+    hundreds of times; the array is held with its result, so its id stays its own)."""
+    if up == 1:
+        return np.ascontiguousarray(x_c, dtype=float)
+    key = (id(x_c), n, up)
+    hit = _UPSAMPLED.get(key)
+    if hit is not None and hit[0] is x_c:
+        return hit[1]
+    xc = scipy.signal.resample_poly(x_c, up, 1, window=_interpolator(up))[: (n - 1) * up + 1]
+    xc.flags.writeable = False
+    if len(_UPSAMPLED) >= 32:
+        _UPSAMPLED.pop(next(iter(_UPSAMPLED)))
+    _UPSAMPLED[key] = (x_c, xc)
+    return xc
 
 
 _COMBINED: dict = {}  # compiled element functions by structure (one kernel compile each)
@@ -319,8 +361,7 @@ class ReducedModel:
             raise VtableError(f"run step {dt:g} s: the time column must increase")
         up = max(1, math.ceil(dt / self.max_step - 1e-9))
         h = dt / up
-        xc = scipy.signal.resample_poly(x_c, up, 1, window=_interpolator(up))[
-            : (len(t) - 1) * up + 1] if up > 1 else np.ascontiguousarray(x_c, dtype=float)
+        xc = _upsampled(x_c, len(t), up)
         nq = self.M.shape[0]
         args = (xc, h, nq, self.Minv, self.K, self.C, self.c2, self.bF, self.ax, self.sp,
                 self.T, self.Tp, self.g, self.kp, self.kv, self.Aw, self.Wq, self.Wv, self.Fw)
