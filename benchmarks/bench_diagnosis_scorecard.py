@@ -115,6 +115,11 @@ def main(argv: list[str] | None = None) -> int:
     print(f"null and mis-declared null: nothing added in {frac(tot['null'])} (acceptance: all)")
     print(f"outside the catalog: unexplained not null in {frac(tot['outside'])} "
           "(acceptance: all)")
+    cal = tot["calibration"]
+    if cal["cases"]:
+        print(f"calibrated base on the {cal['cases']} null cases: every mode frequency within "
+              f"{cal['frequency']:.2%} of the truth (acceptance 0.5 %), damping within "
+              f"{cal['damping']:.1%} (acceptance 20 %)")
     n_new = sum(not r.get("cached") for _, r in done)
     per = tot["time_s"] / len(done) if done else 0.0
     print(f"diagnosis time: {tot['time_s']:.0f} s in all, {per:.0f} s per case "

@@ -415,3 +415,33 @@ def test_resampling_keeps_missing_samples_out():
     assert excluded_channels(a) == [
         "run0: pitch is not scored (its channels are zero throughout)",  # pitch locked
         "run0: channel 'acc_n_nw' has 1 missing samples; left out of structure acceleration"]
+
+
+def test_workers_run_a_script_without_a_main_guard(tmp_path):
+    """The candidate fits run in spawned worker processes; a script that diagnoses at its
+    top level (no `if __name__ == "__main__"`) is not run again by them, and the result is
+    the one fitting in this process gives."""
+    import subprocess
+    import sys
+
+    from vtable.diagnose.engine import Diagnoser
+
+    _, runs = effect_campaign(("valve_dynamics",))
+    for i, r in enumerate(runs):
+        write_run(r, tmp_path / f"run{i}")
+    script = tmp_path / "diag.py"
+    script.write_text(
+        "import glob\n"
+        "from vtable.runs import read_run\n"
+        "from vtable.diagnose.engine import Diagnoser\n"
+        "print('script body ran')\n"
+        f"runs = [read_run(p) for p in sorted(glob.glob({str(tmp_path)!r} + '/run*.toml'))]\n"
+        "d = Diagnoser(runs, catalog=['valve_dynamics', 'force_feedback_filter'], workers=2)\n"
+        "print('found', d.diagnose().final_effects, d._procs is not None)\n")
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.count("script body ran") == 1, out.stdout
+    assert "found ['valve_dynamics'] True" in out.stdout, out.stdout
+    here = Diagnoser(runs, catalog=["valve_dynamics", "force_feedback_filter"], workers=1)
+    assert here.diagnose().final_effects == ["valve_dynamics"]

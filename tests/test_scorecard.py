@@ -95,6 +95,16 @@ def test_the_rules():
                      (out, {"ok": False, "time_s": 3.0})])
     assert tot["in_catalog"] == (1, 1) and tot["outside"] == (0, 1) and not tot["accepted"]
     assert tot["time_s"] == 6.0
+    # the calibration rule: 0.5 % on every mode frequency, 20 % on the damping
+    true = {"frequencies_hz": [2.0, 6.0], "damping": 0.02}
+    fitted = {"specimen.mode1.frequency_hz": {"fitted": 2.004},
+              "specimen.mode2.frequency_hz": {"fitted": 5.976},
+              "specimen.damping": {"fitted": 0.023}}
+    r = {"ok": True, "time_s": 1.0, "true": true, "diagnosis": {"base": fitted}}
+    assert sc.calibration_errors(r) == pytest.approx((0.004, 0.15))
+    assert sc.totals([(null, r)])["accepted"]
+    fitted["specimen.damping"]["fitted"] = 0.0245
+    assert not sc.totals([(null, r)])["accepted"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -143,11 +153,6 @@ def test_the_calibrated_base_recovers_a_misdeclared_specimen(subset):
     assert f["bounds"] == pytest.approx([0.95 * f["declared"], 1.05 * f["declared"]])
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "the base is recovered (see above) and nothing is added, but the synthetic-record "
-    "earthquake run leaves 5.8 % held-out error (4.4 x the noise floor) in the table "
-    "acceleration at the largest span, 20-30 Hz: not yet explained (the same campaign "
-    "family's exact null at 500 Hz shows 3.3 x)"))
 def test_a_misdeclared_null_is_calibrated_away(subset):
     """effects.md: a difference the calibration absorbs is a wrong declaration, and for a
     model that then matches the verdict is "no missing effect" (unexplained null)."""
