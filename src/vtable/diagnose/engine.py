@@ -45,10 +45,14 @@ noise. A candidate whose fitted parameters sit within 1 % of a bound (on the fit
 logarithmic for log parameters) is flagged: the fit may have pushed the effect where it is
 not physics but a patch.
 
-Ctrl-C: the loop runs in a worker thread; the caller's thread only waits and reports
-progress. An interrupt sets a stop flag that the residual function checks between
-simulations, pending candidate fits are cancelled, and `DiagnosisInterrupted` (a
-KeyboardInterrupt) carries the rounds finished.
+The candidates of a round (and the backward step's refits) are fitted in `workers`
+processes (`vtable.diagnose.workers`; threads when a user's effect was registered from code
+rather than a file, and in the loop's own thread with `workers=1`).
+
+Ctrl-C: the loop runs in a thread of its own; the caller's thread only waits and reports
+progress. An interrupt sets the stop flags (this process's and the workers' shared one)
+that the residual function checks between simulations, pending candidate fits are
+cancelled, and `DiagnosisInterrupted` (a KeyboardInterrupt) carries the rounds finished.
 """
 
 from __future__ import annotations
