@@ -284,7 +284,9 @@ class _State:
 
 
 class Diagnoser:
-    """fit/score on a campaign; `diagnose()` runs the loop.
+    """fit/score on a campaign; `diagnose()` runs the loop. `workers`: the processes the
+    candidates are fitted in (default `WORKERS`, two on this project's machines; 1 fits
+    them one after the other in the loop's thread).
 
     `runs` are the campaign as read; `self.runs` the same at the analysis rate, and
     `self.notes` what the readers reported, the resampling done and the channels left out.
@@ -296,7 +298,6 @@ class Diagnoser:
                  max_rounds: int = 4, calibration: Calibration | None = None,
                  workers: int | None = None) -> None:
         self.campaign = Campaign.of(runs)
-        self.vt = self.campaign.table  # made once here, sent to the workers with the campaign
         self.workers = WORKERS if workers is None else max(1, int(workers))
         self._procs = None
         self._file = None  # the campaign pickled for the worker processes

@@ -40,6 +40,8 @@ _CAMPAIGN: tuple[str, Campaign] | None = None
 
 
 def _init(files: tuple[str, ...], stop) -> None:
+    """A worker's start: Ctrl-C is the parent's to handle, the user's effect files are
+    loaded, the kernels warmed up."""
     global _STOP
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _STOP = stop
@@ -70,6 +72,8 @@ def _ping() -> None:
 
 def _fit(path: str, start: Physics, name: str | None, baseline: float | None,
          seed: dict[str, float] | None, calibration: Calibration) -> tuple:
+    """`TableModel(start=start, multistart=name, ...)` fitted on the campaign pickled at
+    `path`, and its predictions (the module docstring's tuple)."""
     global _CAMPAIGN
     from vtable.diagnose.model import TableModel
     from vtable.errors import VtableError
