@@ -141,3 +141,43 @@ def test_a_buildings_storey_masses_are_calibrated_each_with_its_frequencies_held
     assert list(ph.specimen.masses) == pytest.approx([m0, 1.08 * m0, m0])
     assert specimen_frequencies(ph.specimen) == pytest.approx(specimen_frequencies(b),
                                                               rel=1e-9)
+
+
+def test_unpacking_only_what_moved_equals_unpacking_everything():
+    """A fit's evaluations set only the parameters that moved since the last one
+    (`TableModel._unpack_fast`); the model must be the one setting them all gives, for a
+    building's modes and storeys, the table and an effect, in any order of moves."""
+    import numpy as np
+
+    from vtable.diagnose.campaign import Campaign
+    from vtable.diagnose.model import TableModel
+    from vtable.effects.physics import Physics, nominal_open_loop
+
+    c = Campaign.of([read_run(p) for p in _building_campaign()])
+    ph = Physics(nominal_open_loop(c.table), c.specimen, {"pitch_flexibility": {}})
+    m = TableModel(start=ph)
+    m.vt, m.declared = c.table, c.specimen
+    lay = m._layout(ph)
+    x0 = m._pack(ph, lay)
+    assert {p.group for p in lay} >= {"loop", "specimen", "table", "pitch",
+                                      "effect:pitch_flexibility"}
+    rng = np.random.default_rng(0)
+    x = x0.copy()
+    for _ in range(40):
+        moved = rng.choice(len(x), size=rng.integers(1, 4), replace=False)
+        x = x.copy()
+        x[moved] += 0.02 * rng.standard_normal(len(moved))
+        fast, full = m._unpack_fast(x, ph, lay), TableModel._unpack(x, ph, lay)
+        assert np.array_equal(m._pack(fast, lay), m._pack(full, lay))
+        assert fast.specimen == full.specimen and fast.table == full.table
+
+
+@functools.cache
+def _building_campaign() -> tuple[str, ...]:
+    folder = Path(tempfile.mkdtemp(prefix="vtable-unpack-"))
+    spec = truth.building([25.0, 25.0, 25.0], [110.0, 160.0, 210.0],
+                          storey_k_kip_in=[120.0, 100.0, 80.0], xi=0.02)
+    paths = truth.campaign(folder, truth.eerc_table(pitch="none"), spec, spec, fs=200.0,
+                           noise=0.01, seed=4, duration_s=4.0, spans_in=(0.1, 0.3),
+                           quake_peak_in=1.0)
+    return tuple(str(p) for p in paths)

@@ -137,9 +137,14 @@ class TableModel:
         return np.array([math.log(p.get(ph)) if p.log else p.get(ph) for p in lay])
 
     @staticmethod
-    def _unpack(x: np.ndarray, ph: Physics, lay) -> Physics:
+    def _set(ph: Physics, p: BaseParam, xi: float) -> Physics:
+        """`ph` with parameter `p` at `xi` on its fitted scale (clipped to its bounds)."""
+        return p.set(ph, float(np.clip(math.exp(xi) if p.log else xi, p.lower, p.upper)))
+
+    @classmethod
+    def _unpack(cls, x: np.ndarray, ph: Physics, lay) -> Physics:
         for xi, p in zip(x, lay, strict=True):
-            ph = p.set(ph, float(np.clip(math.exp(xi) if p.log else xi, p.lower, p.upper)))
+            ph = cls._set(ph, p, xi)
         return ph
 
     def _unpack_fast(self, x: np.ndarray, start: Physics, lay) -> Physics:
@@ -150,9 +155,7 @@ class TableModel:
         if last is not None and last[0] is start and last[1] is lay:
             ph = last[3]
             for i in np.flatnonzero(x != last[2]):
-                p, xi = lay[i], x[i]
-                ph = p.set(ph, float(np.clip(math.exp(xi) if p.log else xi, p.lower,
-                                             p.upper)))
+                ph = self._set(ph, lay[i], x[i])
         else:
             ph = self._unpack(x, start, lay)
         self._last = (start, lay, x.copy(), ph)
