@@ -60,7 +60,6 @@ from __future__ import annotations
 import os
 import queue
 import threading
-import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -335,14 +334,9 @@ class Diagnoser:
     def _fit_here(self, start: Physics, name: str, baseline: float | None,
                   seed: dict[str, float] | None) -> tuple:
         """`workers._fit` in this process."""
-        t0 = time.thread_time()
-        m = self.fit(start, multistart=name, baseline=baseline, seed=seed)
-        try:
-            pred: Any = self.predict(m.physics_)
-        except VtableError as exc:
-            pred = exc
-        return (m.physics_, m.train_error_, m.flags_, m.cost_, m.screened_, pred,
-                time.thread_time() - t0)
+        from vtable.diagnose.workers import fitted
+
+        return fitted(self.model(start, name, baseline, seed), self.campaign)
 
     def _campaign_file(self):
         if self._file is None:

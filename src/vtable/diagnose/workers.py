@@ -76,21 +76,30 @@ def _fit(path: str, start: Physics, name: str | None, baseline: float | None,
     `path`, and its predictions (the module docstring's tuple)."""
     global _CAMPAIGN
     from vtable.diagnose.model import TableModel
-    from vtable.errors import VtableError
 
-    t0 = time.process_time()
     if _CAMPAIGN is None or _CAMPAIGN[0] != path:
         with open(path, "rb") as f:
             _CAMPAIGN = (path, pickle.load(f))
-    c = _CAMPAIGN[1]
-    m = TableModel(start=start, multistart=name, stop=_STOP, calibration=calibration,
-                   baseline=baseline, seed=seed).fit(c)
+    return fitted(TableModel(start=start, multistart=name, stop=_STOP,
+                             calibration=calibration, baseline=baseline, seed=seed),
+                  _CAMPAIGN[1])
+
+
+def fitted(model, campaign: Campaign) -> tuple:
+    """Fit `model` (a `TableModel`) on `campaign`: (physics, train error, flags, cost,
+    screened, its predictions or the error that prevented them, CPU seconds of this
+    thread) — what a candidate's fit hands the diagnosis, in a worker or in its own
+    process."""
+    from vtable.errors import VtableError
+
+    t0 = time.thread_time()
+    m = model.fit(campaign)
     try:
-        pred: Any = m.predictions(c)
+        pred: Any = m.predictions(campaign)
     except VtableError as exc:  # the fit found no model it could build
         pred = exc
     return (m.physics_, m.train_error_, m.flags_, m.cost_, m.screened_, pred,
-            time.process_time() - t0)
+            time.thread_time() - t0)
 
 
 # -- in the parent ----------------------------------------------------------------------
