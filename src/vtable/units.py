@@ -155,8 +155,3 @@ def from_si(value, unit: str):
 def weight_to_mass(weight: float, unit: str = "kip") -> float:
     """A weight (force, e.g. kip) -> mass in kg, dividing by standard gravity."""
     return to_si(weight, unit) / G
-
-
-def mass_to_weight(mass: float, unit: str = "kip") -> float:
-    """A mass in kg -> its weight in `unit` (kip by default)."""
-    return from_si(mass * G, unit)

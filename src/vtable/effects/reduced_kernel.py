@@ -24,8 +24,8 @@ import types
 
 import numpy as np
 import scipy.linalg
-from numba import njit
 
+from vtable._numba import njit
 from vtable.hydraulics.element import actuator_rates, dof_error, fed_back_pressure
 
 

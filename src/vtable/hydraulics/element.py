@@ -21,7 +21,8 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+
+from vtable._numba import njit
 
 # kernel slots (this module only)
 _A, _V, _BETA, _KT, _KCT, _RC, _PS, _FR, _QMAX, _TAU, _AIR, _PMEAN, _VEPS = range(13)

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
-from numba import njit
 
+from vtable._numba import njit
 from vtable.analytic.base import LinearModel
 from vtable.analytic.closed_forms import effective_height_first_mode, modal_mass
 from vtable.analytic.mechanical import MechanicalModel

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
-from numba import njit
 
+from vtable._numba import njit
 from vtable.errors import VtableError
 
 
