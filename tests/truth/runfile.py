@@ -1,4 +1,4 @@
-"""Run files in the interchange format (shared/spec/measurement-format.md), written by the
+"""Run files in the interchange format (docs/run-format.md), written by the
 truth's own code: RUN.csv (time + channels) and RUN.toml, optionally a drive file.
 
 EERC runs use the format's units (in, g, kip, in/s, rad, rad/s²); LNEC runs are written

@@ -1,6 +1,6 @@
 """The two tables (EERC, LNEC) and the effects switched on them.
 
-Effect names and parameter units follow vtable's catalog (shared/spec/effects.md); the
+Effect names and parameter units follow vtable's catalog (docs/effects.md); the
 three effects below the line are outside that catalog. Parameters are given in these
 units and converted to SI when the model is built (`model.build`).
 """

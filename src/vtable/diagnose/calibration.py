@@ -1,5 +1,5 @@
 """Calibrating the base: what a lab only approximately knows, refitted within bounds around
-its declaration (shared/spec/effects.md: "a difference that such a calibration absorbs is
+its declaration (docs/effects.md: "a difference that such a calibration absorbs is
 a wrong declaration, not a missing effect").
 
 The base parameters of a campaign (`base_params`):

@@ -227,7 +227,7 @@ class Diagnosis:
         return h
 
     def to_json(self) -> dict[str, Any]:
-        """The keys of shared/spec/effects.md (and more)."""
+        """The keys of docs/diagnosis-json.md (and more)."""
         return {
             "format": "vtable-diagnosis/1",
             "start_effects": self.start_effects,

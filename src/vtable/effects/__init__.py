@@ -1,4 +1,4 @@
-"""Effects: named pieces of physics a model of the table can add (shared/spec/effects.md).
+"""Effects: named pieces of physics a model of the table can add (docs/effects.md).
 
 Each catalog effect is one module here (`vtable.effects.pitch_flexibility`, ...), an
 `Effect` object that knows how it enters the reduced model and the virtual table; users

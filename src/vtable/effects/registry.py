@@ -1,5 +1,5 @@
 """The registry of effects: the catalog's (one module each, names from
-shared/spec/effects.md) and the ones users register from their own files."""
+docs/effects.md) and the ones users register from their own files."""
 
 from __future__ import annotations
 

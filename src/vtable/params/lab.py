@@ -2,7 +2,7 @@
 horizontal actuators and their servo loop, the controller, the limits.
 
 `lab_table(desc)` turns a run's [table] (`vtable.runs.table.TableDescription`: a preset
-and/or a description, shared/spec/measurement-format.md) into a `LabTable`; a run without
+and/or a description, docs/run-format.md) into a `LabTable`; a run without
 [table] is the EERC table (the format's default). The horizontal loop is described per
 actuator by the report's constants (`ServoConstants`, eqs 6.1-6.5): for the EERC table
 Table B.5's at the Table 3.2 knobs; for a table described physically, the flow gain per

@@ -1,5 +1,5 @@
 """The command as the drive file the controller played ([command] drive_file, drive_unit,
-drive_scale, drive_offset_s; shared/spec/measurement-format.md).
+drive_scale, drive_offset_s; docs/run-format.md).
 
 Many acquisitions record only the responses: the command x_c is the drive file, scaled by
 the operator's span factor and offset in time by the samples the acquisition lost. With

@@ -1,4 +1,4 @@
-"""Runs in the interchange format (shared/spec/measurement-format.md, version 1):
+"""Runs in the interchange format (docs/run-format.md, version 1):
 RUN.csv (time + channels) and RUN.toml (what was tested)."""
 
 from __future__ import annotations

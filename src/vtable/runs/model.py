@@ -33,7 +33,7 @@ class _FormatUnits(dict):
         return self[key] if key in self else default
 
 
-#: the interchange format's channels and units (shared/spec/measurement-format.md)
+#: the interchange format's channels and units (docs/run-format.md)
 FORMAT_UNITS: dict[str, str] = _FormatUnits({
     "h_span": "in", "avg_hdisp": "in", "avg_vdisp": "in", "avg_hacc": "g", "avg_vacc": "g",
     "pitch_acc": "rad/s2", "roll_acc": "rad/s2", "twist_acc": "rad/s2", "pitch_disp": "rad",

@@ -1,7 +1,7 @@
 """The run format's [table] table: which shaking table a run was made on.
 
 A [table] names a preset (``preset = "eerc"``) and/or describes the table itself; keys
-below a preset add to it or override it (shared/spec/measurement-format.md). Every
+below a preset add to it or override it (docs/run-format.md). Every
 physical key names its unit as a suffix, in SI or in the report's units
 (``platen_mass_kg`` or ``platen_weight_kip``); weights are turned into masses by standard
 gravity. Values are stored in SI in typed frozen dataclasses.

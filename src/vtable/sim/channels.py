@@ -1,5 +1,5 @@
 """Simulated histories -> the run format's channels (names, units and signs of
-shared/spec/measurement-format.md, report Table 2.3), plus the full state."""
+docs/run-format.md, report Table 2.3), plus the full state."""
 
 from __future__ import annotations
 
