@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from vtable import units
 from vtable.errors import VtableError
+from vtable.ident.drive import align
 from vtable.runs import campaign, read_hdf5, read_run, write_hdf5, write_run
 from vtable.runs.model import FORMAT_UNITS, Run
 
@@ -503,10 +504,17 @@ def test_command_description_and_drive_file(tmp_path):
     assert r.channels["h_span"] == pytest.approx([1e-3, 2e-3, 3e-3], abs=1e-15)
     assert any("command h_span from the drive file pink.csv (mm, scale 0.5), offset 0.005 s "
                "(1 samples, given)" in m for m in r.reports)
-    # "auto" on a record too short to estimate the lag: one line naming the key
+    # "auto": the reader leaves the command to the alignment (an identification step) and
+    # says so; on a record too short to estimate the lag, aligning is one line naming the key
+    auto = _read(tmp_path, "drv2", "time,avg_hdisp\n0,0\n0.005,1\n0.01,2\n",
+                 toml.replace("drive_offset_s = 0.005", 'drive_offset_s = "auto"'))
+    assert not auto.has("h_span") and auto.drive().drive_offset == "auto"
+    assert auto.reports[-1].endswith('drive_offset_s = "auto" is estimated from the table\'s '
+                                     "response when the run is aligned "
+                                     "(vtable.ident.drive.align)")
     with pytest.raises(VtableError, match=r"\[command\]\.drive_offset_s: \"auto\""):
-        _read(tmp_path, "drv2", "time,avg_hdisp\n0,0\n0.005,1\n0.01,2\n",
-              toml.replace("drive_offset_s = 0.005", 'drive_offset_s = "auto"'))
+        align(auto)
+    assert align(r) is r  # a given offset: nothing to align
     # no h_span and no drive file: said
     r = _read(tmp_path, "nocmd", "time,avg_hdisp\n0,0\n0.005,1\n0.01,2\n")
     assert any("no h_span column and no [command] drive_file" in m for m in r.reports)
@@ -612,7 +620,7 @@ def test_stems_keep_their_dots(tmp_path):
 
 # ---- 10. writing -----------------------------------------------------------------------
 def test_interrupted_overwrite_leaves_no_run(tmp_path, monkeypatch):
-    import vtable.runs.read as rd
+    import vtable.runs.write as rd
 
     old = _sample(tmp_path)
     write_run(old, tmp_path / "w")
@@ -739,7 +747,7 @@ def test_missing_and_constant_channels_are_reported(tmp_path):
 def test_reading_costs_about_the_samples(tmp_path):
     import tracemalloc
 
-    from vtable.runs.read import BLOCK
+    from vtable.runs.csvfile import BLOCK
 
     n, m = 40_000, 20
     rng = np.random.default_rng(0)
