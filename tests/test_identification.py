@@ -323,7 +323,11 @@ def test_damping_flagged_unless_resolved():
 
 def test_printed_flags(capsys):
     run = independent_sdof_run(10.0)
-    d = identify_run(run).to_json()
+    res = identify_run(run)
+    d = res.to_json()
+    assert capsys.readouterr().out == ""  # the library prints nothing
+    assert list(d)[:7] == ["run", "fs_hz", "duration_s", "reports", "notes", "skipped", "table"]
+    assert Identification.from_json(d).report() == res.report()
     # the table is the run's (the EERC preset: 100 kips, three actuators): u of eq 7.9
     assert d["table"]["platen_mass_kg"] == pytest.approx(45359.237)
     assert d["table"]["horizontal_actuators"] == 3

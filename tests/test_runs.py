@@ -999,3 +999,29 @@ def test_lab_export_stamps_with_few_digits_read(tmp_path, digits):
         f"{s},0.5\n" for s in lost))
     with pytest.raises(VtableError, match=r"not uniform: step .* at line 3002"):
         read_run(tmp_path / "r.toml")
+
+
+# ---- the declaration: the TOML parsed once -------------------------------------------------
+def test_the_toml_is_parsed_once_into_typed_fields(tmp_path, monkeypatch):
+    import vtable.runs.meta as meta
+
+    toml = TOML + '\n[units]\nh_span = "mm"\n\n[command]\nkind = "random"\nband_hz = [0.5, 25.0]\n'
+    r = _read(tmp_path, "decl", CSV_OK, toml)
+    d = r.declared
+    assert d.title == "test" and d.table.preset == "eerc"
+    assert d.table.mass == pytest.approx(45359.237)  # 100 kips (§2.2), in kg
+    assert d.command.band == (0.5, 25.0) and d.units == {"h_span": "mm"}
+    assert r.channels["h_span"][1] == pytest.approx(1e-3)  # 1 mm
+    assert d.specimen.kind == "sdof" and r.specimen() is d.specimen
+    calls = []
+    monkeypatch.setattr(meta, "table_from_dict", lambda *a: calls.append(a))
+    assert r.table() is d.table and r.drive() is d.command and not calls  # not parsed again
+    monkeypatch.undo()
+    # a new meta (dataclasses.replace) is parsed again; other replacements keep the parse
+    light = dataclasses.replace(r, meta={**r.meta, "table": {"preset": "eerc",
+                                                            "platen_mass_kg": 2000.0}})
+    assert light.table().mass == 2000.0 and r.table().mass == pytest.approx(45359.237)
+    assert dataclasses.replace(r, reports=[]).declared is d
+    h5 = read_hdf5(write_hdf5(r, tmp_path / "decl.h5"))
+    assert h5.declared.units == {"h_span": "mm"} and h5.declared.meta is h5.meta
+    assert h5.declared.table == d.table and h5.declared.command.band == (0.5, 25.0)
