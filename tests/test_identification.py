@@ -175,7 +175,8 @@ from vtable.ident.frames import (  # noqa: E402
     frame_for_mode,
     record_needed,
 )
-from vtable.ident.report import identify_run, print_identification  # noqa: E402
+from vtable.ident.report import identify_run  # noqa: E402
+from vtable.ident.result import Identification  # noqa: E402
 from vtable.ident.structure import fixed_base  # noqa: E402
 from vtable.runs.model import Run  # noqa: E402
 
@@ -309,7 +310,7 @@ def test_damping_flagged_unless_resolved():
     one = fixed_base(short, nperseg=2000)  # 0.1 Hz: one frame
     assert {"unresolved"} <= _codes(one.primary.flags, "xi_n")
     assert "one_average" in _codes(one.primary.flags)
-    d = identify_run(short)
+    d = identify_run(short).to_json()
     row = d["table_3_1"][0]
     assert row["case"] == "fixed base" and "unresolved" in _codes(row["flags"], "xi_n")
     long = independent_sdof_run(400.0)
@@ -322,18 +323,22 @@ def test_damping_flagged_unless_resolved():
 
 def test_printed_flags(capsys):
     run = independent_sdof_run(10.0)
-    d = identify_run(run)
+    res = identify_run(run)
+    d = res.to_json()
+    assert capsys.readouterr().out == ""  # the library prints nothing
+    assert list(d)[:7] == ["run", "fs_hz", "duration_s", "reports", "notes", "skipped", "table"]
+    assert Identification.from_json(d).report() == res.report()
     # the table is the run's (the EERC preset: 100 kips, three actuators): u of eq 7.9
     assert d["table"]["platen_mass_kg"] == pytest.approx(45359.237)
     assert d["table"]["horizontal_actuators"] == 3
     assert d["table_sdof"]["mass_ratio"] == pytest.approx(run.specimen().mass / 45359.237)
-    print_identification(d)
+    print(Identification.from_json(d).report())
     out = capsys.readouterr().out
     assert "table: eerc (DOFs x, z, roll, pitch, twist; platen 45359.2 kg, 3 horizontal" in out
     # a lighter platen in the run's [table] is the m_t of u = m_s/m_t, not 100 kips
     light = dataclasses.replace(run, meta={**run.meta, "table": {"preset": "eerc",
                                                                   "platen_mass_kg": 2000.0}})
-    dl = identify_run(light)
+    dl = identify_run(light).to_json()
     assert dl["table"]["platen_mass_kg"] == 2000.0
     assert dl["table_sdof"]["mass_ratio"] == pytest.approx(run.specimen().mass / 2000.0)
     assert dl["table_sdof"]["table_mass_kg"] == 2000.0
@@ -346,7 +351,7 @@ def test_open_loop_at_bound_flags_the_gain_margin(capsys):
     """eq 6.15 data with ξ_o = 8, beyond the fit's bound of 5: ξ_o is flagged at its
     bound, and the gain margin (eq 6.20) and springs (eqs 5.15-5.16) inherit it. With
     the report's ξ_o = 0.477 nothing is flagged and (f_o, ξ_o, k_o) come back."""
-    d = identify_run(_bare_loop_run(8.0))
+    d = identify_run(_bare_loop_run(8.0)).to_json()
     assert "no [specimen]: identified as a bare table" in d["notes"]
     ol = d["open_loop"]
     assert "at_bound" in _codes(ol["flags"], "xi_o") and ol["params"]["xi_o"] == \
@@ -354,10 +359,10 @@ def test_open_loop_at_bound_flags_the_gain_margin(capsys):
     gm = ol["gain_margin_flags"]
     assert "at_bound" in _codes(gm) and all(f["source"] == "eq 6.15 fit" for f in gm)
     assert "at_bound" in _codes(d["horizontal_spring"]["flags"])
-    print_identification(d)
+    print(Identification.from_json(d).report())
     out = capsys.readouterr().out
     assert "ξ_o 5.000" in out and "⚠ at bound" in out and "⚠ from a flagged fit" in out
-    good = identify_run(_bare_loop_run(0.477))["open_loop"]
+    good = identify_run(_bare_loop_run(0.477)).to_json()["open_loop"]
     assert good["flags"] == [] and good["gain_margin_flags"] == []
     assert good["params"]["f_o"] == pytest.approx(12.6, rel=0.02)
     assert good["params"]["xi_o"] == pytest.approx(0.477, rel=0.02)
@@ -386,14 +391,14 @@ def test_identify_a_short_run_reports_every_section(capsys, tmp_path, short_run)
     assert "⚠ unresolved" in out
     # without a usable command: the sections that need it are skipped, one line each
     run = _with(short_run, h_span=np.full_like(short_run.channels["h_span"], 1e-3))
-    d = identify_run(run)
+    d = identify_run(run).to_json()
     assert "h_span is constant" in d["skipped"]["servo loop fit"]
     assert "h_span is constant" in d["skipped"]["table 3.1: transl. and rot. coupling"]
     assert [r["case"] for r in d["table_3_1"]] == ["fixed base", "base rotation coupling"]
     # no [specimen]
     bare = dataclasses.replace(short_run, meta={k: v for k, v in short_run.meta.items()
                                                 if k != "specimen"})
-    d = identify_run(bare)
+    d = identify_run(bare).to_json()
     assert "no [specimen]: identified as a bare table" in d["notes"]
     assert "open_loop" in d and "needs a sdof specimen" in d["skipped"]["table 3.1"]
 
@@ -401,7 +406,7 @@ def test_identify_a_short_run_reports_every_section(capsys, tmp_path, short_run)
 def test_zero_pitch_channels_skip_the_pitch_sections(capsys, short_run):
     zero = np.zeros_like(short_run.channels["pitch_acc"])
     run = _with(short_run, pitch_acc=zero, pitch_disp=zero.copy())
-    d = identify_run(run)
+    d = identify_run(run).to_json()
     sk = d["skipped"]
     assert "pitch_disp is zero throughout" in sk["rocking impedance"]
     assert "pitch_acc is zero throughout" in sk["rocking impedance"]
@@ -409,7 +414,7 @@ def test_zero_pitch_channels_skip_the_pitch_sections(capsys, short_run):
     assert "no base rotation" in sk["table 3.1: base rotation coupling"]
     assert any("taken as a table without pitch" in n for n in d["notes"])
     assert d["table_3_1"][0]["case"] == "fixed base"  # x_eff = x_t: still identified
-    print_identification(d)
+    print(Identification.from_json(d).report())
     assert "skipped rocking impedance" in capsys.readouterr().out
     with pytest.raises(VtableError, match="constant"):
         hysteresis(zero, zero, 0.005, 2.6)

@@ -3,6 +3,7 @@ uniaxial table on the virtual table, `simulate --table`, and the diagnosis on it
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import json
 import math
@@ -133,8 +134,7 @@ def lnec_campaign():
     runs = []
     for i, c in enumerate(cmds):
         r = virtual_run(truth, c, noise=0.01, seed=10 + i, name=f"lnec{i}", vt=vt)
-        r.meta["table"] = declared
-        runs.append(r)
+        runs.append(dataclasses.replace(r, meta={**r.meta, "table": declared}))
     return truth, runs
 
 

@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from vtable import units
 from vtable.errors import VtableError
+from vtable.ident.drive import align
 from vtable.runs import campaign, read_hdf5, read_run, write_hdf5, write_run
 from vtable.runs.model import FORMAT_UNITS, Run
 
@@ -503,10 +504,17 @@ def test_command_description_and_drive_file(tmp_path):
     assert r.channels["h_span"] == pytest.approx([1e-3, 2e-3, 3e-3], abs=1e-15)
     assert any("command h_span from the drive file pink.csv (mm, scale 0.5), offset 0.005 s "
                "(1 samples, given)" in m for m in r.reports)
-    # "auto" on a record too short to estimate the lag: one line naming the key
+    # "auto": the reader leaves the command to the alignment (an identification step) and
+    # says so; on a record too short to estimate the lag, aligning is one line naming the key
+    auto = _read(tmp_path, "drv2", "time,avg_hdisp\n0,0\n0.005,1\n0.01,2\n",
+                 toml.replace("drive_offset_s = 0.005", 'drive_offset_s = "auto"'))
+    assert not auto.has("h_span") and auto.drive().drive_offset == "auto"
+    assert auto.reports[-1].endswith('drive_offset_s = "auto" is estimated from the table\'s '
+                                     "response when the run is aligned "
+                                     "(vtable.ident.drive.align)")
     with pytest.raises(VtableError, match=r"\[command\]\.drive_offset_s: \"auto\""):
-        _read(tmp_path, "drv2", "time,avg_hdisp\n0,0\n0.005,1\n0.01,2\n",
-              toml.replace("drive_offset_s = 0.005", 'drive_offset_s = "auto"'))
+        align(auto)
+    assert align(r) is r  # a given offset: nothing to align
     # no h_span and no drive file: said
     r = _read(tmp_path, "nocmd", "time,avg_hdisp\n0,0\n0.005,1\n0.01,2\n")
     assert any("no h_span column and no [command] drive_file" in m for m in r.reports)
@@ -612,7 +620,7 @@ def test_stems_keep_their_dots(tmp_path):
 
 # ---- 10. writing -----------------------------------------------------------------------
 def test_interrupted_overwrite_leaves_no_run(tmp_path, monkeypatch):
-    import vtable.runs.read as rd
+    import vtable.runs.write as rd
 
     old = _sample(tmp_path)
     write_run(old, tmp_path / "w")
@@ -739,7 +747,7 @@ def test_missing_and_constant_channels_are_reported(tmp_path):
 def test_reading_costs_about_the_samples(tmp_path):
     import tracemalloc
 
-    from vtable.runs.read import BLOCK
+    from vtable.runs.csvfile import BLOCK
 
     n, m = 40_000, 20
     rng = np.random.default_rng(0)
@@ -991,3 +999,29 @@ def test_lab_export_stamps_with_few_digits_read(tmp_path, digits):
         f"{s},0.5\n" for s in lost))
     with pytest.raises(VtableError, match=r"not uniform: step .* at line 3002"):
         read_run(tmp_path / "r.toml")
+
+
+# ---- the declaration: the TOML parsed once -------------------------------------------------
+def test_the_toml_is_parsed_once_into_typed_fields(tmp_path, monkeypatch):
+    import vtable.runs.meta as meta
+
+    toml = TOML + '\n[units]\nh_span = "mm"\n\n[command]\nkind = "random"\nband_hz = [0.5, 25.0]\n'
+    r = _read(tmp_path, "decl", CSV_OK, toml)
+    d = r.declared
+    assert d.title == "test" and d.table.preset == "eerc"
+    assert d.table.mass == pytest.approx(45359.237)  # 100 kips (§2.2), in kg
+    assert d.command.band == (0.5, 25.0) and d.units == {"h_span": "mm"}
+    assert r.channels["h_span"][1] == pytest.approx(1e-3)  # 1 mm
+    assert d.specimen.kind == "sdof" and r.specimen() is d.specimen
+    calls = []
+    monkeypatch.setattr(meta, "table_from_dict", lambda *a: calls.append(a))
+    assert r.table() is d.table and r.drive() is d.command and not calls  # not parsed again
+    monkeypatch.undo()
+    # a new meta (dataclasses.replace) is parsed again; other replacements keep the parse
+    light = dataclasses.replace(r, meta={**r.meta, "table": {"preset": "eerc",
+                                                            "platen_mass_kg": 2000.0}})
+    assert light.table().mass == 2000.0 and r.table().mass == pytest.approx(45359.237)
+    assert dataclasses.replace(r, reports=[]).declared is d
+    h5 = read_hdf5(write_hdf5(r, tmp_path / "decl.h5"))
+    assert h5.declared.units == {"h_span": "mm"} and h5.declared.meta is h5.meta
+    assert h5.declared.table == d.table and h5.declared.command.band == (0.5, 25.0)

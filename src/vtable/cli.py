@@ -299,10 +299,10 @@ def _print_compare(d: dict[str, Any]) -> None:
 
 
 def _print_identify(d: dict[str, Any]) -> None:
-    from vtable.ident.report import print_identification
+    from vtable.ident.result import Identification
 
     for r in d["runs"]:
-        print_identification(r)
+        print(Identification.from_json(r).report())
 
 
 def _print_simulate(s: dict[str, Any]) -> None:

@@ -99,10 +99,11 @@ def run_tf(path: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5,
     """H1 with coherence between two channels of a run, on frames giving >= 8 averages
     (vtable.ident.frames) unless `nperseg` says otherwise; too few averages are warned."""
     from vtable.ident import channels, transfer_function
+    from vtable.ident.drive import align
     from vtable.ident.frames import FEWEST_AVERAGES, MIN_AVERAGES, averages, frame_for_averages
     from vtable.runs import read_any
 
-    run = read_any(path)
+    run = align(read_any(path))
     out = "avg_hdisp" if out == "x_t" else out
     inp = "h_span" if inp == "x_c" else inp
     x, y = run.channel(inp), run.channel(out)
@@ -173,11 +174,12 @@ def effect_names(text: str) -> list[str]:
 
 def identify(paths: Sequence[str]) -> dict[str, Any]:
     """The report's identification of every run of one configuration."""
+    from vtable.ident.drive import align
     from vtable.ident.report import identify_run
     from vtable.runs import campaign
 
     return {"format": "vtable-identification/1",
-            "runs": [identify_run(r) for r in campaign(paths)]}
+            "runs": [identify_run(align(r)).to_json() for r in campaign(paths)]}
 
 
 def compare(paths: Sequence[str], effects: Sequence[str] = (),
@@ -188,9 +190,11 @@ def compare(paths: Sequence[str], effects: Sequence[str] = (),
     from vtable.diagnose.calibration import Calibration
     from vtable.diagnose.compare import UNEXPLAINED_RULE, localisation_text, unexplained
     from vtable.diagnose.model import TableModel
+    from vtable.ident.drive import align
     from vtable.runs import campaign
 
-    m = TableModel(effects, calibration=Calibration.parse(calibrate)).fit(campaign(paths))
+    m = TableModel(effects, calibration=Calibration.parse(calibrate)).fit(
+        [align(r) for r in campaign(paths)])
     c = m.comparison()
     ol = m.physics_.open_loop
     return {"effects": list(m.effects), "params": m.physics_.effects,
@@ -212,6 +216,7 @@ def diagnose(paths: Sequence[str], with_: Sequence[str] = (), catalog: Sequence[
 
     from vtable.diagnose.engine import Diagnoser, DiagnosisInterrupted, localise
     from vtable.fileio import write_text
+    from vtable.ident.drive import align
     from vtable.jsonable import jsonable
     from vtable.runs import campaign
 
@@ -219,8 +224,8 @@ def diagnose(paths: Sequence[str], with_: Sequence[str] = (), catalog: Sequence[
         raise VtableError(f"--max-rounds must be at least 1, got {max_rounds}")
     from vtable.diagnose.calibration import Calibration
 
-    diag = Diagnoser(campaign(paths), list(with_), catalog=list(catalog) or None,
-                     progress=progress, max_rounds=max_rounds,
+    diag = Diagnoser([align(r) for r in campaign(paths)], list(with_),
+                     catalog=list(catalog) or None, progress=progress, max_rounds=max_rounds,
                      calibration=Calibration.parse(calibrate))
     try:
         d = diag.diagnose()

@@ -32,6 +32,7 @@ from vtable.ident import channels
 from vtable.ident.fits import Fit, fit_open_loop, fit_table_sdof
 from vtable.ident.frames import MIN_AVERAGES, frame_for_averages, frame_for_mode
 from vtable.ident.loop import STRUCTURES, LoopData, Prior, compare_structures
+from vtable.ident.result import Identification
 from vtable.ident.structure import (
     ModalEstimate,
     fixed_base,
@@ -45,11 +46,12 @@ from vtable.ident.structure import (
     rocking_springs_fit,
 )
 from vtable.ident.tf import TransferFunction, transfer_function
-from vtable.ident.validity import Flag, flags_json, inherit, loop_flags, marker, settled
+from vtable.ident.validity import Flag, flags_json, inherit, loop_flags, settled
 from vtable.params.lab import LabTable, run_table
 from vtable.params.loops import OpenLoop
 from vtable.params.specimen import NoSpecimen, RigidBlock, SDOFSpecimen, ShearBuilding
-from vtable.runs.model import FORMAT_UNITS, Run
+from vtable.runs.channels import FORMAT_UNITS
+from vtable.runs.model import Run
 
 #: the servo-loop fits use this band (the report's 0-25 Hz random tests), widened to 1.5
 #: times the described f_o (below 0.45 fs) for a table whose loop lies above it
@@ -71,13 +73,13 @@ def _no_pitch(table: LabTable) -> str:
     return f"the {table.name} table does not pitch (its DOFs: {', '.join(table.dofs)})"
 
 
-def _section(out: dict[str, Any], name: str, step: Callable[[], None]) -> None:
+def _section(out: Identification, name: str, step: Callable[[], None]) -> None:
     """Run one section; a VtableError skips it with its message (anything else is a bug
     and propagates)."""
     try:
         step()
     except VtableError as e:
-        out["skipped"][name] = str(e)
+        out.skipped[name] = str(e)
 
 
 def _unusable_channels(run: Run) -> list[str]:
@@ -90,7 +92,7 @@ def _unusable_channels(run: Run) -> list[str]:
     return out
 
 
-def identify_run(run: Run) -> dict[str, Any]:
+def identify_run(run: Run) -> Identification:
     """Everything identifiable from the run's channels on the run's table
     (`vtable.params.lab.run_table`), each section in its own guarded step; sections that
     cannot be made (a channel absent, a DOF the table does not have, a fit that fails)
@@ -99,27 +101,27 @@ def identify_run(run: Run) -> dict[str, Any]:
     Parameters
     ----------
     run
-        A run as read (`vtable.runs.read_run`; a drive-file command is already h_span).
+        A run as read, aligned when its drive file's offset is "auto"
+        (`vtable.ident.drive.align`: the command h_span is then made).
 
     Returns
     -------
-    dict
-        JSON-ready sections (report units), ``notes`` and ``skipped``.
+    Identification
+        The sections (report units), ``notes`` and ``skipped``; ``to_json()`` for the
+        JSON record, ``report()`` for the printed text.
     """
-    out: dict[str, Any] = {"run": run.name, "fs_hz": run.fs, "duration_s": run.duration,
-                           "reports": list(run.reports), "notes": [], "skipped": {}}
-    notes = out["notes"]
-    if "specimen" in run.meta:
-        spec = run.specimen()
-    else:
-        spec = NoSpecimen()
+    out = Identification(run=run.name, fs_hz=run.fs, duration_s=run.duration,
+                         reports=list(run.reports))
+    notes = out.notes
+    spec = run.specimen()
+    if run.declared.specimen is None:
         notes.append("no [specimen]: identified as a bare table")
     table = run_table(run)
-    out["table"] = {"name": table.name, "dofs": list(table.dofs),
-                    "platen_mass_kg": table.platen_mass,
-                    "horizontal_actuators": table.n_actuators,
-                    "valve_time_constant_s": table.valve_time_constant}
-    if "table" not in run.meta:
+    out.table = {"name": table.name, "dofs": list(table.dofs),
+                 "platen_mass_kg": table.platen_mass,
+                 "horizontal_actuators": table.n_actuators,
+                 "valve_time_constant_s": table.valve_time_constant}
+    if run.declared.table is None:
         notes.append("no [table]: the EERC table assumed (the format's default)")
     notes.extend(_unusable_channels(run))
     m_t = table.platen_mass
@@ -127,7 +129,7 @@ def identify_run(run: Run) -> dict[str, Any]:
     _section(out, "servo loop fit", lambda: _servo_loop(run, spec, m_t, table, out))
     rows: dict[str, ModalEstimate] = {}
     if isinstance(spec, SDOFSpecimen):
-        out["table_3_1"], out["table_3_1_methods"] = [], {}
+        out.table_3_1, out.table_3_1_methods = [], {}
         if pitch_is_zero(run):
             notes.append("pitch_acc is zero throughout: taken as a table without pitch "
                          "(x_eff = x_t)")
@@ -141,13 +143,13 @@ def identify_run(run: Run) -> dict[str, Any]:
             _section(out, "table 3.1: base rotation coupling", lambda: _row(
                 out, rows, "rocking", rocking_coupled(run, *_after(rows, "fixed"))))
         else:
-            out["skipped"]["table 3.1: base rotation coupling"] = _no_pitch(table)
+            out.skipped["table 3.1: base rotation coupling"] = _no_pitch(table)
         _section(out, "table 3.1: transl. and rot. coupling", lambda: _row(
             out, rows, "coupled", fully_coupled(
                 run, *_after(rows, "rocking" if "rocking" in rows else "fixed"))))
         _section(out, "springs from frequencies", lambda: _springs(spec, rows, out))
     else:
-        out["skipped"]["table 3.1"] = (
+        out.skipped["table 3.1"] = (
             f"needs a sdof specimen, the run has {spec.kind}" +
             (" (shear buildings: vtable.ident.structure.table_3_1)"
              if isinstance(spec, ShearBuilding) else ""))
@@ -156,13 +158,13 @@ def identify_run(run: Run) -> dict[str, Any]:
         _section(out, "rocking impedance", lambda: _rocking(run, rows, out, at))
         _section(out, "hysteresis", lambda: _hysteresis(run, out, at))
     else:
-        out["skipped"]["rocking impedance"] = _no_pitch(table)
-        out["skipped"]["hysteresis"] = _no_pitch(table) + ": no moment-rotation loop"
+        out.skipped["rocking impedance"] = _no_pitch(table)
+        out.skipped["hysteresis"] = _no_pitch(table) + ": no moment-rotation loop"
     return out
 
 
 # ---- the servo loop -------------------------------------------------------------------
-def _servo_loop(run: Run, spec, m_t: float, table: LabTable, out: dict[str, Any]) -> None:
+def _servo_loop(run: Run, spec, m_t: float, table: LabTable, out: Identification) -> None:
     """x_t/x_c: eq 6.15 (bare table, rigid mass; x a first-order valve lag when the
     table has a valve time constant), checked against the other loop structures first,
     or eq 7.9 (a SDOF structure, the valve lag held)."""
@@ -180,7 +182,7 @@ def _servo_loop(run: Run, spec, m_t: float, table: LabTable, out: dict[str, Any]
         tf = transfer_function(x_c, x_t, run.fs, n)
         prior = Prior(table.open_loop(), tau, table.name)
         ls = compare_structures(LoopData.from_tf(tf, band), prior)
-        out["loop_structure"] = ls.to_json()
+        out.loop_structure = ls.to_json()
         if not ls.fits_eq_6_15:
             raise VtableError(ls.why + "; its eq 6.15 parameters would not be physical")
         if tau > 0:  # the table's valve lag: eq 6.15 x 1/(1 + τs), τ fitted
@@ -197,11 +199,11 @@ def _servo_loop(run: Run, spec, m_t: float, table: LabTable, out: dict[str, Any]
         d["band_hz"] = list(band)
         d["gain_margin"] = closed_forms.gain_margin_bare(ol)
         d["gain_margin_flags"] = flags_json(derived)
-        out["open_loop"] = d
+        out.open_loop = d
         mass = m_t + (spec.mass if isinstance(spec, RigidBlock) else 0.0)
         f = np.array([2.0, 5.0, 10.0])
         k_h, c_h = closed_forms.feedback_spring(mass, ol, f)  # eqs 5.15-5.16
-        out["horizontal_spring"] = {
+        out.horizontal_spring = {
             "f_hz": f.tolist(), "k_h_kip_per_in": units.from_si(k_h, "kip/in").tolist(),
             "c_h_lb_s_per_in": units.from_si(c_h, "lb-s/in").tolist(),
             "equations": "5.15, 5.16", "flags": flags_json(derived),
@@ -239,7 +241,7 @@ def _servo_loop(run: Run, spec, m_t: float, table: LabTable, out: dict[str, Any]
             d["note"] = ("eq 7.9 has no pitch: on a pitching table f_s, ξ_s are the "
                          "structure's on the rocking table (compare Table 3.1's base "
                          "rotation coupling)")
-        out["table_sdof"] = d
+        out.table_sdof = d
     else:
         raise VtableError("eq 6.15 is for a bare table or a rigid mass and eq 7.9 for a sdof "
                           f"structure; no servo-loop model for a {spec.kind}")
@@ -255,22 +257,22 @@ def _after(rows: dict[str, ModalEstimate], key: str) -> tuple[float, float]:
     return e.f, xi
 
 
-def _row(out: dict[str, Any], rows: dict[str, ModalEstimate], key: str,
+def _row(out: Identification, rows: dict[str, ModalEstimate], key: str,
          e: ModalEstimate) -> None:
     rows[key] = e
     p = e.primary
-    out["table_3_1"].append({
+    out.table_3_1.append({
         "case": e.name, "f_hz": e.f, "damping": e.xi, "method": p.method,
         "nperseg": 2 * (e.tf.f.size - 1), "averages": e.tf.averages,
         "resolution_hz": e.tf.resolution_hz,
         "frame": e.frame.why if e.frame else "given --nperseg",
         "flags": flags_json(p.flags)})
-    out["table_3_1_methods"][e.name] = {
+    out.table_3_1_methods[e.name] = {
         "primary": _fit_dict(p), "appendix_d": _fit_dict(e.amplitude),
         "circle": _fit_dict(e.circle), "skipped": dict(e.skipped)}
 
 
-def _springs(spec: SDOFSpecimen, rows: dict[str, ModalEstimate], out: dict[str, Any]) -> None:
+def _springs(spec: SDOFSpecimen, rows: dict[str, ModalEstimate], out: Identification) -> None:
     """k_r (eq 5.4) from the fixed-base and rocking-coupled frequencies, k_h (eq 5.5)
     with the coupled one, as a `Fit` whose standard errors propagate the frequencies'
     (k_r is undetermined when f_f and f_r differ by less than their errors); the
@@ -299,7 +301,7 @@ def _springs(spec: SDOFSpecimen, rows: dict[str, ModalEstimate], out: dict[str, 
     flags: list[Flag] = list(fit.flags)
     for e in est:
         flags += inherit(e.primary.flags, e.name, params=("f_n",))
-    out["springs_from_frequencies"] = {
+    out.springs_from_frequencies = {
         "k_r_lb_in_per_rad": units.from_si(k[0], "lb-in/rad"),
         "k_h_kip_per_in": units.from_si(k[1], "kip/in"),
         "stderr": {"k_r_lb_in_per_rad": units.from_si(sk[0], "lb-in/rad"),
@@ -338,7 +340,7 @@ def pitch_resonance(run: Run) -> tuple[float, list[Flag]]:
     return float(fb[i]), flags
 
 
-def _rocking(run: Run, rows: dict[str, ModalEstimate], out: dict[str, Any],
+def _rocking(run: Run, rows: dict[str, ModalEstimate], out: Identification,
              at: dict[str, Any]) -> None:
     """G_r = M/θ at the coupled frequency (or the pitch resonance without Table 3.1),
     total and by group (eqs 5.9-5.11)."""
@@ -369,11 +371,11 @@ def _rocking(run: Run, rows: dict[str, ModalEstimate], out: dict[str, Any],
                                                                 "lb-in-s/rad")},
                 "coherence": fit.context.get("coherence"), "averages": fit.context["averages"],
                 "flags": flags_json([*fit.flags, *base])}
-    out["rocking_impedance"] = d
+    out.rocking_impedance = d
     at["f"], at["flags"] = f_eval, base
 
 
-def _hysteresis(run: Run, out: dict[str, Any], at: dict[str, Any]) -> None:
+def _hysteresis(run: Run, out: Identification, at: dict[str, Any]) -> None:
     """Eqs 5.12-5.13 on the moment-rotation loop at the G_r frequency."""
     (th,) = channels.require(run, "pitch_disp", purpose="the moment-rotation loop")
     if "f" not in at:
@@ -383,7 +385,7 @@ def _hysteresis(run: Run, out: dict[str, Any], at: dict[str, Any]) -> None:
     reg = h.fit
     loop = loop_flags(h.crest_factor, f_eval)
     k_flags = [*(reg.flags if reg else ()), *base]
-    out["hysteresis"] = {
+    out.hysteresis = {
         "f_hz": f_eval,
         "k_r_lb_in_per_rad": units.from_si(h.stiffness, "lb-in/rad"),
         "k_r_stderr_lb_in_per_rad": units.from_si(reg.stderr["k"], "lb-in/rad"),
@@ -392,151 +394,3 @@ def _hysteresis(run: Run, out: dict[str, Any], at: dict[str, Any]) -> None:
         "damping_ratio": h.damping_ratio, "crest_factor": h.crest_factor,
         "equations": "5.12-5.13", "flags": flags_json(k_flags),
         "loop_flags": flags_json([*loop, *k_flags])}
-
-
-# ---- printing --------------------------------------------------------------------------
-def _warn_lines(flags: list[dict[str, Any]], indent: str = "      ") -> None:
-    seen = set()
-    for f in flags:
-        if f["text"] not in seen:
-            seen.add(f["text"])
-            print(f"{indent}⚠ {f['text']}")
-
-
-def _mark(flags: list[dict[str, Any]], param: str) -> str:
-    return marker([Flag(f["code"], f["text"], f["param"], f["source"]) for f in flags], param)
-
-
-def _frame(d: dict[str, Any]) -> str:
-    a, r = d.get("averages"), d.get("resolution_hz")
-    return "" if a is None else f", {int(a)} averages, Δf {r:.3g} Hz"
-
-
-def _v(x: float | None, fmt: str, scale: float = 1.0, width: int = 0) -> str:
-    """A number for the printed tables, "—" when there is none (NaN, None)."""
-    if x is None or not np.isfinite(x):
-        return f"{'—':>{width}}"
-    return f"{scale * x:{width}{fmt}}"
-
-
-def _print_methods(m: dict[str, Any]) -> None:
-    """The comparison methods of one Table 3.1 row, each with its flag markers."""
-    parts = []
-    for key, label in (("appendix_d", "appendix D"), ("circle", "circle fit")):
-        fit = m.get(key)
-        if fit is None or fit is m.get("primary") or (
-                m.get("primary") and fit["method"] == m["primary"]["method"]):
-            continue
-        p, fl = fit["params"], fit["flags"]
-        parts.append(f"{label} {_v(p['f_n'], '.3f')} Hz{_mark(fl, 'f_n')} "
-                     f"{_v(p['xi_n'], '.2f', 100)} %{_mark(fl, 'xi_n')}")
-    for label, why in m.get("skipped", {}).items():
-        parts.append(f"{label} skipped ({why})")
-    if parts:
-        print("      compare: " + "; ".join(parts))
-
-
-def _print_structure(ls: dict[str, Any]) -> None:
-    """The loop-structure verdict; when the loop is not eq 6.15, the structure that fits
-    with its parameters (the eq 6.15 ones are not quoted)."""
-    mark = "" if ls["fits_eq_6_15"] else "⚠ "
-    print(f"  loop structure: {mark}{ls['why']}")
-    for n in ls.get("notes", []):
-        print(f"      note: {n}")
-    for key, c in ls["candidates"].items():
-        if ls["fits_eq_6_15"] and key != ls["best"]:
-            continue
-        if not ls["fits_eq_6_15"] and STRUCTURES[key].type1:
-            print(f"      {c['name']}: ΔAIC {c['delta_aic']:+.0f} (R² {c['r2']:.4f}), "
-                  "parameters not quoted")
-            continue
-        ps = ", ".join(f"{k} {v:.4g} ± {c['stderr'][k]:.2g}" for k, v in c["params"].items())
-        print(f"      {c['name']}: {ps} (ΔAIC {c['delta_aic']:+.0f}, R² {c['r2']:.4f})")
-
-
-def print_identification(d: dict[str, Any]) -> None:
-    """The identification of one run, each number with its flags (⚠)."""
-    print(f"{d['run']}: {d['duration_s']:.1f} s at {d['fs_hz']:.0f} Hz")
-    for r in d["reports"]:
-        print(f"  note: {r}")
-    for r in d.get("notes", []):
-        print(f"  note: {r}")
-    if "table" in d:
-        t = d["table"]
-        print(f"  table: {t['name']} (DOFs {', '.join(t['dofs'])}; platen "
-              f"{t['platen_mass_kg']:.6g} kg, {t['horizontal_actuators']} horizontal "
-              f"actuator(s), valve time constant {t['valve_time_constant_s']:g} s)")
-    if "loop_structure" in d:
-        _print_structure(d["loop_structure"])
-    if "open_loop" in d:
-        o = d["open_loop"]
-        p, e, fl = o["params"], o["stderr"], o["flags"]
-        gm = "" if not o["gain_margin_flags"] else " ⚠ from a flagged fit"
-        lag = (f", τ {p['tau']:.4f} ± {e['tau']:.2g} s{_mark(fl, 'tau')}" if "tau" in p
-               else "")
-        print(f"  open loop ({o.get('model', 'eq 6.15')}): f_o {p['f_o']:.3f} ± "
-              f"{e['f_o']:.3g} Hz{_mark(fl, 'f_o')}, ξ_o {p['xi_o']:.3f} ± {e['xi_o']:.3g}"
-              f"{_mark(fl, 'xi_o')}, k_o {p['k_o']:.2f} ± {e['k_o']:.3g} 1/s{_mark(fl, 'k_o')}"
-              f"{lag} (R² {o['r2']:.4f}{_frame(o)}); gain margin (eq 6.20) "
-              f"{o['gain_margin']:.2f}{gm}")
-        _warn_lines(fl)
-        hs = d.get("horizontal_spring")
-        if hs:
-            ks = ", ".join(f"{k:.3g}" for k in hs["k_h_kip_per_in"])
-            cs = ", ".join(f"{c:.3g}" for c in hs["c_h_lb_s_per_in"])
-            fs = ", ".join(f"{f:g}" for f in hs["f_hz"])
-            print(f"  horizontal spring (eqs 5.15-5.16) at {fs} Hz: k_h {ks} kip/in, c_h {cs} "
-                  "lb-s/in"
-                  + (" ⚠ from a flagged fit" if hs["flags"] else ""))
-    if "table_sdof" in d:
-        o = d["table_sdof"]
-        p, fl = o["params"], o["flags"]
-        print(f"  table + SDOF (eq 7.9): f_o {p['f_o']:.2f} Hz{_mark(fl, 'f_o')}, ξ_o "
-              f"{p['xi_o']:.3f}{_mark(fl, 'xi_o')}, k_o {p['k_o']:.2f}{_mark(fl, 'k_o')}, "
-              f"f_s {p['f_s']:.3f} Hz{_mark(fl, 'f_s')}, ξ_s {p['xi_s']:.4f}"
-              f"{_mark(fl, 'xi_s')} (R² {o['r2']:.4f}{_frame(o)})")
-        _warn_lines(fl)
-        if fl:
-            print(f"      frames: {o['frame']}")
-        if o.get("note"):
-            print(f"      note: {o['note']}")
-    if d.get("table_3_1"):
-        print(f"  {'Table 3.1':<28} {'f (Hz)':>8} {'damping (%)':>12}   frames")
-        for row in d["table_3_1"]:
-            fl = row["flags"]
-            print(f"  {row['case']:<28} {_v(row['f_hz'], '.3f', width=8)}{_mark(fl, 'f_n')} "
-                  f"{_v(row['damping'], '.2f', 100, 12)}{_mark(fl, 'xi_n')}   "
-                  f"{row['nperseg']} pts, {row['averages']} avg, Δf {row['resolution_hz']:.3g} Hz")
-            _warn_lines(fl)
-            if fl:
-                print(f"      frames: {row['frame']}")
-            _print_methods(d.get("table_3_1_methods", {}).get(row["case"], {}))
-    if "springs_from_frequencies" in d:
-        s = d["springs_from_frequencies"]
-        fl, e = s["flags"], s["stderr"]
-        print(f"  springs (eqs 5.4, 5.5): k_r {s['k_r_lb_in_per_rad']:.3g} ± "
-              f"{e['k_r_lb_in_per_rad']:.2g}{_mark(fl, 'k_r')} lb-in/rad, k_h "
-              f"{s['k_h_kip_per_in']:.3g} ± {e['k_h_kip_per_in']:.2g}{_mark(fl, 'k_h')} kip/in"
-              + (" ⚠ from flagged frequencies" if any(f["source"] for f in fl) else ""))
-        _warn_lines(s["flags"])
-    if "rocking_impedance" in d:
-        g = d["rocking_impedance"]
-        print(f"  rocking impedance G_r = M/θ at {g['f_hz']:.3f} Hz, {g['at']} "
-              f"(eqs 5.9-5.11, θ from {g['theta_from']}):")
-        for k in ("total", "vertical actuators", "stabilizers"):
-            if k not in g:
-                print(f"    {k:<20} skipped: {g['skipped'][k]}")
-                continue
-            fl = g[k]["flags"]
-            print(f"    {k:<20} k_r {g[k]['k_r_lb_in_per_rad']:.3g}{_mark(fl, 'k_r')} lb-in/rad, "
-                  f"c_r {g[k]['c_r_lb_in_s_per_rad']:.3g}{_mark(fl, 'c_r')} lb-in-s/rad "
-                  f"(γ² {g[k]['coherence']:.3f}, {int(g[k]['averages'])} avg)")
-            _warn_lines(fl, "        ")
-    if "hysteresis" in d:
-        h = d["hysteresis"]
-        print(f"  hysteresis (eqs 5.12-5.13): k_r {h['k_r_lb_in_per_rad']:.3g} lb-in/rad "
-              f"(R² {h['r2']:.3f}){' ⚠' if h['flags'] else ''}, ξ_v "
-              f"{100 * h['damping_ratio']:.2f} %{' ⚠' if h['loop_flags'] else ''}")
-        _warn_lines(h["loop_flags"])
-    for k, why in d["skipped"].items():
-        print(f"  skipped {k}: {why}")

@@ -27,12 +27,9 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from vtable.ident.frames import LINES_PER_BAND, MIN_AVERAGES
-
-if TYPE_CHECKING:
-    from vtable.ident.fits import Fit
 
 #: below this R² the fitted model does not describe the data it was fitted to
 R2_MIN = 0.9
@@ -49,6 +46,19 @@ MARKERS = {"at_bound": "at bound", "not_finite": "no value", "stderr_large": "σ
 
 SYMBOLS = {"f_o": "f_o", "xi_o": "ξ_o", "k_o": "k_o", "f_s": "f_s", "xi_s": "ξ_s",
            "f_n": "f_n", "xi_n": "ξ_n", "gain": "gain", "P_n": "P_n"}
+
+
+class FitLike(Protocol):
+    """What the flags are computed from (`vtable.ident.fits.Fit` is one)."""
+
+    params: dict[str, float]
+    stderr: dict[str, float]
+    r2: float
+    bounds: dict[str, tuple[float, float]]
+    modes: tuple[tuple[str, str], ...]
+    context: dict[str, float]
+    correlation: dict[str, float]
+    flags: tuple[Flag, ...]
 
 
 @dataclass(frozen=True)
@@ -70,7 +80,7 @@ def _sym(name: str) -> str:
     return SYMBOLS.get(name, name)
 
 
-def fit_flags(fit: Fit) -> tuple[Flag, ...]:
+def fit_flags(fit: FitLike) -> tuple[Flag, ...]:
     """All flags of a fit, from its parameters, standard errors, bounds, goodness of fit
     and its context (`resolution_hz`, `averages`, `coherence`: the mean γ² of the fitted
     lines), in a fixed order."""
@@ -129,7 +139,7 @@ def fit_flags(fit: Fit) -> tuple[Flag, ...]:
     return tuple(out)
 
 
-def settled(fit: Fit, params: Iterable[str]) -> bool:
+def settled(fit: FitLike, params: Iterable[str]) -> bool:
     """Whether `params` of the fit are good enough to choose frames from: no flag on
     them other than ``unresolved`` (which the new frames address), and no ``poor_fit``."""
     keep = set(params)

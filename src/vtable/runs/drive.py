@@ -14,16 +14,10 @@ grid; a drive sampled faster than the run is first low-passed at 0.45 fs of the 
 held at the drive's first or last value (the table at rest) and the samples are counted
 in the report line.
 
-drive_offset_s = "auto": the table itself delays its response (a valve-integrator loop
-has a DC group delay of about 1/k_o plus the valve lag), so the lag of x_t behind the
-drive is not the offset. The offset is estimated in two steps: a coarse alignment o₀ at
-the peak of the cross-correlation of drive and x_t (avg_hdisp), then the complex H1 of
-x_t over the drive aligned at o₀ is fitted by the candidate loop structures each with a
-pure delay e^{jωΔ} (`vtable.ident.loop.compare_structures`: eq 6.15, eq 6.15 x a
-first-order valve lag, a type-0 loop; started from the run's table, eq 6.16 and its valve
-time constant); the best structure's Δ gives o = o₀ + Δ, its standard error the
-uncertainty. The offset used is o rounded to whole samples of the run (lost samples are
-whole samples); the report line gives both.
+drive_offset_s = "auto": the offset is not known until the table's response is
+identified (the table delays its response, so the lag of x_t behind the drive is not the
+offset). The reader leaves the command out and says so in a report line;
+`vtable.ident.drive.align` estimates the offset and makes the command with `with_command`.
 
 A run with both an h_span column and a drive file: the column wins (it is what the
 controller recorded) and the drive is checked against it: the lag and the scale that best
@@ -37,7 +31,6 @@ import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import scipy.interpolate
@@ -45,7 +38,6 @@ import scipy.signal
 
 from vtable import units as un
 from vtable.errors import VtableError
-from vtable.runs.format import CommandDescription
 from vtable.runs.model import Run
 
 #: the drive is low-passed at this fraction of the run's sampling rate when sampled faster
@@ -68,29 +60,6 @@ class DriveFile:
     @property
     def dt(self) -> float:
         return float(np.median(np.diff(self.t)))
-
-
-@dataclass(frozen=True)
-class OffsetEstimate:
-    """drive_offset_s = "auto": the offset (s), its standard error, the coarse alignment
-    and the loop structure it was fitted with (`vtable.ident.loop.LoopStructure`)."""
-
-    offset: float
-    stderr: float
-    coarse: float
-    structure: Any
-    fs: float
-    how: str = ""
-
-    @property
-    def samples(self) -> float:
-        return self.offset * self.fs
-
-    def to_json(self) -> dict[str, Any]:
-        return {"offset_s": self.offset, "offset_samples": self.samples,
-                "stderr_s": self.stderr, "stderr_samples": self.stderr * self.fs,
-                "coarse_offset_s": self.coarse, "how": self.how,
-                "loop": self.structure.to_json()}
 
 
 def read_drive(path: Path, unit: str | None, scale: float | None, where: str) -> DriveFile:
@@ -160,7 +129,7 @@ def on_grid(drive: DriveFile, t: np.ndarray, offset: float) -> tuple[np.ndarray,
     return out, outside
 
 
-def _coarse_offset(drive: DriveFile, t: np.ndarray, y: np.ndarray) -> float:
+def coarse_offset(drive: DriveFile, t: np.ndarray, y: np.ndarray) -> float:
     """o₀: the drive resampled on the run's step from its start, its lag at the peak of
     the cross-correlation with the response y (positive peak: scale > 0)."""
     dt = float((t[-1] - t[0]) / (len(t) - 1))
@@ -172,62 +141,11 @@ def _coarse_offset(drive: DriveFile, t: np.ndarray, y: np.ndarray) -> float:
     return float(drive.t[0] + lag * dt - t[0])
 
 
-def estimate_offset(run: Run, drive: DriveFile, band: tuple[float, float] | None,
-                    where: str) -> OffsetEstimate:
-    """drive_offset_s = "auto" (module docstring): the coarse alignment, then the delay
-    fitted jointly with the loop structures on the complex H1 of avg_hdisp over the drive."""
-    from vtable.ident import channels
-    from vtable.ident.frames import MIN_AVERAGES, frame_for_averages
-    from vtable.ident.loop import (
-        STRUCTURES,
-        LoopData,
-        Prior,
-        compare_structures,
-        fit_delay_held,
-        resolved,
-    )
-    from vtable.ident.tf import transfer_function
-    from vtable.params.lab import run_table
-
-    why = channels.channel_problem(run, "avg_hdisp")
-    if why:
-        raise VtableError(f"{where}.drive_offset_s: \"auto\" estimates the lag from the "
-                          f"table's response, but {why}; give the offset in seconds")
-    y = run.channels["avg_hdisp"]
-    coarse = _coarse_offset(drive, run.time, y)
-    x0, _ = on_grid(drive, run.time, coarse)
-    n = frame_for_averages(len(y), MIN_AVERAGES, longest=2048) or \
-        frame_for_averages(len(y), 2)
-    if n is None:
-        raise VtableError(f"{where}.drive_offset_s: \"auto\": the run ({len(y)} samples) is "
-                          "too short to estimate the lag; give the offset in seconds")
-    tf = transfer_function(x0, y, run.fs, n)
-    hi = 0.45 * run.fs if band is None else min(band[1], 0.45 * run.fs)
-    lo = max(0.2, 3 * run.fs / n)
-    table = run_table(run)
-    prior = Prior(table.open_loop(), table.valve_time_constant, table.name)
-    try:
-        data = LoopData.from_tf(tf, (lo, hi), min_coherence=0.8)
-        st = compare_structures(data, prior, delay_dt=run.dt)
-    except VtableError as e:
-        raise VtableError(f"{where}.drive_offset_s: \"auto\": cannot fit the lag ({e}); give "
-                          "the offset in seconds") from None
-    fit = st.fits[st.best]
-    how = f"{STRUCTURES[st.best].name} x e^(-jωδ), fitted jointly"
-    if not resolved(st):
-        fit = fit_delay_held(data, prior, run.dt)
-        how = (f"the loop of the table's description ({table.name}: eq 6.16, valve lag "
-               f"{prior.tau:g} s) x e^(-jωδ), δ alone: the record does not tell the loop "
-               f"structures apart ({len(data.f)} lines)")
-    delay, sd = fit.params["delay"], fit.stderr["delay"]
-    return OffsetEstimate(coarse + delay, sd, coarse, st, run.fs, how)
-
-
 def _check_column(run: Run, drive: DriveFile, offset: float) -> str:
     """The h_span column against the drive: the lag (samples, beyond `offset`) and scale
     that map the drive onto the column best."""
     col = run.channels["h_span"]
-    coarse = _coarse_offset(drive, run.time, col)
+    coarse = coarse_offset(drive, run.time, col)
     x, _ = on_grid(drive, run.time, coarse)
     ok = np.isfinite(col)
     ratio = float(np.dot(x[ok], col[ok]) / np.dot(x[ok], x[ok])) if np.any(x[ok]) else math.nan
@@ -238,41 +156,44 @@ def _check_column(run: Run, drive: DriveFile, offset: float) -> str:
             f"{ratio:.4g}" + (" ⚠ they disagree" if warn else " (they agree)"))
 
 
-def apply_drive(run: Run, where: str) -> Run:
-    """The run with its command h_span made from the drive file (or, with an h_span
-    column, the drive checked against it), and a report line naming the file, the scale
-    and the offset (given, or estimated with its uncertainty). `where` names the TOML."""
-    from vtable.runs.format import command_from_dict
+#: the report line a run with drive_offset_s = "auto" carries until it is aligned
+AUTO_PENDING = ("command h_span not made: drive_offset_s = \"auto\" is estimated from the "
+                "table's response when the run is aligned (vtable.ident.drive.align)")
 
-    folder = run.source.parent if run.source is not None else None
-    key = f"{where} [command]"
-    cmd: CommandDescription = command_from_dict(run.meta["command"], key, folder)
-    if cmd.drive_file is None:
+
+def apply_drive(run: Run, where: str) -> Run:
+    """The run with its command h_span made from the drive file at the given
+    drive_offset_s (or, with an h_span column, the drive checked against it), and a
+    report line naming the file, the scale and the offset. With drive_offset_s = "auto"
+    the run is returned with the report line `AUTO_PENDING` (`vtable.ident.drive.align`
+    makes the command). `where` names the TOML."""
+    cmd = run.drive()
+    if cmd is None or cmd.drive_file is None:
         return run
+    key = f"{where} [command]"
     drive = read_drive(cmd.drive_file, cmd.drive_unit, cmd.drive_scale, key)
-    name = drive.path.name
     if run.has("h_span"):
         off = 0.0 if cmd.drive_offset in (None, "auto") else float(cmd.drive_offset)
         line = f"{where}: {_check_column(run, drive, off)}"
         return dataclasses.replace(run, reports=[*run.reports, line])
-    estimate = None
     if cmd.drive_offset == "auto":
-        estimate = estimate_offset(run, drive, cmd.band, key)
-        offset = round(estimate.samples) * run.dt
-    else:
-        offset = float(cmd.drive_offset or 0.0)
+        return dataclasses.replace(run, reports=[*run.reports, f"{where}: {AUTO_PENDING}"])
+    offset = float(cmd.drive_offset or 0.0)
+    return with_command(run, drive, offset, f"offset {offset:g} s ({offset * run.fs:.4g} "
+                        "samples, given)", where)
+
+
+def with_command(run: Run, drive: DriveFile, offset: float, how: str, where: str) -> Run:
+    """The run with h_span = the drive at `offset` (s) on its time grid, and the report
+    line naming the file, the scale and `how` the offset was found."""
+    name = drive.path.name
+    key = f"{where} [command]"
     t = run.time
     if not (t[0] + offset < drive.t[-1] and t[-1] + offset > drive.t[0]):
         raise VtableError(f"{key}.drive_offset_s: {offset:g} s puts the drive {name} "
                           f"({drive.t[0]:g}-{drive.t[-1]:g} s) outside the run "
                           f"({t[0]:g}-{t[-1]:g} s)")
     x, outside = on_grid(drive, t, offset)
-    if estimate is not None:
-        how = (f"estimated lag {round(estimate.samples)} samples ({offset:.4g} s): "
-               f"{estimate.samples:.2f} ± {estimate.stderr * run.fs:.2g} samples, from the "
-               f"H1 of avg_hdisp over the drive with {estimate.how}")
-    else:
-        how = f"offset {offset:g} s ({offset * run.fs:.4g} samples, given)"
     faster = " (low-passed at 0.45 fs)" if drive.dt < run.dt * (1 - 1e-3) else ""
     line = (f"{where}: command h_span from the drive file {name} ({drive.unit}, scale "
             f"{drive.scale:g}{faster}), {how}")

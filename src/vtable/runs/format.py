@@ -4,13 +4,18 @@ RUN.csv (time + channels) and RUN.toml (what was tested)."""
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from vtable import units
+from vtable.analytic.structure import building_matrices, fixed_base_modes
 from vtable.errors import VtableError
+from vtable.params.base import check_number
+from vtable.params.table import DIRECTIONS, KNOBS
 
 FORMAT = "vtable-run/1"
 SPECIMEN_KEYS = {"none": (), "rigid": ("weight_kip", "height_in"),
@@ -27,8 +32,6 @@ def specimen_table(spec) -> dict[str, Any]:
         if k in d:
             out[k] = d[k]
     if kind == "shear_building" and "frequencies_hz" not in d:
-        from vtable.analytic.structure import building_matrices, fixed_base_modes
-
         M, K, _ = building_matrices(spec)
         w, _ = fixed_base_modes(M, K)
         out["frequencies_hz"] = (w / (2 * np.pi)).tolist()
@@ -52,8 +55,6 @@ def _toml_value(v: Any) -> str:
 
 def _toml_key(k: str) -> str:
     """A bare key when TOML allows one, else a quoted key."""
-    import re
-
     return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else json.dumps(k)
 
 
@@ -72,9 +73,6 @@ def dumps_toml(d: dict[str, Any]) -> str:
 def check_control(d: Any, where: str) -> list[str]:
     """Check a [control] table (report Table 3.2 knob positions per direction): every knob
     a finite number >= 0; unknown directions and knobs are returned as notes."""
-    from vtable.params.base import check_number
-    from vtable.params.table import DIRECTIONS, KNOBS
-
     notes: list[str] = []
     for direction, knobs in d.items():
         w = f"{where[:-1]}.{direction}]" if where.endswith("]") else f"{where}.{direction}"
@@ -135,8 +133,6 @@ class CommandDescription:
 
 
 def _positive(d: dict[str, Any], key: str, where: str, unit: str = "1") -> float | None:
-    from vtable.params.base import check_number
-
     if key not in d:
         return None
     x = check_number(d[key], f"{where}.{key}", unit)
@@ -156,9 +152,6 @@ def _text(d: dict[str, Any], key: str, where: str) -> str | None:
 def command_from_dict(d: Any, where: str, folder: Path | None = None) -> CommandDescription:
     """Parse and check a [command] table; `folder` resolves a relative drive_file (the
     folder of RUN.toml). Unknown keys are returned in `notes`."""
-    from vtable import units
-    from vtable.params.base import check_number
-
     if not isinstance(d, dict):
         raise VtableError(f"{where}: expected a table, got {type(d).__name__}")
     notes = [f"{where}: unknown key {k!r} (kept, not used)" for k in d if k not in COMMAND_KEYS]
@@ -211,23 +204,3 @@ def command_from_dict(d: Any, where: str, folder: Path | None = None) -> Command
         frequency=_positive(d, "frequency_hz", where, "Hz"), record=_text(d, "record", where),
         length_scale=_positive(d, "length_scale", where),
         time_scale=_positive(d, "time_scale", where), notes=tuple(notes))
-
-
-# ---- [units] --------------------------------------------------------------------------
-def check_units(d: Any, where: str) -> None:
-    """Every [units] value is a known unit whose dimension is the channel's: a format
-    channel takes units of its own dimension, `time` a time unit, other (extra) channels
-    any known unit."""
-    from vtable import units
-    from vtable.runs.model import channel_dimension
-
-    for ch, u in d.items():
-        if not isinstance(u, str) or u not in units.UNITS:
-            raise VtableError(f"{where} {ch} = {u!r} is not a known unit (e.g. in, mm, m, g, "
-                              "m/s2, kip, N, rad)")
-        dim = "time" if ch == "time" else channel_dimension(ch)
-        if dim is not None:
-            try:
-                units.check_dimension(u, dim, "the time column" if ch == "time" else ch)
-            except VtableError as e:
-                raise VtableError(f"{where} {e}") from None

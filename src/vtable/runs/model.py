@@ -1,8 +1,9 @@
-"""A run in memory: time, channels in SI, what the TOML said, and what was reported."""
+"""A run in memory: time, channels in SI, what the TOML declared (parsed once), and what
+was reported."""
 
 from __future__ import annotations
 
-import re
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -10,56 +11,24 @@ from typing import Any
 import numpy as np
 
 from vtable.errors import VtableError
+from vtable.params.specimen import NoSpecimen, Specimen
+from vtable.runs.channels import COMMAND_CHANNELS, FORMAT_UNITS, channel_dimension
+from vtable.runs.format import CommandDescription
+from vtable.runs.meta import Declaration, declare
+from vtable.runs.table import TableDescription
 
-_FLOOR = re.compile(r"floor([1-9][0-9]*)_(acc|disp)")
-
-
-class _FormatUnits(dict):
-    """The format's channel -> unit table. Besides the fixed names it holds the floor
-    channels floorK_acc (g) and floorK_disp (in) for any K >= 1 (they are not listed
-    when iterating)."""
-
-    def __missing__(self, key: str) -> str:
-        m = _FLOOR.fullmatch(key) if isinstance(key, str) else None
-        if m is None:
-            raise KeyError(key)
-        return "g" if m.group(2) == "acc" else "in"
-
-    def __contains__(self, key: object) -> bool:
-        return dict.__contains__(self, key) or (
-            isinstance(key, str) and _FLOOR.fullmatch(key) is not None)
-
-    def get(self, key: str, default: Any = None) -> Any:
-        return self[key] if key in self else default
-
-
-#: the interchange format's channels and units (docs/run-format.md)
-FORMAT_UNITS: dict[str, str] = _FormatUnits({
-    "h_span": "in", "avg_hdisp": "in", "avg_vdisp": "in", "avg_hacc": "g", "avg_vacc": "g",
-    "pitch_acc": "rad/s2", "roll_acc": "rad/s2", "twist_acc": "rad/s2", "pitch_disp": "rad",
-    **{f"v{i}_disp": "in" for i in range(1, 5)}, **{f"h{i}_disp": "in" for i in range(1, 4)},
-    **{f"h{i}_force": "kip" for i in range(1, 4)}, **{f"v{i}_force": "kip" for i in range(1, 5)},
-    **{f"p{i}_stab": "kip" for i in range(1, 5)}, "h_vel": "in/s",
-    "acc_n_ne": "g", "acc_n_nw": "g", "acc_w_nw": "g", "acc_w_sw": "g",
-    "pot_n_sw": "in", "pot_n_se": "in", "acc_cmd": "g",
-})
-TOP_KEYS = ("format", "title", "table", "control", "specimen", "command", "units")
-#: channels the controller generates: constant, they drive nothing
-COMMAND_CHANNELS = ("h_span", "acc_cmd")
-
-
-def channel_dimension(name: str) -> str | None:
-    """The dimension of a format channel (length, acceleration, force, angle, ...); None
-    for a channel the format does not name (an extra channel takes any unit)."""
-    from vtable import units
-
-    unit = FORMAT_UNITS.get(name)
-    return None if unit is None else units.dimension(unit)
+__all__ = ["COMMAND_CHANNELS", "FORMAT_UNITS", "Declaration", "Run", "channel_dimension",
+           "with_noise"]
 
 
 @dataclass
 class Run:
-    """One run. `channels` are in SI; `units` the unit each channel has in its file."""
+    """One run. `channels` are in SI; `units` the unit each channel has in its file;
+    `meta` the TOML as read and `declared` the same parsed into typed fields (SI).
+
+    The reader parses the TOML once and passes `declared`; a run made in code (or
+    `dataclasses.replace` with a new `meta`) has it parsed on construction. Change `meta`
+    with `dataclasses.replace`, not in place: `declared` is not parsed again otherwise."""
 
     name: str
     time: np.ndarray
@@ -70,6 +39,12 @@ class Run:
     missing: dict[str, int] = field(default_factory=dict)
     extra: list[str] = field(default_factory=list)
     reports: list[str] = field(default_factory=list)
+    declared: Declaration | None = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.declared is None or self.declared.meta is not self.meta:
+            folder = self.source.parent if self.source is not None else None
+            self.declared = declare(self.meta, self.name, folder)
 
     @property
     def dt(self) -> float:
@@ -96,33 +71,18 @@ class Run:
                               "samples; vtable does not fill them in")
         return self.channels[name]
 
-    def specimen(self):
+    def specimen(self) -> Specimen:
         """The [specimen] (a bare table when the run has none; the reader reports that)."""
-        from vtable.params.specimen import NoSpecimen, specimen_from_dict
+        return self.declared.specimen or NoSpecimen()
 
-        if "specimen" not in self.meta:
-            return NoSpecimen()
-        return specimen_from_dict(self.meta["specimen"], f"{self.name} [specimen]")
+    def table(self) -> TableDescription | None:
+        """The [table] description, None when the run has no [table]."""
+        return self.declared.table
 
-    def table(self):
-        """The [table] description (`vtable.runs.table.TableDescription`), None when the
-        run has no [table]."""
-        from vtable.runs.table import table_from_dict
-
-        if "table" not in self.meta:
-            return None
-        return table_from_dict(self.meta["table"], f"{self.name} [table]")
-
-    def drive(self):
-        """The [command] description (`vtable.runs.format.CommandDescription`: kind, band,
-        drive file, ...), None when the run has no [command]. The drive file itself is not
-        read yet."""
-        from vtable.runs.format import command_from_dict
-
-        if "command" not in self.meta:
-            return None
-        folder = self.source.parent if self.source is not None else None
-        return command_from_dict(self.meta["command"], f"{self.name} [command]", folder)
+    def drive(self) -> CommandDescription | None:
+        """The [command] description (kind, band, drive file, ...), None when the run has
+        no [command]."""
+        return self.declared.command
 
     def configuration(self) -> dict[str, Any]:
         """What must agree across a campaign: table, control settings, specimen."""
@@ -130,11 +90,9 @@ class Run:
 
 
 def with_noise(run: Run, fraction: float, seed: int = 0,
-               exclude: tuple[str, ...] = ("h_span", "acc_cmd")) -> Run:
+               exclude: tuple[str, ...] = COMMAND_CHANNELS) -> Run:
     """A copy with white Gaussian sensor noise of `fraction` x each channel's RMS (the
     command channels, which the controller generates, are left clean)."""
-    import dataclasses
-
     rng = np.random.default_rng(seed)
     noisy = {}
     for k, v in run.channels.items():

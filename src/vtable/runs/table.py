@@ -24,6 +24,7 @@ from typing import Any
 
 from vtable import units
 from vtable.errors import VtableError
+from vtable.params import presets
 from vtable.params.base import check_number
 
 #: degrees of freedom a platen may have (x along the shaking direction, z up)
@@ -199,8 +200,6 @@ class TableDescription:
 # ---- presets: one registry ------------------------------------------------------------
 def _eerc() -> dict[str, Any]:
     """The EERC 20 x 20 ft table (data/eerc.toml): §2.2, Tables 2.1, 2.2, 3.2, 8.1, B.5."""
-    from vtable.params import presets
-
     t = presets.eerc_table()
     g, s, sp, std = t.geometry, t.servo, t.specs, t.standard.horizontal
     return {
@@ -221,8 +220,6 @@ def _eerc() -> dict[str, Any]:
 def _data(name: str) -> Callable[[], dict[str, Any]]:
     """A preset written as a [table] description in params/data/NAME.toml."""
     def load() -> dict[str, Any]:
-        from vtable.params import presets
-
         return {k: v for k, v in presets._file(name).items() if k != "source"}
     return load
 
@@ -230,11 +227,6 @@ def _data(name: str) -> Callable[[], dict[str, Any]]:
 #: table presets by name (a run's [table] preset)
 TABLE_PRESETS: dict[str, Callable[[], dict[str, Any]]] = {"eerc": _eerc,
                                                           "lnec-st1d": _data("lnec_st1d")}
-
-
-def table_presets() -> list[str]:
-    """The names a [table] preset may take."""
-    return list(TABLE_PRESETS)
 
 
 # ---- parsing --------------------------------------------------------------------------
