@@ -19,8 +19,9 @@ from vtable.params.base import _key
 from vtable.params.table import DIRECTIONS, KNOBS
 from vtable.runs import table as tb
 from vtable.runs import write_run
+from vtable.runs.channels import FORMAT_UNITS
 from vtable.runs.format import COMMAND_KEYS, COMMAND_KINDS
-from vtable.runs.model import FORMAT_UNITS, TOP_KEYS
+from vtable.runs.meta import TOP_KEYS
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 
