@@ -81,6 +81,8 @@ def load_specimen(name_or_path: str | None) -> Specimen:
 
 #: `--valve nonlinear`: the appendix C valve, an alias for these two effects
 NONLINEAR_VALVE = ("valve_flow_nonlinearity", "flow_saturation")
+#: the standard table's ΔP feedback RC filter (eq B.4), left out by `rc_filter=False`
+RC_FILTER = "force_feedback_filter"
 
 
 def experiment_physics(specimen: Specimen, vt: VirtualTable | None = None, *,
@@ -97,7 +99,11 @@ def experiment_physics(specimen: Specimen, vt: VirtualTable | None = None, *,
     if valve == "nonlinear":
         for e in NONLINEAR_VALVE:
             extra.setdefault(e, {})
-    return standard_physics(specimen, extra, vt, rc_filter=rc_filter)
+    ph = standard_physics(specimen, None, vt)
+    ph = ph if rc_filter else ph.without(RC_FILTER)
+    for name, params in extra.items():
+        ph = ph.with_effect(name, params)
+    return ph
 
 
 @dataclass
@@ -131,7 +137,7 @@ def run_experiment(specimen: Specimen, command: Command, *, vt: VirtualTable | N
     dt, _ = simulation_step(ph, rate, vt)
     notes = [*command.notes, *check_playable(command, vt, dt, output_dt)]
     added = {k: v for k, v in ph.effects.items()
-             if k not in standard_physics(specimen, None, vt, rc_filter=rc_filter).effects}
+             if k not in standard_physics(specimen, None, vt).effects}
     if added:
         notes.append("effects on the standard table: " + ", ".join(
             f"{k}" + (f" ({', '.join(f'{p}={v:g}' for p, v in pv.items())})" if pv else "")

@@ -40,29 +40,33 @@ class SimulatedRun(Run):
 
     result: SimResult | None = None
 
+    def __getstate__(self) -> dict:
+        """A pickled copy (a diagnosis's worker processes) holds the run, not the
+        simulation (MuJoCo's model does not pickle)."""
+        return {**self.__dict__, "result": None}
+
     @property
     def built(self) -> BuiltModel:
         return self.result.built
 
 
 def standard_physics(specimen: Specimen, extra: Mapping[str, Mapping[str, float]] | None = None,
-                     vt: VirtualTable | None = None, *, rc_filter: bool = True
-                     ) -> phys.Physics:
+                     vt: VirtualTable | None = None) -> phys.Physics:
     """The standard virtual table `vt` (EERC by default) as a `Physics`: its own loop
-    (eq 6.16 from its servo constants), the table's pitch system (`pitch_flexibility`,
-    where the platen pitches) and its ΔP feedback RC filter (`force_feedback_filter`, when
-    it has one and `rc_filter`), plus `extra` effects."""
+    (eq 6.16 from its servo constants) and the standard effects (`registry.STANDARD`: the
+    pitch system, the ΔP feedback's RC filter) that the table can realise (a table whose
+    platen does not pitch refuses the pitch system), plus `extra` effects."""
     vt = vt or virtual_table()
-    std: dict[str, dict[str, float]] = {}
-    for e in STANDARD:
-        if e == "pitch_flexibility" and "pitch" in vt.dofs:
-            std[e] = {}
-        elif e == "force_feedback_filter" and rc_filter and vt.horizontal_servo.rc:
-            std[e] = {"rc": vt.horizontal_servo.rc}
-        elif e not in ("pitch_flexibility", "force_feedback_filter"):
-            std[e] = {}
-    return phys.Physics(phys.nominal_open_loop(vt), specimen,
-                        {**std, **{k: dict(v) for k, v in (extra or {}).items()}})
+    base = phys.nominal_open_loop(vt)
+    std = {}
+    for name in STANDARD:
+        trial = phys.Physics(base, specimen, {name: {}})
+        try:
+            trial.apply(VirtualAssembly(trial, vt), "virtual")
+        except VtableError:
+            continue
+        std[name] = {}
+    return phys.Physics(base, specimen, {**std, **{k: dict(v) for k, v in (extra or {}).items()}})
 
 
 def setup(ph: phys.Physics, vt: VirtualTable | None = None, timestep: float = MAX_STEP
