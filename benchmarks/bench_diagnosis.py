@@ -4,7 +4,7 @@ for each figure, their start counted in its wall time):
 
 1. a three-run, 44-second campaign at 200 Hz (two 11 s random runs and the §9.2 El Centro
    run; SDOF frame with pitch flexibility hidden; 1 % noise), target <= 15 s:
-   a. made on the virtual table in-process (`virtual_run`), the kernel compile measured
+   a. made on the virtual table in-process (`simulate`), the kernel compile measured
       separately;
    b. made with `vtable simulate` as the README shows (three runs written, read back);
 2. three real-size runs (165 s + 165 s random, 45 s El Centro at its own time scale;
@@ -29,10 +29,10 @@ from pathlib import Path
 from vtable.diagnose import workers
 from vtable.diagnose.engine import Diagnoser
 from vtable.effects.physics import Physics, nominal_open_loop
-from vtable.effects.virtual import virtual_run
 from vtable.params import presets
 from vtable.runs import read_run
-from vtable.sim.experiment import make_command
+from vtable.signals import make_command
+from vtable.sim import simulate
 
 TESTS = Path(__file__).resolve().parents[1] / "tests"
 
@@ -87,7 +87,7 @@ def campaign_virtual(fs: float) -> None:
     truth = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                     {"pitch_flexibility": {}})
     c = Clock()
-    runs = [virtual_run(truth, cmd, noise=0.01, seed=i, name=f"run{i}", output_fs=fs)
+    runs = [simulate(truth, cmd, noise=0.01, seed=i, name=f"run{i}", rate=fs)
             for i, cmd in enumerate(cmds)]
     print(f"  simulated: {c}")
     diagnose("virtual table", runs, 15.0, compile_first=True)

@@ -15,9 +15,9 @@ from vtable.effects import load_file, register
 from vtable.effects.physics import Physics, nominal_open_loop
 from vtable.effects.reduced import ReducedModel
 from vtable.effects.registry import get
-from vtable.effects.virtual import virtual_run
 from vtable.params import presets
-from vtable.sim.experiment import make_command
+from vtable.signals import make_command
+from vtable.sim import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -55,7 +55,7 @@ def main() -> None:
     spec = presets.specimen("sdof_frame")
     cmd = make_command("random", duration=11.0, band=(0.0, 25.0), peak_in=0.05, seed=1)
     base = Physics(nominal_open_loop(), spec, {})
-    run = virtual_run(base, cmd)
+    run = simulate(base, cmd)
     t, x = run.time, run.channel("h_span")
     rows = []
     for label, effects in (("base model", {}),

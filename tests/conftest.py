@@ -21,17 +21,17 @@ def virtual():
 @functools.cache
 def periodic_random_run(specimen: str | None):
     """Four periods of 0-32 Hz periodic random on the virtual table (first one dropped)."""
-    from vtable.mjcf import build
     from vtable.params import presets
-    from vtable.signals import band_limited_random
-    from vtable.sim import Simulator
+    from vtable.params.specimen import NoSpecimen
+    from vtable.signals import Command, band_limited_random
+    from vtable.sim import simulate, standard_physics
     from vtable.units import to_si
 
-    spec = presets.specimen(specimen) if specimen else None
-    built = build(virtual(), spec)
+    spec = presets.specimen(specimen) if specimen else NoSpecimen()
     t, x = band_limited_random(4 * PERIOD, 0.001, (0.0, 32.0), rms=to_si(RMS_IN, "in"), seed=1,
                                period=PERIOD)
-    res = Simulator(built).run(t, {"x": x}, output_dt=0.005)
+    cmd = Command("periodic random", t, x, {"kind": "random", "band_hz": [0.0, 32.0]})
+    res = simulate(standard_physics(spec), cmd, 200.0, vt=virtual()).result
     keep = res.t >= PERIOD - 1e-9
     n = 3 * 4096
     return res, keep.nonzero()[0][:n]
@@ -51,7 +51,8 @@ def identification_runs(tmpdir: str):
     """The identification campaign, made once: a bare-table run (0-32 Hz, RC filter off
     so eq 6.16 applies) and a long SDOF-frame run (0-25 Hz), written as run files."""
     from vtable.runs import read_run
-    from vtable.sim.experiment import load_specimen, make_command, run_experiment
+    from vtable.signals import make_command
+    from vtable.sim.experiment import load_specimen, run_experiment
 
     out = {}
     bare = make_command("random", duration=120.0, band=(0.0, 32.0), peak_in=0.05, seed=7)
@@ -85,7 +86,7 @@ HIDDEN = {
 
 @functools.cache
 def campaign_commands():
-    from vtable.sim.experiment import make_command
+    from vtable.signals import make_command
 
     return (make_command("random", duration=11.0, band=(0.0, 25.0), peak_in=0.05, seed=1),
             make_command("random", duration=11.0, band=(0.0, 25.0), peak_in=0.15, seed=2),
@@ -97,12 +98,12 @@ def effect_campaign(effects: tuple[str, ...]):
     """Three runs of the SDOF frame on the virtual table with `effects` present (doses of
     HIDDEN): random 0-25 Hz at two spans and §9.2 El Centro, 1 % RMS noise, 200 Hz."""
     from vtable.effects.physics import Physics, nominal_open_loop
-    from vtable.effects.virtual import virtual_run
     from vtable.params import presets
+    from vtable.sim import simulate
 
     truth = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                     {e: HIDDEN[e] for e in effects})
-    runs = [virtual_run(truth, c, noise=0.01, seed=10 + i, name=f"run{i}")
+    runs = [simulate(truth, c, noise=0.01, seed=10 + i, name=f"run{i}")
             for i, c in enumerate(campaign_commands())]
     return truth, runs
 

@@ -165,12 +165,12 @@ def rate_campaign(effects: tuple[str, ...], fs: float):
     """effect_campaign's three runs sampled at `fs` (the virtual table stepped at
     1/(k·fs))."""
     from vtable.effects.physics import Physics, nominal_open_loop
-    from vtable.effects.virtual import virtual_run
     from vtable.params import presets
+    from vtable.sim import simulate
 
     truth = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                     {e: HIDDEN[e] for e in effects})
-    return truth, [virtual_run(truth, c, noise=0.01, seed=10 + i, name=f"run{i}", output_fs=fs)
+    return truth, [simulate(truth, c, noise=0.01, seed=10 + i, name=f"run{i}", rate=fs)
                    for i, c in enumerate(campaign_commands())]
 
 

@@ -13,9 +13,9 @@ from vtable.effects import load_file
 from vtable.effects.physics import Physics, nominal_open_loop
 from vtable.effects.reduced import ReducedModel
 from vtable.effects.registry import get, names
-from vtable.effects.virtual import virtual_run
 from vtable.errors import VtableError
 from vtable.params import presets
+from vtable.sim import simulate
 
 
 def test_catalog_has_the_spec_names():
@@ -45,7 +45,7 @@ def test_reduced_model_agrees_with_the_virtual_table(name):
     ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"), {name: DOSES[name]})
     random, _, quake = campaign_commands()
     for cmd in (random, quake):
-        run = virtual_run(ph, cmd)
+        run = simulate(ph, cmd)
         pred = ReducedModel(ph).predict(run)
         # an SDOF frame's floor 1 is its top mass; the table writes floors for buildings
         assert set(pred) - set(run.channels) == {"floor1_acc", "floor1_disp"}
@@ -81,7 +81,7 @@ def test_reduced_model_predicts_a_buildings_floors_as_the_virtual_table(effects)
     random, _, quake = campaign_commands()
     floors = {f"floor{k}_{w}" for k in (1, 2, 3) for w in ("acc", "disp")}
     for cmd in (random, quake):
-        run = virtual_run(ph, cmd)
+        run = simulate(ph, cmd)
         pred = ReducedModel(ph).predict(run)
         assert floors <= set(run.channels) and floors <= set(pred)
         assert not any(c.startswith("floor4") for c in (*run.channels, *pred))
@@ -110,12 +110,12 @@ def test_effect_parameters_are_checked():
 
 @pytest.mark.parametrize("fs", [256.0, 1000.0, 150.0])
 def test_virtual_runs_at_other_rates_and_the_reduced_model_follows(fs):
-    """virtual_run(output_fs=...) steps the table at 1/(k·fs); the reduced model integrates
+    """simulate(rate=...) steps the table at 1/(k·fs); the reduced model integrates
     at a step dividing the run's (≤ 2.5 ms) and agrees as it does at 200 Hz."""
     ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                  {"valve_dynamics": HIDDEN["valve_dynamics"], "sensor_filter": {}})
     random, _, _ = campaign_commands()
-    run = virtual_run(ph, random, output_fs=fs)
+    run = simulate(ph, random, rate=fs)
     assert run.fs == pytest.approx(fs, rel=1e-12)
     assert run.duration == pytest.approx(random.t[-1] - random.t[0], abs=1.0 / fs)
     pred = ReducedModel(ph).predict(run)
@@ -128,4 +128,4 @@ def test_virtual_runs_at_other_rates_and_the_reduced_model_follows(fs):
 def test_virtual_run_refuses_a_bad_rate():
     ph = Physics(nominal_open_loop(), presets.specimen("none"))
     with pytest.raises(VtableError, match=r"output rate -5 Hz: expected a positive rate"):
-        virtual_run(ph, campaign_commands()[0], output_fs=-5.0)
+        simulate(ph, campaign_commands()[0], rate=-5.0)

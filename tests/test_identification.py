@@ -192,7 +192,8 @@ def _codes(flags, param=None):
 def _short_run(tmpdir: str):
     """The README's run: sdof_frame, random 0-25 Hz, 0.25 in peak, 11 s at 200 Hz."""
     from vtable.runs import read_run
-    from vtable.sim.experiment import load_specimen, make_command, run_experiment
+    from vtable.signals import make_command
+    from vtable.sim.experiment import load_specimen, run_experiment
 
     cmd = make_command("random", duration=11.0, band=(0.0, 25.0), peak_in=0.25, seed=0)
     run_experiment(load_specimen("sdof_frame"), cmd, out=f"{tmpdir}/sdof_random")

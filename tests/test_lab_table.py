@@ -51,15 +51,14 @@ def test_eerc_preset_is_table_b5_through_eq_6_16():
 
 @functools.cache
 def lnec_random_run():
-    from vtable.controllers import standard_controllers
-    from vtable.mjcf import build
-    from vtable.signals import band_limited_random
-    from vtable.sim import Simulator
+    from vtable.params.specimen import NoSpecimen
+    from vtable.signals import Command, band_limited_random
+    from vtable.sim import simulate, standard_physics
 
     vt = virtual_table_for(lnec())
     t, x = band_limited_random(82.0, 0.001, (0, 40), rms=0.0002, seed=3)
-    return Simulator(build(vt, with_meshes=False), standard_controllers(vt)).run(
-        t, {"x": x}, output_dt=0.005)
+    cmd = Command("random 0-40 Hz", t, x, {"kind": "random", "band_hz": [0.0, 40.0]})
+    return simulate(standard_physics(NoSpecimen(), vt=vt), cmd, 200.0, vt=vt).result
 
 
 def test_the_uniaxial_virtual_table_is_eq_6_15_with_the_valve_lag():
@@ -121,9 +120,9 @@ def lnec_campaign():
     declaring the table with the valve time constant withheld (0): random 0-40 Hz at two
     spans and a scaled earthquake, 200 Hz, 1 % noise."""
     from vtable.effects.physics import Physics, nominal_open_loop
-    from vtable.effects.virtual import virtual_run
     from vtable.params.specimen import NoSpecimen
-    from vtable.sim.experiment import make_command
+    from vtable.signals import make_command
+    from vtable.sim import simulate
 
     declared = {"preset": "lnec-st1d", "horizontal": {"valve_time_constant_s": 0.0}}
     vt = virtual_table_for(lab_table(table_from_dict(declared)))
@@ -133,7 +132,7 @@ def lnec_campaign():
             make_command("earthquake", peak_in=1.9)]
     runs = []
     for i, c in enumerate(cmds):
-        r = virtual_run(truth, c, noise=0.01, seed=10 + i, name=f"lnec{i}", vt=vt)
+        r = simulate(truth, c, noise=0.01, seed=10 + i, name=f"lnec{i}", vt=vt)
         runs.append(dataclasses.replace(r, meta={**r.meta, "table": declared}))
     return truth, runs
 

@@ -15,10 +15,10 @@ from vtable.ident import transfer_function
 from vtable.mjcf import build
 from vtable.params import RigidBlock, SDOFSpecimen, presets
 from vtable.runs import FORMAT_UNITS as CHANNEL_UNITS
-from vtable.signals import band_limited_random, sine
+from vtable.signals import band_limited_random, make_command, sine
 from vtable.sim import SimulationDivergedError, Simulator
-from vtable.sim.experiment import make_command, run_experiment
-from vtable.viz.rerun_scene import read_rrd
+from vtable.sim.experiment import run_experiment
+from vtable.viz.rerun_scene import log_run, read_rrd
 
 IN = units.to_si(1.0, "in")
 
@@ -61,8 +61,7 @@ def test_divergence_stops_with_time_and_cause(vt, tmp_path):
         vt.horizontal_servo, k_t=vt.horizontal_servo.k_t * 40, k_p=0.0))
     cmd = make_command("sine", duration=5.0, frequency=1.0, peak_in=0.05)
     with pytest.raises(SimulationDivergedError, match=r"diverged at t = \d+\.\d+ s") as e:
-        run_experiment(presets.specimen("none"), cmd, vt=hot, out=tmp_path / "run",
-                       rerun=tmp_path / "run.rrd")
+        run_experiment(presets.specimen("none"), cmd, vt=hot, out=tmp_path / "run")
     assert "nothing written" in str(e.value)
     assert not any(tmp_path.iterdir())
 
@@ -102,8 +101,8 @@ def test_run_files_follow_the_format(vt, tmp_path):
 
 def test_rerun_recording_reads_back(vt, tmp_path):
     cmd = make_command("sine", duration=2.0, frequency=2.0, peak_in=0.1)
-    exp = run_experiment(presets.specimen("sdof_frame"), cmd, rerun=tmp_path / "s.rrd",
-                         exaggeration=100.0)
+    exp = run_experiment(presets.specimen("sdof_frame"), cmd)
+    log_run(exp.run, tmp_path / "s.rrd", exaggeration=100.0)
     d = read_rrd(tmp_path / "s.rrd")
     for ent in ("/world/table/slab", "/world/table/slab/mesh", "/world/table/slab/frame",
                 "/world/table/slab/top_mass", "/world/actuators/H1/line",

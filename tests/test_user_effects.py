@@ -17,8 +17,8 @@ from conftest import campaign_commands
 from vtable.cli import main
 from vtable.effects import BUILT_IN, get, load_file, names
 from vtable.effects.physics import Physics, nominal_open_loop
-from vtable.effects.virtual import virtual_run
 from vtable.params import presets
+from vtable.sim import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "swivel_backlash.py"
@@ -99,7 +99,7 @@ def backlash_campaign():
     load_file(EXAMPLE)
     truth = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                     {"swivel_backlash": {"gap": GAP_IN}})
-    runs = [virtual_run(truth, c, noise=0.01, seed=10 + i, name=f"run{i}")
+    runs = [simulate(truth, c, noise=0.01, seed=10 + i, name=f"run{i}")
             for i, c in enumerate(campaign_commands())]
     return truth, runs
 

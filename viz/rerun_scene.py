@@ -16,11 +16,19 @@ from scipy.spatial.transform import Rotation
 
 from vtable.mjcf.meshes import braced_frame, slab_with_ribs
 from vtable.params.bodies import MASS_BLOCK
-from vtable.units import to_si
+from vtable.runs.model import FORMAT_UNITS
+from vtable.units import from_si, to_si
 from vtable.viz.recording import rrd_file
 
 COLORS = {"horizontal": [50, 100, 230], "vertical": [230, 130, 30], "stabilizer": [80, 180, 80]}
 KIP = to_si(1.0, "kip")
+
+
+def log_run(run, path: str | Path, *, exaggeration: float = 50.0) -> Path:
+    """Write an .rrd of a simulated run (`vtable.sim.simulate`'s `SimulatedRun`): its
+    simulation's scene and its format channels in their run-file units."""
+    named = {k: from_si(v, run.units[k]) for k, v in run.channels.items() if k in FORMAT_UNITS}
+    return log_simulation(run.result, path, named, exaggeration=exaggeration)
 
 
 def log_simulation(res, path: str | Path, channels: dict[str, np.ndarray] | None = None,

@@ -90,7 +90,9 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("--freq", type=_number, default=2.0, help="sine frequency, Hz [2]")
     sim.add_argument("--seed", type=_integer, default=0)
     sim.add_argument("--valve", choices=["linear", "nonlinear"], default="linear",
-                     help="linear servovalves (eqs 6.1-6.5) or appendix C valves on H1-H3")
+                     help="linear servovalves (eqs 6.1-6.5) or appendix C valves on H1-H3; "
+                          "nonlinear is an alias for --effect valve_flow_nonlinearity "
+                          "--effect flow_saturation (at their defaults unless given)")
     sim.add_argument("--effect", action="append", default=[], metavar="NAME[:P=V,...]",
                      help="add an effect to the standard table, with parameters in its units "
                           "(e.g. actuator_friction:friction=3); repeatable")

@@ -277,7 +277,8 @@ def simulate(specimen: str = "sdof_frame", kind: str = "random", *,
     standard table); the peak table, limits and files written."""
     from vtable.effects.registry import parse_spec
     from vtable.params.virtual import virtual_table_for
-    from vtable.sim.experiment import load_specimen, load_table, make_command, run_experiment
+    from vtable.signals import make_command
+    from vtable.sim.experiment import load_specimen, load_table, run_experiment
 
     eff = dict(parse_spec(e) for e in effects)
     lab = load_table(table)
@@ -290,8 +291,11 @@ def simulate(specimen: str = "sdof_frame", kind: str = "random", *,
             peak = 0.5 * lab.stroke / 0.0254
     cmd = make_command(kind, duration=duration, band=tuple(band), peak_in=peak,
                        frequency=freq, seed=seed, record=record)
-    exp = run_experiment(spec, cmd, vt=vt, valve=valve, out=out, rerun=rerun,
-                         exaggeration=exaggerate, effects=eff)
+    exp = run_experiment(spec, cmd, vt=vt, valve=valve, out=out, effects=eff)
+    if rerun is not None:
+        from vtable.viz.rerun_scene import log_run
+
+        exp.files.append(log_run(exp.run, rerun, exaggeration=exaggerate))
     summary = simulation_summary(exp)
     summary.update({"command": cmd.name, "specimen": spec.title,
                     "duration_s": float(exp.result.t[-1] - exp.result.t[0])})
@@ -330,13 +334,16 @@ def demo(out: str = "vtable-demo", simulate_too: bool = True) -> dict[str, Any]:
 
 
 def _demo_simulation(out: str) -> dict[str, Any]:
-    from vtable.sim.experiment import load_specimen, make_command, run_experiment
+    from vtable.signals import make_command
+    from vtable.sim.experiment import load_specimen, run_experiment
     from vtable.studies import response_spectrum
     from vtable.units import to_si
+    from vtable.viz.rerun_scene import log_run
 
     spec = load_specimen("sdof_frame")
     cmd = make_command("earthquake")
-    exp = run_experiment(spec, cmd, out=f"{out}/sdof_elcentro", rerun=f"{out}/sdof_elcentro.rrd")
+    exp = run_experiment(spec, cmd, out=f"{out}/sdof_elcentro")
+    exp.files.append(log_run(exp.run, f"{out}/sdof_elcentro.rrd"))
     res = exp.result
     h = exp.result.built.structure_heights[-1]
     x_t, th = res.joint("x"), res.joint("pitch")

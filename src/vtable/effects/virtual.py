@@ -17,8 +17,6 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
-import numpy as np
-
 from vtable.controllers import (
     ForceLawController,
     HydraulicServo,
@@ -31,12 +29,7 @@ from vtable.errors import VtableError
 from vtable.hydraulics.law import group_law
 from vtable.mjcf import edit
 from vtable.mjcf.builder import BuiltModel, compile_table, table_spec
-from vtable.params.virtual import VirtualTable, virtual_table, with_rocking
-from vtable.runs import specimen_table
-from vtable.runs.model import Run, with_noise
-from vtable.sim.channels import result_run
-from vtable.sim.experiment import Command
-from vtable.sim.simulator import Simulator
+from vtable.params.virtual import VirtualTable, with_rocking
 
 OUTPUT_FS = 200.0  # Hz: the rate of the runs the diagnosis tests are made of
 MAX_STEP = 1e-3  # s: the virtual table's largest MuJoCo/control step
@@ -132,67 +125,3 @@ class VirtualAssembly:
         built.vt = vt
         return built, ctl + self.controllers
 
-
-def virtual_setup(ph: phys.Physics, vt: VirtualTable | None = None,
-                  timestep: float = MAX_STEP) -> tuple[BuiltModel, list]:
-    """The built model and controllers that realise `ph` on the virtual table (MuJoCo and
-    control step `timestep`), and the output filters of its effects."""
-    built, ctl, _ = setup(ph, vt, timestep)
-    return built, ctl
-
-
-def setup(ph: phys.Physics, vt: VirtualTable | None = None, timestep: float = MAX_STEP):
-    """(built model, controllers, output filters) realising `ph`."""
-    va = VirtualAssembly(ph, vt or virtual_table(), timestep)
-    ph.apply(va, "virtual")
-    if va.max_step < timestep:
-        raise VtableError(f"a stiff force element needs a step of {va.max_step:.3g} s or "
-                          f"less, not {timestep:g} s")
-    built, ctl = va.finalize()
-    return built, ctl, va.filters
-
-
-def standard_physics(specimen, extra: dict[str, dict[str, float]] | None = None
-                     ) -> phys.Physics:
-    """The standard virtual table as a `Physics` (the chapter-7 base with the table's
-    pitch system and RC filter, `registry.STANDARD`) plus `extra` effects."""
-    from vtable.effects.registry import STANDARD
-
-    return phys.Physics(phys.nominal_open_loop(), specimen,
-                        {**{e: {} for e in STANDARD}, **(extra or {})})
-
-
-def max_step(ph: phys.Physics, vt: VirtualTable | None = None) -> float:
-    """The largest step the virtual table realising `ph` may take (stiff elements)."""
-    va = VirtualAssembly(ph, vt or virtual_table())
-    ph.apply(va, "virtual")
-    return va.max_step
-
-
-def virtual_run(ph: phys.Physics, command: Command, *, noise: float = 0.0, seed: int = 0,
-                name: str = "", vt: VirtualTable | None = None,
-                output_fs: float = OUTPUT_FS) -> Run:
-    """Simulate `command` on the virtual table realising `ph`; channels sampled at
-    `output_fs` (Hz, 200 by default) through the effects' output filters, plus `noise` x
-    RMS white sensor noise.
-
-    The table is simulated at the step 1/(k·output_fs), k = ⌈1 kHz/output_fs⌉ (1 ms at 200 Hz
-    and 1 kHz, 1/1024 s at 256 Hz), and every k-th sample is kept (output filters act at
-    the simulation rate, before that sampling)."""
-    if not output_fs > 0:
-        raise VtableError(f"output rate {output_fs:g} Hz: expected a positive rate")
-    k = max(1, math.ceil(1.0 / (max_step(ph, vt) * output_fs) - 1e-9))
-    dt = 1.0 / (k * output_fs)
-    built, ctl, filters = setup(ph, vt, dt)
-    res = Simulator(built, ctl).run(command.t, {"x": command.x}, output_dt=dt)
-    meta = {"title": name or f"{command.name} ({ph.label})",
-            "table": {"preset": built.vt.name},
-            "specimen": specimen_table(ph.specimen), "command": command.table}
-    run = result_run(res, meta, name or command.name, full_state=False)
-    for fn in filters:
-        run.channels = {c: (v if c in COMMANDS else fn(v, 1.0 / dt))
-                        for c, v in run.channels.items()}
-    run.time = np.arange(len(run.time[::k])) / output_fs
-    run.channels = {c: v[::k] for c, v in run.channels.items()}
-    run.reports.append(f"virtual table: {ph.label}, sampled at {output_fs:g} Hz")
-    return with_noise(run, noise, seed) if noise else run

@@ -1,5 +1,7 @@
-"""Simulating the virtual table: stepping, channels, limits, linearization."""
+"""Simulating the virtual table: `simulate` (the one way), stepping, channels, limits,
+linearization."""
 
+from vtable.sim.run import SimulatedRun, simulate, standard_physics
 from vtable.sim.simulator import (
     Exceedance,
     SimResult,
@@ -8,4 +10,5 @@ from vtable.sim.simulator import (
     check_commands,
 )
 
-__all__ = ["Exceedance", "SimResult", "SimulationDivergedError", "Simulator", "check_commands"]
+__all__ = ["Exceedance", "SimResult", "SimulatedRun", "SimulationDivergedError", "Simulator",
+           "check_commands", "simulate", "standard_physics"]

@@ -19,6 +19,10 @@ from vtable import units
 from vtable.controllers import DOFS, Controller, LinearController, standard_controllers
 from vtable.errors import VtableError
 from vtable.mjcf.builder import BuiltModel
+from vtable.sim.stepping import mujoco_steps, sparse_rows, step_linear
+
+CHECK_EVERY = 250  # steps between the divergence checks (Python loop)
+CHUNK = 1000  # steps of the compiled loop between the divergence checks
 
 
 class SimulationDivergedError(VtableError):
@@ -215,10 +219,10 @@ class Simulator:
         M2[:, :ns] = np.vstack([self.M[n:, nz:nz + ns], self.M[:n, nz:nz + ns]])
         M2[:, ns:ns + nz] = np.vstack([self.M[n:, :nz], self.M[:n, :nz]])
         M2[:, W:] = np.vstack([self.M[n:, nz + ns:], self.M[:n, nz + ns:]])
-        prev = np.vstack([cmd[:1], cmd[:-1]])
-        nxt = np.vstack([cmd[1:], cmd[-1:]])
-        ck = prev @ self.N0.T + cmd @ self.N1.T + nxt @ self.N2.T + self.offset
-        ck = np.ascontiguousarray(np.hstack([ck[:, n:], ck[:, :n]]))
+        # the command terms, rows ordered as M2's [z; u]: N0 c_{k-1} + N1 c_k + N2 c_{k+1}
+        perm = np.r_[n:n + nz, 0:n]
+        Nall = np.hstack([self.N0, self.N1, self.N2])[perm]
+        offset = np.ascontiguousarray(self.offset[perm])
         hist = np.zeros((n_steps + 1, W))  # row 0: the state before the first step
         flat = hist.reshape(-1)
         n_out = (n_steps - 1) // dec + 1
@@ -233,7 +237,20 @@ class Simulator:
         rest = self.rest_length
         step1, step2, dot = mujoco.mj_step1, mujoco.mj_step2, np.dot
         U = slice(ns + nz, W)
-        for k in range(n_steps):
+        fns = None if other else mujoco_steps()
+        if fns is not None:  # linear controllers only: the compiled loop (`stepping`)
+            args = (sparse_rows(M2), sparse_rows(Nall), offset, cmd, hist, ns, n, dec, sens,
+                    ctrl, d.qpos, d.qvel, d.qacc, rec["qpos"], rec["qvel"], rec["qacc"],
+                    rec["sensors"])
+            for k0 in range(0, n_steps, CHUNK):
+                k1 = min(n_steps, k0 + CHUNK)
+                step_linear(*fns, m._address, d._address, k0, k1, *args)
+                self._check_finite(tk[k1 - 1], limit_x)
+        else:
+            prev = np.vstack([cmd[:1], cmd[:-1]])
+            nxt = np.vstack([cmd[1:], cmd[-1:]])
+            ck = np.hstack([prev, cmd, nxt]) @ Nall.T + offset
+        for k in range(n_steps if fns is None else 0):
             row = hist[k + 1]
             step1(m, d)
             row[:ns] = sens[:ns]
@@ -258,7 +275,7 @@ class Simulator:
                 rec["qvel"][i] += d.qvel  # v(t_k) = mean of the step averages around t_k
                 rec["qacc"][i] = d.qacc
                 rec["sensors"][i] = sens
-            if k % 250 == 0:
+            if k % CHECK_EVERY == 0:
                 self._check_finite(tk[k], limit_x)
         self._check_finite(tk[-1], limit_x)
         rec["qvel"] *= 0.5

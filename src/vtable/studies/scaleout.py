@@ -171,14 +171,16 @@ def virtual_table_point(record: str, height_in: float | None = None,
     """One virtual-table run: the specimen (its height changed to `height_in`) under the
     §9.2-processed `record` (first `duration` s): peaks of the table channels and the
     effective-motion spectrum (x_t + hθ, 5 %) over the command's."""
-    from vtable.sim.experiment import COMMAND_DT, Command, run_experiment
+    from vtable.signals import COMMAND_DT, Command
+    from vtable.sim.run import simulate, standard_physics
     from vtable.studies.spectra import effective_motion, response_spectrum
 
     spec = _specimen(specimen, height_in)
     cmd = _command(record, duration)
     t = np.arange(0.0, cmd.time[-1] + 1e-12, COMMAND_DT)
-    run = run_experiment(spec, Command(cmd.name, t, np.interp(t, cmd.time, cmd.displacement),
-                                       {"kind": "earthquake", "record": record})).run
+    run = simulate(standard_physics(spec), Command(
+        cmd.name, t, np.interp(t, cmd.time, cmd.displacement),
+        {"kind": "earthquake", "record": record}))
     eff = effective_motion(run, spec.height)
     s_eff = response_spectrum(eff, run.dt, periods).psa
     s_cmd = response_spectrum(cmd.acceleration, cmd.dt, periods).psa
