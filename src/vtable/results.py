@@ -30,7 +30,7 @@ class Result(Protocol):
     def report(self) -> str: ...
 
 
-def _wrote(files: list[Path]) -> list[str]:
+def _names(files: list[Path]) -> list[str]:
     return [str(f) for f in files]
 
 
@@ -180,10 +180,10 @@ class Written:
     files: list[Path]
 
     def to_json(self) -> dict[str, Any]:
-        return {"files": _wrote(self.files)}
+        return {"files": _names(self.files)}
 
     def report(self) -> str:
-        return "wrote " + ", ".join(_wrote(self.files))
+        return "wrote " + ", ".join(_names(self.files))
 
 
 @dataclass
@@ -231,7 +231,7 @@ class SimulationSummary:
 
     def to_json(self) -> dict[str, Any]:
         return jsonable({"peaks": self.peaks, "exceedances": self.exceedances,
-                         "files": _wrote(self.files), "notes": self.notes,
+                         "files": _names(self.files), "notes": self.notes,
                          "command": self.command, "specimen": self.specimen,
                          "duration_s": self.duration_s})
 
@@ -241,7 +241,7 @@ class SimulationSummary:
         out += _peak_lines(self.peaks)
         out += [f"  limit: {e}" for e in self.exceedances]
         if self.files:
-            out.append("  wrote " + ", ".join(_wrote(self.files)))
+            out.append("  wrote " + ", ".join(_names(self.files)))
         return "\n".join(out)
 
 
@@ -267,7 +267,7 @@ class DemoSimulation:
 
     def to_json(self) -> dict[str, Any]:
         return jsonable({"peaks": self.peaks, "exceedances": self.exceedances,
-                         "files": _wrote(self.files), "notes": self.notes,
+                         "files": _names(self.files), "notes": self.notes,
                          "command": self.command, "duration_s": self.duration_s,
                          "peak_x_t_in": self.peak_x_t_in,
                          "peak_theta_h_in": self.peak_theta_h_in,
@@ -286,7 +286,7 @@ class DemoSimulation:
                    f"{self.effective_spectrum_ratio:.3f}")
         out += [f"  limit: {e}" for e in self.exceedances]
         if self.files:
-            out.append("  wrote " + ", ".join(_wrote(self.files)))
+            out.append("  wrote " + ", ".join(_names(self.files)))
         return "\n".join(out)
 
 
@@ -363,11 +363,11 @@ class Assessment:
                          "rocking_share": self.rocking_share,
                          "time_elongation": self.time_elongation,
                          "compensated_error": self.compensated_error,
-                         "files": _wrote(self.files), "notes": self.notes})
+                         "files": _names(self.files), "notes": self.notes})
 
     def report(self) -> str:
         out = [f"note: {n}" for n in self.notes]
-        out += [self.verdict, "wrote " + ", ".join(_wrote(self.files))]
+        out += [self.verdict, "wrote " + ", ".join(_names(self.files))]
         return "\n".join(out)
 
 
