@@ -173,3 +173,26 @@ def test_identify_and_tf_on_runs(capsys, tmp_path, ident_runs):
 def test_tf_on_a_run_with_a_missing_channel(capsys, tmp_path, ident_runs):
     code, _, err = run(capsys, "tf", str(ident_runs["bare"].source), "--out", "acc_n_ne")
     assert code == 2 and "no channel 'acc_n_ne'" in err
+
+
+def test_a_verb_returns_a_typed_result_the_cli_only_formats(capsys, tmp_path):
+    """python-control's `*_response` pattern: the verb's result carries `to_json()` and
+    `report()`; the CLI prints the report, `--json` the JSON, `--json FILE` writes the same
+    JSON there and prints the report and the file."""
+    from vtable import verbs
+
+    r = verbs.modes("table9.3")
+    assert r.modes[1]["f_hz"] == pytest.approx(6.71, abs=0.01)
+    _, out, _ = run(capsys, "modes", "table9.3")
+    assert out == r.report() + "\n"
+    _, out, _ = run(capsys, "modes", "table9.3", "--json")
+    assert json.loads(out) == r.to_json()
+    f = tmp_path / "m.json"
+    code, out, _ = run(capsys, "modes", "table9.3", "--json", str(f))
+    assert code == 0 and out == r.report() + f"\nwrote {f}\n"
+    assert json.loads(f.read_text()) == r.to_json()
+    t = verbs.tf("table6.1:standard", fmin=12.6, fmax=13.0, n=2, png=str(tmp_path / "h.png"))
+    assert t.files == [tmp_path / "h.png"] and t.files[0].stat().st_size > 10_000
+    assert t.to_json()["png"] == str(tmp_path / "h.png")
+    assert abs(t.to_json()["phase_deg"][0]) == pytest.approx(180.0, abs=1e-6)
+    assert t.report().endswith(f"  wrote {tmp_path / 'h.png'}")

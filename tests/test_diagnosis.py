@@ -330,7 +330,8 @@ def test_cli_ctrl_c_writes_the_rounds_done_and_exits_130(tmp_path, capsys, monke
 
 
 def test_mils_and_amplitude_trend():
-    from vtable.diagnose.compare import Comparison, localisation_text, residual_location
+    from vtable.diagnose.prose import localisation_text, residual_location
+    from vtable.diagnose.statistics import Comparison
 
     c = Comparison(0.05, {"a": {"structure acceleration": 0.02},
                           "b": {"structure acceleration": 0.08}}, 0.01,
@@ -348,8 +349,8 @@ def test_mils_and_amplitude_trend():
 def test_notes_missing_samples_and_a_dead_command(tmp_path, capsys):
     import numpy as np
 
-    from vtable.cli import _print_compare
     from vtable.diagnose.engine import Diagnoser
+    from vtable.diagnose.result import ModelComparison
     from vtable.runs import read_run
 
     _, runs = effect_campaign(())
@@ -365,10 +366,10 @@ def test_notes_missing_samples_and_a_dead_command(tmp_path, capsys):
     assert any("channel 'h2_disp' has 1 missing samples; left out of table displacement" in n
                for n in diag.notes)
     assert any(n.startswith("run1: ") and "noise added" in n for n in diag.notes)
-    _print_compare({"effects": [], "params": {}, "base": {"f_o_hz": 15.0, "xi_o": 0.7,
+    print(ModelComparison(**{"effects": [], "params": {}, "base": {"f_o_hz": 15.0, "xi_o": 0.7,
                                                         "k_o_per_s": 26.0},
                     "error": 0.01, "noise_floor": 0.008, "per_run": {}, "localisation": "",
-                    "unexplained": None, "notes": diag.notes})
+                    "unexplained": None, "notes": diag.notes}).report())
     out = capsys.readouterr().out
     assert out.startswith("notes:\n  ") and "left out of table displacement" in out
     for x, what in ((np.zeros_like(r0.channels["h_span"]), "zero throughout"),
@@ -437,7 +438,7 @@ def test_workers_run_a_script_without_a_main_guard(tmp_path):
         "print('script body ran')\n"
         f"runs = [read_run(p) for p in sorted(glob.glob({str(tmp_path)!r} + '/run*.toml'))]\n"
         "d = Diagnoser(runs, catalog=['valve_dynamics', 'force_feedback_filter'], workers=2)\n"
-        "print('found', d.diagnose().final_effects, d._procs is not None)\n")
+        "print('found', d.diagnose().final_effects, d.fits.procs is not None)\n")
     out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
                          timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]

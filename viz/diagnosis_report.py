@@ -10,14 +10,17 @@ import base64
 import html
 import io
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from vtable import units
-from vtable.diagnose.compare import GROUP_UNITS, group_prediction, group_signal, short
-from vtable.diagnose.engine import Diagnosis
+from vtable.diagnose.groups import GROUP_UNITS, group_prediction, group_signal, short
 from vtable.fileio import write_text
 from vtable.ident.tf import transfer_function
+
+if TYPE_CHECKING:  # the diagnosis draws itself through this module (`Diagnosis.plot`)
+    from vtable.diagnose.result import Diagnosis
 
 PRETTY = {"rad/s2": "rad/s²"}
 

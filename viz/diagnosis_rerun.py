@@ -23,7 +23,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from vtable import units
-from vtable.diagnose.compare import (
+from vtable.diagnose.groups import (
     GROUP_UNITS,
     group_prediction,
     group_signal,

@@ -1,7 +1,8 @@
 """One library function per command-line verb: each takes plain arguments, does the work
-and returns plain data (a dict ready for JSON, SI or the units its keys name). The CLI
-(`vtable.cli`) only parses arguments, calls one of these and formats the result; a
-script gets the same results by calling them.
+and returns a typed result (`vtable.results`, `vtable.diagnose.result`) with `to_json()`,
+`report()` and, where it draws a figure, `plot()`. The CLI (`vtable.cli`) only parses
+arguments, calls one of these and formats the result; a script gets the same results by
+calling them.
 """
 
 from __future__ import annotations
@@ -9,11 +10,27 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from vtable.errors import VtableError
+from vtable.results import (
+    Assessment,
+    CampaignIdentification,
+    Demo,
+    DemoSimulation,
+    FrequencyResponse,
+    Margins,
+    Modes,
+    Presets,
+    SimulationSummary,
+    Study,
+    Written,
+)
+
+if TYPE_CHECKING:  # the diagnosis is imported when used: it takes seconds to load
+    from vtable.diagnose.result import Diagnosis, ModelComparison
 
 
 # ---- analytical models -------------------------------------------------------------------
@@ -31,26 +48,26 @@ def _margins_dict(model, out: str, inp: str) -> dict[str, Any]:
             "f_phase_crossover_hz": g.f_phase_crossover, "f_gain_crossover_hz": g.f_gain_crossover}
 
 
-def modes(config: str) -> dict[str, Any]:
+def modes(config: str) -> Modes:
     """Eigen-modes of a named configuration or a model file (eqs 9.1-9.4)."""
     from vtable.analytic import configs
 
     model = configs.load(config)
     model.check_stable()
-    return _modes_dict(model)
+    return Modes(**_modes_dict(model))
 
 
-def margins(config: str, out: str = "x_t", inp: str = "x_c") -> dict[str, Any]:
+def margins(config: str, out: str = "x_t", inp: str = "x_c") -> Margins:
     """Gain and phase margins of L = H/(1-H), H = out/inp."""
     from vtable.analytic import configs
 
-    return _margins_dict(configs.load(config), out, inp)
+    return Margins(**_margins_dict(configs.load(config), out, inp))
 
 
-def presets() -> dict[str, Any]:
+def presets() -> Presets:
     from vtable.analytic import configs
 
-    return {"configurations": configs.names()}
+    return Presets(configs.names())
 
 
 def is_run(path: str) -> bool:
@@ -68,7 +85,7 @@ def is_run(path: str) -> bool:
 
 def tf(config: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5, fmax: float = 20.0,
        n: int = 40, log: bool = False, nperseg: int | None = None,
-       png: str | None = None) -> dict[str, Any]:
+       png: str | None = None) -> FrequencyResponse:
     """A frequency response: of a model (at n frequencies), or of a run by H1 with
     coherence (`run_tf`)."""
     if is_run(config):
@@ -83,19 +100,15 @@ def tf(config: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5, fmax:
     model.check_stable()
     f = (np.geomspace if log else np.linspace)(fmin, fmax, n)
     H = model.freqresp(f, out, inp)
-    d = {"model": model.title, "output": out, "input": inp, "f_hz": f.tolist(),
-         "magnitude": np.abs(H).tolist(), "phase_deg": np.degrees(np.angle(H)).tolist()}
+    r = FrequencyResponse(model.title, out, inp, f, H, f"{model.title}: {out}/{inp}")
     if png:
-        from vtable.viz.figures import transfer_function_png
-
-        transfer_function_png(png, f, H, None, f"{model.title}: {out}/{inp}")
-        d["png"] = png
-    return d
+        r.plot(png)
+    return r
 
 
 def run_tf(path: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5,
            fmax: float = 20.0, nperseg: int | None = None,
-           png: str | None = None) -> dict[str, Any]:
+           png: str | None = None) -> FrequencyResponse:
     """H1 with coherence between two channels of a run, on frames giving >= 8 averages
     (vtable.ident.frames) unless `nperseg` says otherwise; too few averages are warned."""
     from vtable.ident import channels, transfer_function
@@ -138,20 +151,12 @@ def run_tf(path: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5,
                         f"biased towards 1{better}")
     est = transfer_function(x, y, run.fs, n)
     sel = (est.f >= fmin) & (est.f <= fmax)
-    d = {"model": run.name, "output": out, "input": inp, "f_hz": est.f[sel].tolist(),
-         "magnitude": np.abs(est.H[sel]).tolist(),
-         "phase_deg": np.degrees(np.angle(est.H[sel])).tolist(),
-         "coherence": est.coherence[sel].tolist(), "averages": est.averages, "nperseg": n,
-         "resolution_hz": run.fs / n, "frame": why, "coherence_meaningful": nd > 1,
-         "warnings": warnings, "notes": list(run.reports)}
+    r = FrequencyResponse(run.name, out, inp, est.f[sel], est.H[sel],
+                          f"{run.name}: {out}/{inp} ({nd} averages)", est.coherence[sel],
+                          est.averages, n, run.fs / n, why, nd > 1, warnings, list(run.reports))
     if png:
-        from vtable.viz.figures import transfer_function_png
-
-        transfer_function_png(png, est.f[sel], est.H[sel],
-                              est.coherence[sel] if nd > 1 else None,
-                              f"{run.name}: {out}/{inp} ({nd} averages)")
-        d["png"] = png
-    return d
+        r.plot(png)
+    return r
 
 
 # ---- measured runs ---------------------------------------------------------------------
@@ -172,86 +177,48 @@ def effect_names(text: str) -> list[str]:
     return names
 
 
-def identify(paths: Sequence[str]) -> dict[str, Any]:
+def identify(paths: Sequence[str]) -> CampaignIdentification:
     """The report's identification of every run of one configuration."""
     from vtable.ident.drive import align
     from vtable.ident.report import identify_run
     from vtable.runs import campaign
 
-    return {"format": "vtable-identification/1",
-            "runs": [identify_run(align(r)).to_json() for r in campaign(paths)]}
+    return CampaignIdentification([identify_run(align(r)) for r in campaign(paths)])
 
 
 def compare(paths: Sequence[str], effects: Sequence[str] = (),
-            calibrate: str = "") -> dict[str, Any]:
+            calibrate: str = "") -> ModelComparison:
     """How the model with `effects` fits the runs (fitted on the training segments,
     scored on the held-out ones; the base calibrated as `calibrate` says, see
     `vtable.diagnose.calibration.Calibration.parse`)."""
     from vtable.diagnose.calibration import Calibration
-    from vtable.diagnose.compare import UNEXPLAINED_RULE, localisation_text, unexplained
     from vtable.diagnose.model import TableModel
+    from vtable.diagnose.result import ModelComparison
     from vtable.ident.drive import align
     from vtable.runs import campaign
 
-    m = TableModel(effects, calibration=Calibration.parse(calibrate)).fit(
-        [align(r) for r in campaign(paths)])
-    c = m.comparison()
-    ol = m.physics_.open_loop
-    return {"effects": list(m.effects), "params": m.physics_.effects,
-            "base": {"f_o_hz": ol.f_o, "xi_o": ol.xi_o, "k_o_per_s": ol.k_o},
-            "base_fit": m.base_, "flags": m.flags_,
-            "error": c.error, "noise_floor": c.noise_floor, "per_run": c.per_run,
-            "bands": c.bands, "localisation": localisation_text(c),
-            "unexplained": unexplained(c), "unexplained_rule": UNEXPLAINED_RULE,
-            "notes": m.notes_}
+    return ModelComparison.of(TableModel(effects, calibration=Calibration.parse(calibrate))
+                              .fit([align(r) for r in campaign(paths)]))
 
 
 def diagnose(paths: Sequence[str], with_: Sequence[str] = (), catalog: Sequence[str] = (),
-             max_rounds: int = 4, progress: Callable | None = None, json_path: str | None = None,
-             rerun: str | None = None, report: str | None = None, calibrate: str = ""):
-    """The diagnosis loop on the runs; writes the JSON (also on an interrupt: the rounds
-    finished, `interrupted` true), the .rrd and the HTML report asked for. Returns (the
-    diagnosis JSON, the `Diagnosis`)."""
-    import json
-
-    from vtable.diagnose.engine import Diagnoser, DiagnosisInterrupted, localise
-    from vtable.fileio import write_text
+             max_rounds: int = 4, progress: Callable | None = None, rerun: str | None = None,
+             report: str | None = None, calibrate: str = "") -> Diagnosis:
+    """The diagnosis loop on the runs; writes the Rerun recording (`rerun`) and the HTML
+    report (`report`) asked for (`Diagnosis.plot`, listed in its `files`). Ctrl-C raises
+    `DiagnosisInterrupted` carrying the rounds finished (`partial`, `interrupted` true)."""
+    from vtable.diagnose.calibration import Calibration
+    from vtable.diagnose.engine import Diagnoser
     from vtable.ident.drive import align
-    from vtable.jsonable import jsonable
     from vtable.runs import campaign
 
     if max_rounds < 1:
         raise VtableError(f"--max-rounds must be at least 1, got {max_rounds}")
-    from vtable.diagnose.calibration import Calibration
-
-    diag = Diagnoser([align(r) for r in campaign(paths)], list(with_),
-                     catalog=list(catalog) or None, progress=progress, max_rounds=max_rounds,
-                     calibration=Calibration.parse(calibrate))
-    try:
-        d = diag.diagnose()
-    except DiagnosisInterrupted as e:
-        part = e.partial.to_json()
-        part["localisation"] = localise(e.partial)
-        if json_path:
-            write_text(json_path, json.dumps(jsonable(part), indent=2))
-            e.wrote = json_path
-        raise
-    out = d.to_json()
-    out["localisation"] = localise(d)
-    wrote = []
-    if json_path:
-        write_text(json_path, json.dumps(jsonable(out), indent=2))
-        wrote.append(json_path)
-    if rerun:
-        from vtable.viz.diagnosis_rerun import log_diagnosis
-
-        wrote.append(str(log_diagnosis(d, rerun)))
-    if report:
-        from vtable.viz.diagnosis_report import write_report
-
-        wrote.append(str(write_report(d, report)))
-    out["_wrote"] = wrote
-    return out, d
+    d = Diagnoser([align(r) for r in campaign(paths)], list(with_), catalog=list(catalog) or None,
+                  progress=progress, max_rounds=max_rounds,
+                  calibration=Calibration.parse(calibrate)).diagnose()
+    d.plot(report=report, rerun=rerun)
+    return d
 
 
 # ---- the virtual table -------------------------------------------------------------------
@@ -271,7 +238,7 @@ def simulate(specimen: str = "sdof_frame", kind: str = "random", *,
              peak: float | None = None, freq: float = 2.0, seed: int = 0,
              record: str | None = None, valve: str = "linear",
              effects: Sequence[str] = (), out: str | None = None, rerun: str | None = None,
-             exaggerate: float = 50.0, table: str = "eerc") -> dict[str, Any]:
+             exaggerate: float = 50.0, table: str = "eerc") -> SimulationSummary:
     """Run a command on the multibody virtual table of `table` (a preset name, or a TOML
     file with a [table] in the run format's keys; `effects`: 'name[:p=v,...]' added to the
     standard table); the peak table, limits and files written."""
@@ -299,17 +266,17 @@ def simulate(specimen: str = "sdof_frame", kind: str = "random", *,
     summary = simulation_summary(exp)
     summary.update({"command": cmd.name, "specimen": spec.title,
                     "duration_s": float(exp.result.t[-1] - exp.result.t[0])})
-    return summary
+    return SimulationSummary(**summary)
 
 
-def export_mjcf(specimen: str, out: str) -> dict[str, Any]:
+def export_mjcf(specimen: str, out: str) -> Written:
     from vtable.mjcf.export import export_mjcf as export
     from vtable.sim.experiment import load_specimen
 
-    return {"files": [str(f) for f in export(load_specimen(specimen), out)]}
+    return Written([Path(f) for f in export(load_specimen(specimen), out)])
 
 
-def demo(out: str = "vtable-demo", simulate_too: bool = True) -> dict[str, Any]:
+def demo(out: str = "vtable-demo", simulate_too: bool = True) -> Demo:
     """The built-in EERC configuration: the hybrid model's coupled modes and margins, the
     peak and notch of x_t/x_c, and the SDOF frame on the virtual table under El Centro."""
     from vtable.analytic import configs
@@ -330,10 +297,10 @@ def demo(out: str = "vtable-demo", simulate_too: bool = True) -> dict[str, Any]:
          "theta_h/x_c peak_hz": float(f[near][th[near].argmax()])}
     if simulate_too:
         d["simulation"] = _demo_simulation(out)
-    return d
+    return Demo.from_dict(d)
 
 
-def _demo_simulation(out: str) -> dict[str, Any]:
+def _demo_simulation(out: str) -> DemoSimulation:
     from vtable.signals import make_command
     from vtable.sim.experiment import load_specimen, run_experiment
     from vtable.studies import response_spectrum
@@ -361,12 +328,12 @@ def _demo_simulation(out: str) -> dict[str, Any]:
         "peak_theta_h_in": float(np.max(np.abs(th * h)) / to_si(1, "in")),
         "peak_x_s_in": float(np.max(np.abs(x_s)) / to_si(1, "in")),
         "effective_spectrum_ratio": ratio, "spectrum_period_s": T_s})
-    return summary
+    return DemoSimulation(**summary)
 
 
 # ---- interaction studies -------------------------------------------------------------------
 def assess(specimen: str = "sdof_frame", record: str = "elcentro", raw: bool = False,
-           out: str = "vtable-assess") -> dict[str, Any]:
+           out: str = "vtable-assess") -> Assessment:
     """The five models of §9.4 for a specimen and a record: coupled modes, PSV spectra,
     the verdict, and the sweeps of Figs 9.4-9.12 (written as PNGs)."""
     from vtable.signals.processing import process_record
@@ -405,17 +372,16 @@ def assess(specimen: str = "sdof_frame", record: str = "elcentro", raw: bool = F
         files.append(figures.coupled_sweep_png(
             folder / f"coupled_vs_{label_x}.png", f_s, "f_s (Hz)", curves, ref,
             f"hybrid model: varying structural {label_x} (Figs 9.9-9.12)"))
-    return {"verdict": res.verdict(), "specimen": s.title, "record": label,
-            "modes": {k: {"f_hz": f, "damping": z} for k, (f, z) in res.modes.items()},
-            "psv_at_specimen_period_m_s": res.psv_at_specimen,
-            "rocking_share": res.rocking_share, "time_elongation": res.elongation,
-            "compensated_error": res.compensated_error, "files": [str(f) for f in files],
-            "notes": list(getattr(rec, "notes", ()))}
+    return Assessment(res.verdict(), s.title, label,
+                      {k: {"f_hz": f, "damping": z} for k, (f, z) in res.modes.items()},
+                      res.psv_at_specimen, res.rocking_share, res.elongation,
+                      res.compensated_error, [Path(f) for f in files],
+                      list(getattr(rec, "notes", ())))
 
 
 def study(store: str, heights: Sequence[float], records: Sequence[str] = ("elcentro",),
           specimen: str = "sdof_frame", model: str = "virtual", duration: float | None = None,
-          scheduler: str | None = None, workers: int = 2) -> dict[str, Any]:
+          scheduler: str | None = None, workers: int = 2) -> Study:
     """A heights x records study on Dask, stored as it runs and resumable."""
     from vtable.studies.scaleout import height_record_study, run_study
 
@@ -423,5 +389,4 @@ def study(store: str, heights: Sequence[float], records: Sequence[str] = ("elcen
     if duration is not None or model == "virtual":
         common["duration"] = duration if duration is not None else 4.0
     s = height_record_study(list(heights), list(records), model, **common)
-    return {"store": store, "model": model,
-            "points": run_study(s, store, scheduler=scheduler, n_workers=workers)}
+    return Study(store, model, run_study(s, store, scheduler=scheduler, n_workers=workers))

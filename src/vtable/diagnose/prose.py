@@ -1,0 +1,85 @@
+"""Where a model fails, in words and numbers: the worst channel groups and bands, the
+amplitude trend, the worst time window, and whether a residual is left unexplained
+(`noise.UNEXPLAINED_RULE`)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from vtable import units
+from vtable.diagnose.groups import short
+from vtable.diagnose.noise import NOISE_FACTOR
+from vtable.diagnose.statistics import Comparison
+
+
+def mils(x_m: float) -> str:
+    """A command amplitude in metres as mils (1 mil = 0.001 in = 25.4 µm)."""
+    v = 1000 * units.from_si(x_m, "in")
+    return f"{v:.0f}" if v >= 10 else f"{v:.2g}"
+
+
+def amplitude_trend(cmp: Comparison, group: str | None = None) -> str:
+    """How a group's (or the mean) error changes with the command's RMS span across runs."""
+    pts = []
+    for name, a, e in cmp.amplitude:
+        if group is not None:
+            e = cmp.per_run.get(name, {}).get(group)
+        if e is not None:
+            pts.append((a, e))
+    if len({round(a, 9) for a, _ in pts}) < 2:
+        return "one command amplitude only (no amplitude trend can be read)"
+    pts.sort()
+    (a0, e0), (a1, e1) = pts[0], pts[-1]
+    span = f"{e0:.1%} at {mils(a0)} mil rms, {e1:.1%} at {mils(a1)} mil rms"
+    if e1 > 1.25 * e0:
+        return f"largest at the largest spans ({span})"
+    if e0 > 1.25 * e1:
+        return f"largest at the smallest spans ({span})"
+    return f"no clear amplitude trend ({span})"
+
+
+def unexplained(cmp: Comparison) -> dict[str, Any] | None:
+    """None when cmp.error <= NOISE_FACTOR x the noise floor, else the ratio and where the
+    residual lives (UNEXPLAINED_RULE)."""
+    floor = cmp.noise_floor
+    if floor > 0 and cmp.error <= NOISE_FACTOR * floor:
+        return None
+    ratio = cmp.error / floor if floor > 0 else float("inf")
+    return {"ratio_to_floor": ratio, "where": residual_location(cmp)}
+
+
+def residual_location(cmp: Comparison) -> str:
+    """'<group>, <band>, <amplitude trend>, <time window>' of a comparison made with
+    detail=True; what could not be read is said."""
+    worst = cmp.worst_groups(1)
+    if not worst:
+        return "no channel group was scored"
+    g, e = worst[0]
+    wb = cmp.worst_band(g)
+    band = f"worst band {wb[0]} ({wb[1]:.1%})" if wb else "no band resolved (no coherent band)"
+    if cmp.windows:
+        name, t0, t1, ew = max(cmp.windows, key=lambda x: x[3])
+        window = f"worst 2 s window {t0:.1f}-{t1:.1f} s of {short(name)} ({ew:.1%})"
+    else:
+        window = "no time window located (runs shorter than 2 s)"
+    return f"{g} ({e:.1%}), {band}, {amplitude_trend(cmp, g)}, {window}"
+
+
+def localisation_text(cmp: Comparison) -> str:
+    """Where the model fails, in words and numbers."""
+    parts = []
+    worst = cmp.worst_groups(2)
+    if worst:
+        parts.append("largest errors in " + ", ".join(f"{g} ({e:.1%})" for g, e in worst))
+        wb = cmp.worst_band(worst[0][0])
+        if wb:
+            parts.append(f"{worst[0][0]} worst at {wb[0]} ({wb[1]:.1%})")
+    if len(cmp.amplitude) > 1:
+        amp = sorted(cmp.amplitude, key=lambda x: x[1])
+        parts.append("by command amplitude: " + ", ".join(
+            f"{e:.1%} at {mils(a)} mil rms" for _, a, e in amp))
+    if cmp.windows:
+        name, t0, t1, e = max(cmp.windows, key=lambda x: x[3])
+        parts.append(f"worst 2 s window {t0:.1f}-{t1:.1f} s of {short(name)} ({e:.1%})")
+    parts.append(f"noise floor {cmp.noise_floor:.1%}")
+    return "; ".join(parts)

@@ -1,0 +1,357 @@
+"""What a diagnosis and a comparison return (python-control's `*_response` pattern): typed
+results with `to_json()` (the JSON the command line writes: the diagnosis's keys are the
+interchange contract of docs/diagnosis-json.md), `report()` (the text it prints) and, for a
+diagnosis, `plot()` (the HTML report and the Rerun recording, `vtable.viz`).
+
+A diagnosis keeps its stages (`Stage`: each model it went through, with its predictions and
+comparison), its rounds (`Round`: the ranking of `Candidate`s, what was added and removed)
+and the verdict; `DiagnosisInterrupted` carries the rounds finished on Ctrl-C.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vtable.diagnose.model import SCREEN, TableModel
+from vtable.diagnose.noise import UNEXPLAINED_RULE
+from vtable.diagnose.prose import localisation_text, unexplained
+from vtable.diagnose.selection import SELECTION, failing
+from vtable.diagnose.statistics import Comparison, Gain
+from vtable.effects.physics import Physics
+from vtable.effects.registry import get as effect
+from vtable.jsonable import jsonable
+from vtable.runs.model import Run
+
+ERROR_DEFINITION = ("mean over runs and channel groups of the normalised RMS error "
+                    "||model - measured|| / ||measured|| on the held-out last 40 % of every "
+                    "run, at the analysis rate (runs faster than 200 Hz anti-alias filtered and "
+                    "resampled to 200 Hz); the noise floor is the same measure for the sensor "
+                    "noise alone")
+
+
+
+@dataclass
+class Stage:
+    """A model the diagnosis went through, with what it predicts for every run (analysis
+    rate) and how that compares with the measurements: the report and the recording render
+    these without simulating again."""
+
+    label: str
+    physics: Physics = field(repr=False)
+    predictions: dict[str, dict[str, np.ndarray]] = field(repr=False)
+    comparison: Comparison | None = None
+
+
+@dataclass
+class Candidate:
+    effect: str
+    params: dict[str, float]
+    error_after: float
+    train_error: float
+    evidence: str
+    n_params: int
+    physics: Physics = field(repr=False)
+    flags: list[str] = field(default_factory=list)
+    predictions: dict | None = field(default=None, repr=False)
+    screened: bool = False  # its first fit steps lowered the training cost < 1 %: stopped
+    cost: float = float("nan")  # the fit's training cost (residuals and priors)
+    gain: Gain | None = None  # its held-out gain over the current model (`SELECTION`)
+
+    @property
+    def blocking(self) -> list[str]:
+        """The flags on the candidate's own parameters (at a bound, not identifiable, no
+        valid model): it is not added on that evidence. Flags on base parameters (a
+        calibrated value at its bound) are reported but do not block: they say the model
+        still lacks something, not that this effect is wrong."""
+        return [f for f in self.flags if f.startswith((f"{self.effect}.", "no valid model"))]
+
+    @property
+    def score(self) -> float:
+        """The ranking's key: the held-out mean squared NRMS error (`Gain.e2_candidate`)."""
+        return self.gain.e2_candidate if self.gain is not None else float("inf")
+
+    def failing(self) -> list[str]:
+        """The statistical criteria of `SELECTION` this candidate's gain does not meet."""
+        return failing(self.gain)
+
+
+
+@dataclass
+class Round:
+    ranking: list[Candidate]
+    added: str | None
+    error: float
+    before: float
+    skipped: dict[str, str] = field(default_factory=dict)  # effect -> why it cannot apply
+    #: effects added earlier and removed after this round's addition: effect -> why
+    removed: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass
+class Diagnosis:
+    start_effects: list[str]
+    start_error: float | None
+    noise_floor: float
+    rounds: list[Round]
+    final: Physics
+    final_error: float | None
+    verdict: str
+    comparison_start: Comparison | None = None
+    comparison_final: Comparison | None = None
+    base: dict[str, dict[str, Any]] = field(default_factory=dict)
+    unexplained: dict[str, Any] | None = None
+    notes: list[str] = field(default_factory=list)
+    interrupted: bool = False
+    stages: list[Stage] = field(default_factory=list, repr=False)
+    runs: list[Run] = field(default_factory=list, repr=False)
+    #: the files written from it (`plot`: the Rerun recording, the HTML report)
+    files: list[Path] = field(default_factory=list)
+
+    @property
+    def final_effects(self) -> list[str]:
+        return list(self.final.effects)
+
+    def history(self) -> list[tuple[str, float]]:
+        if self.start_error is None:
+            return []
+        h = [("start", self.start_error)]
+        for r in self.rounds:
+            if r.added:
+                h.append((r.added + "".join(f" - {e}" for e in r.removed), r.error))
+        return h
+
+    @property
+    def localisation(self) -> str:
+        """Where the starting model fails, in words and numbers (`prose.localisation_text`)."""
+        return localisation_text(self.comparison_start) if self.comparison_start else ""
+
+    def to_json(self) -> dict[str, Any]:
+        """The diagnosis JSON (docs/diagnosis-json.md's keys, and more), plain JSON values
+        (a non-finite number is null)."""
+        return jsonable(self._raw())
+
+    def _raw(self) -> dict[str, Any]:
+        """`to_json`'s dictionary with the values as computed (numpy, inf)."""
+        return {
+            "format": "vtable-diagnosis/1",
+            "start_effects": self.start_effects,
+            "start_error": self.start_error,
+            "noise_floor": self.noise_floor,
+            "base": self.base,
+            "rounds": [{"ranking": [{"effect": c.effect, "error_after": c.error_after,
+                                     "train_error": c.train_error, "params": c.params,
+                                     "n_params": c.n_params, "evidence": c.evidence,
+                                     "flags": c.flags, "screened": c.screened,
+                                     "gain": _gain_json(c)}
+                                    for c in r.ranking],
+                        "added": r.added, "removed": r.removed, "error": r.error,
+                        "error_before": r.before, "skipped": r.skipped}
+                       for r in self.rounds],
+            "final_effects": self.final_effects,
+            "final_params": {k: v for k, v in self.final.effects.items()},
+            "final_base": {"f_o_hz": self.final.open_loop.f_o, "xi_o": self.final.open_loop.xi_o,
+                           "k_o_per_s": self.final.open_loop.k_o},
+            "final_error": self.final_error,
+            "unexplained": self.unexplained,
+            "verdict": self.verdict,
+            "interrupted": self.interrupted,
+            "notes": self.notes,
+            "error_definition": ERROR_DEFINITION,
+            "unexplained_rule": UNEXPLAINED_RULE,
+            "selection_rule": SELECTION,
+            "localisation": self.localisation,
+        }
+
+    def report(self) -> str:
+        """The text `vtable diagnose` prints: the notes, the starting model, each round's
+        ranking with its evidence and flags, the error history, the calibrated base, what
+        is left unexplained, the verdict and the files written."""
+        d = self._raw()
+        out = []
+        for i, n in enumerate(d["notes"]):
+            out.append(("notes:\n" if i == 0 else "") + f"  {n}")
+        out.append("starting model: servo loop + specimen"
+                   + (f" + {', '.join(d['start_effects'])}" if d["start_effects"] else ""))
+        out.append(f"  held-out error {d['start_error']:.2%} (noise floor "
+                   f"{d['noise_floor']:.2%})")
+        out.append(f"  where: {d['localisation']}")
+        for i, r in enumerate(d["rounds"], 1):
+            out.append(f"\nround {i}: " + (f"added {r['added']}" if r["added"]
+                                            else "nothing added"))
+            out.append(f"  {'rank':>4}  {'effect':<28} {'held-out':>9}  evidence")
+            for k, c in enumerate(r["ranking"], 1):
+                out.append(f"  {k:>4}  {c['effect']:<28} {c['error_after']:9.2%}  "
+                           + (c["evidence"] if k <= 3 else ""))
+                if c.get("flags"):
+                    out.append(f"  {'':>4}  {'':<28} {'':>9}  flags: " + "; ".join(c["flags"]))
+        out.append("\nerror history: " + " -> ".join(
+            [f"{d['start_error']:.2%}"] + [f"{r['error']:.2%} (+{r['added']})"
+                                            for r in d["rounds"] if r["added"]]))
+        out += base_lines(d["base"])
+        u = d["unexplained"]
+        out.append("unexplained: " + ("none (the final error is consistent with the noise "
+                                      "floor)" if u is None else
+                                      f"{u['ratio_to_floor']:.1f} x the noise floor, "
+                                      f"{u['where']}"))
+        out.append(f"verdict: {d['verdict']}")
+        out += [f"wrote {f}" for f in self.files]
+        return "\n".join(out)
+
+    def plot(self, report: str | Path | None = None, rerun: str | Path | None = None
+             ) -> list[Path]:
+        """Write the diagnosis's figures from the stages it kept (nothing is simulated
+        again): `rerun`, a Rerun recording (.rrd: measured, model and residual of every
+        channel group for every stage, the error history); `report`, an HTML report
+        (verdict, rankings, the error waterfall, transfer-function overlays). Returns the
+        files written (also added to `files`).
+
+        The figures come from `vtable.viz` (matplotlib, rerun), imported here: the
+        diagnosis itself needs neither.
+        """
+        wrote = []
+        if rerun:
+            from vtable.viz.diagnosis_rerun import log_diagnosis
+
+            wrote.append(Path(log_diagnosis(self, rerun)))
+        if report:
+            from vtable.viz.diagnosis_report import write_report
+
+            wrote.append(Path(write_report(self, report)))
+        self.files += wrote
+        return wrote
+
+
+
+class DiagnosisInterrupted(KeyboardInterrupt):
+    """Ctrl-C during `Diagnoser.diagnose`: `partial` is the diagnosis of the rounds that
+    finished (`interrupted` True)."""
+
+    def __init__(self, partial: Diagnosis) -> None:
+        super().__init__(partial.verdict)
+        self.partial = partial
+
+
+def _gain_json(c: Candidate) -> dict[str, float] | None:
+    g = c.gain
+    if g is None:
+        return None
+    return {"mean_sq_error_before": g.e2_current, "mean_sq_error_after": g.e2_candidate,
+            "mean_sq_noise": g.f2, "gain": g.gain, "noise_se": g.se, "z": g.z,
+            "share_of_systematic": g.share, "passes": not c.failing()}
+
+
+def evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
+    if not np.isfinite(c.error_after):
+        return "; ".join(c.flags)
+    if c.screened:
+        return (f"screened out: its first least-squares steps from the best start on its "
+                f"grid lowered the training cost by less than {SCREEN:.0%} (held-out error "
+                f"{err:.2%} -> {c.error_after:.2%}, not refined further)")
+    worst = cmp.worst_groups(2)
+    where = ", ".join(g for g, _ in worst)
+    band = cmp.worst_band(worst[0][0]) if worst else None
+    g = c.gain
+    removed = f"{max(g.share, 0.0):.0%}" if g is not None and np.isfinite(g.share) else "all"
+    z = f", {g.z:.1f} standard errors of the noise" if g is not None else ""
+    params = ", ".join(f"{k} = {v:.3g} {p.unit}" for (k, v), p in
+                       zip(c.params.items(), effect(c.effect).params, strict=True))
+    return (f"residual concentrated in {where}" + (f" at {band[0]}" if band else "")
+            + f"; adding {c.effect} removes {removed} of its systematic part (held-out error "
+              f"{err:.2%} -> {c.error_after:.2%}{z}); fitted {params}")
+
+
+
+def localise(d: Diagnosis) -> str:
+    """`Diagnosis.localisation`."""
+    return d.localisation
+
+
+def base_lines(base: dict[str, Any], indent: str = "") -> list[str]:
+    """The calibrated base: declared -> fitted within its bounds, one line each."""
+    if not base:
+        return []
+    out = [f"{indent}base (declared -> fitted, bounds):"]
+    for k, v in base.items():
+        u = "" if v["unit"] == "1" else f" {v['unit']}"
+        lo, hi = v["bounds"]
+        moved = (v["fitted"] / v["declared"] - 1) if v["declared"] else float("nan")
+        out.append(f"{indent}  {k:<28} {v['declared']:.4g} -> {v['fitted']:.4g}{u} "
+                   f"({moved:+.1%}; bounds {lo:.4g}-{hi:.4g})")
+    return out
+
+
+@dataclass
+class ModelComparison:
+    """How a model with given effects fits a campaign (`vtable compare`): fitted on the
+    training segments with the base calibrated, scored on the held-out ones.
+
+    `effects` and `params` (each effect's fitted parameters, its units), `base` (the
+    servo loop's f_o in Hz, ξ_o, k_o in 1/s), `base_fit` (the calibrated base, declared ->
+    fitted within bounds), `flags` (fitted parameters at a bound or not identifiable),
+    `error` and `noise_floor` (the campaign's held-out NRMS error and the sensor noise's),
+    `per_run` (run -> channel group -> NRMS), `bands` (group -> band -> error),
+    `localisation` (where it fails, in words), `unexplained` (None when the error is
+    consistent with the noise, else the ratio and where: `UNEXPLAINED_RULE`), `notes`.
+    """
+
+    effects: list[str]
+    params: dict[str, dict[str, float]]
+    base: dict[str, float]
+    error: float
+    noise_floor: float
+    per_run: dict[str, dict[str, float]]
+    localisation: str
+    unexplained: dict[str, Any] | None
+    notes: list[str] = field(default_factory=list)
+    base_fit: dict[str, dict[str, Any]] = field(default_factory=dict)
+    flags: list[str] = field(default_factory=list)
+    bands: dict[str, dict[str, float]] = field(default_factory=dict)
+    files: list[Path] = field(default_factory=list)
+
+    @classmethod
+    def of(cls, m: TableModel) -> ModelComparison:
+        """The comparison of a fitted `TableModel` (scored on the held-out segments)."""
+        c = m.comparison()
+        ol = m.physics_.open_loop
+        return cls(list(m.effects), m.physics_.effects,
+                   {"f_o_hz": ol.f_o, "xi_o": ol.xi_o, "k_o_per_s": ol.k_o}, c.error,
+                   c.noise_floor, c.per_run, localisation_text(c), unexplained(c),
+                   m.notes_, m.base_, m.flags_, c.bands)
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON `vtable compare --json` writes."""
+        return jsonable({"effects": self.effects, "params": self.params, "base": self.base,
+                         "base_fit": self.base_fit, "flags": self.flags, "error": self.error,
+                         "noise_floor": self.noise_floor, "per_run": self.per_run,
+                         "bands": self.bands, "localisation": self.localisation,
+                         "unexplained": self.unexplained, "unexplained_rule": UNEXPLAINED_RULE,
+                         "notes": self.notes})
+
+    def report(self) -> str:
+        """The text `vtable compare` prints."""
+        out = []
+        for i, n in enumerate(self.notes):
+            out.append(("notes:\n" if i == 0 else "") + f"  {n}")
+        out.append("model: servo loop + specimen"
+                   + (f" + {', '.join(self.effects)}" if self.effects else ""))
+        b = self.base
+        out.append(f"  base loop: f_o {b['f_o_hz']:.2f} Hz, ξ_o {b['xi_o']:.3f}, "
+                   f"k_o {b['k_o_per_s']:.2f}")
+        for e, p in self.params.items():
+            out.append(f"  {e}: " + ", ".join(f"{k} = {v:.4g}" for k, v in p.items()))
+        out += [f"  flag: {f}" for f in self.flags]
+        out += base_lines(self.base_fit, indent="  ")
+        out.append(f"  held-out error {self.error:.2%}, noise floor {self.noise_floor:.2%}")
+        for run, errs in self.per_run.items():
+            out.append(f"  {run}: " + ", ".join(f"{g} {e:.1%}" for g, e in errs.items()))
+        out.append(f"  where: {self.localisation}")
+        u = self.unexplained
+        out.append("  unexplained: " + ("none (the error is consistent with the noise floor)"
+                                        if u is None else
+                                        f"{u['ratio_to_floor']:.1f} x the noise floor, "
+                                        f"{u['where']}"))
+        return "\n".join(out)
