@@ -11,12 +11,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
-from vtable.ident.result import Identification
 from vtable.jsonable import jsonable
+
+if TYPE_CHECKING:  # the CLI starts without scipy.signal
+    from vtable.ident.result import Identification
 
 
 class Result(Protocol):
