@@ -105,8 +105,9 @@ def diagnosis_json(tmp_path_factory):
     for r in runs[:2]:
         write_run(r, tmp / r.name)
         paths.append(str(tmp / f"{r.name}.toml"))
-    verbs.diagnose(paths, catalog=["actuator_friction"], max_rounds=1,
-                   json_path=str(tmp / "d.json"))
+    d = verbs.diagnose(paths, catalog=["actuator_friction"], max_rounds=1)
+    # what `vtable diagnose --json` writes: the result's JSON, through a file
+    (tmp / "d.json").write_text(json.dumps(d.to_json()))
     return json.loads((tmp / "d.json").read_text())
 
 
