@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from vtable.errors import VtableError
 from vtable.params.base import Params, plain, quantity
 from vtable.params.specimen import SDOFSpecimen
 
@@ -164,8 +165,6 @@ class TwoDirectionalParams(Params):
 
 
 def _nested(cls, d, where, **sub):
-    from vtable.errors import VtableError
-
     where = where or cls.__name__
     if not isinstance(d, dict):
         raise VtableError(f"{where}: expected a table")

@@ -127,7 +127,8 @@ def _check_against_rate(meta: dict[str, Any], fs: float, where: str,
                         folder: Path | None) -> None:
     """What the TOML says must be resolvable at the run's sampling rate: specimen
     frequencies and the command's band below the Nyquist frequency."""
-    from vtable.params.specimen import specimen_frequencies, specimen_from_dict
+    from vtable.analytic.structure import specimen_frequencies
+    from vtable.params.specimen import specimen_from_dict
 
     nyq = fs / 2
     if "specimen" in meta:

@@ -223,7 +223,7 @@ def _data(name: str) -> Callable[[], dict[str, Any]]:
     def load() -> dict[str, Any]:
         from vtable.params import presets
 
-        return {k: v for k, v in presets._file(name).items() if k != "source"}
+        return {k: v for k, v in presets.data(name).items() if k != "source"}
     return load
 
 
