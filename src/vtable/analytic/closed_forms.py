@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from vtable.errors import VtableError
-from vtable.params.loops import OpenLoop
+from vtable.params.loops import OpenLoop, spring_frequency
 
 TWO_PI = 2 * math.pi
 
@@ -176,9 +176,8 @@ def combined_rocking(k_p: float, c_p: float, inertia: float, pitch_loop: OpenLoo
     ξ_θ = c_θ/(2ω_θ I) (8.36), the pitch loop's springs taken at f_hz."""
     k_v, c_v = feedback_spring(inertia, pitch_loop, f_hz)
     k_t, c_t = k_p + float(k_v), c_p + float(c_v)
-    w = math.sqrt(k_t / inertia)
-    return {"k_theta": k_t, "c_theta": c_t, "f_theta": w / TWO_PI,
-            "xi_theta": c_t / (2 * w * inertia)}
+    f, xi = spring_frequency(k_t, c_t, inertia)
+    return {"k_theta": k_t, "c_theta": c_t, "f_theta": f, "xi_theta": xi}
 
 
 def stabilizer_rocking(k_theta: float, c_theta: float, inertia: float, pitch_loop: OpenLoop,

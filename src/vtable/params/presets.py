@@ -6,7 +6,6 @@ Names are ``family`` or ``family:row`` with the report's table number, e.g.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
@@ -26,6 +25,7 @@ from vtable.params.loops import (
     StructureRatios,
     TableSDOFParams,
     TwoDirectionalParams,
+    spring_frequency,
 )
 from vtable.params.specimen import SDOFSpecimen, Specimen, specimen_from_dict
 from vtable.params.table import EERCTable
@@ -177,11 +177,11 @@ def two_directional(f_r: float = 21.0) -> TwoDirectionalParams:
     pitch = pitch_loop(f_r, inertia)
     k_p, c_p = stabilizer_rocking(rock.k_theta, rock.c_theta, inertia, pitch,
                                   pitch_springs().f_coupled)
-    w_p = math.sqrt(k_p / inertia)
+    f_p, xi_p = spring_frequency(k_p, c_p, inertia)
     return TwoDirectionalParams(
         open_loop=part("open_loop", OpenLoop), pitch_loop=pitch,
         structure=StructureRatios.from_physical(spec, m_t, inertia),
-        f_p=w_p / (2 * math.pi), xi_p=c_p / (2 * w_p * inertia), height=spec.height,
+        f_p=f_p, xi_p=xi_p, height=spec.height,
         title=f"two-directional table, pitch loop f_r = {f_r:g} Hz (§8.6.2)",
         source="§8.6.2, Table 8.1")
 
