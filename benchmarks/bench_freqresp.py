@@ -4,9 +4,15 @@ vtable's modal evaluation (with its direct-solve fallback) vs python-control's
 
 The three timings are interleaved round by round (best of each over the rounds), so a
 machine loaded by other work slows both sides alike and the printed ratio is one run's.
+Both sides run with one BLAS thread unless OPENBLAS_NUM_THREADS says otherwise: the
+matrices are 8 x 8, and on a loaded machine extra BLAS threads only contend.
 """
 
 from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy is imported
 
 import timeit
 
@@ -41,7 +47,8 @@ def main() -> None:
             best[k] = min(best[k], timeit.timeit(fn, number=number) / number)
     t_ctrl, t_all, t_one = best["ctrl"], best["all"], best["one"]
     print(f"model: {model.title}; {len(model.states)} states, {len(model.outputs)} outputs x "
-          f"{len(model.inputs)} inputs, {len(f)} frequencies")
+          f"{len(model.inputs)} inputs, {len(f)} frequencies; BLAS threads "
+          f"{os.environ['OPENBLAS_NUM_THREADS']}")
     print(f"python-control {control.__version__}: {t_ctrl * 1e3:8.3f} ms")
     print(f"vtable all pairs:        {t_all * 1e3:8.3f} ms   ({t_ctrl / t_all:5.1f}x faster)")
     print(f"vtable one pair x_t/x_c: {t_one * 1e3:8.3f} ms   ({t_ctrl / t_one:5.1f}x faster)")
