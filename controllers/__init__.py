@@ -32,9 +32,9 @@ def nonlinear_controllers(vt, **valve) -> list:
     loops on V1-V4, passive stabilizers."""
     from vtable.hydraulics import appendix_c, group_law
 
-    h1 = vt.actuator("H1")
     base = group_law(vt, "horizontal").hydraulics
-    hyd = appendix_c(base, vt.table.geometry.supply_pressure, h1.flow, **valve)
+    hyd = appendix_c(base, vt.table.geometry.supply_pressure, vt.table.rated_flow("H1"),
+                     **valve)
     return [HydraulicServo(vt, hyd), ServoController(vt, groups=("vertical",))] + \
         ([PassiveStabilizers(vt)] if vt.stabilizers.pairs else [])
 

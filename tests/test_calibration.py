@@ -121,9 +121,10 @@ def test_a_vtable_simulate_campaign_adds_only_the_virtual_tables_physics(tmp_pat
 def test_a_buildings_storey_masses_are_calibrated_each_with_its_frequencies_held():
     """Each storey's mass is a base parameter (±10 %); moving one keeps the fixed-base
     frequencies (the stiffnesses follow) and the other storeys' masses."""
+    from vtable.analytic.structure import specimen_frequencies
     from vtable.diagnose.calibration import base_params
     from vtable.effects.physics import Physics, nominal_open_loop
-    from vtable.params.specimen import ShearBuilding, specimen_frequencies
+    from vtable.params.specimen import ShearBuilding
     from vtable.params.virtual import virtual_table
 
     kip, inch = 4448.2216, 0.0254

@@ -15,12 +15,12 @@ from vtable.params import (
     read_toml,
     specimen_from_dict,
 )
-from vtable.params.presets import _file
+from vtable.params.presets import data
 
 
 def test_table_b5_survives_si_round_trip():
     servo = presets.eerc_table().servo
-    assert servo.to_dict() == pytest.approx({k: v for k, v in _file("eerc")["servo"].items()
+    assert servo.to_dict() == pytest.approx({k: v for k, v in data("eerc")["servo"].items()
                                              if k != "source"} | {"source": servo.source})
     assert units.from_si(servo.beta, "psi") == pytest.approx(94000.0)
     assert units.from_si(servo.k_ct, "in3/s/psi") == pytest.approx(0.0787)
@@ -45,7 +45,7 @@ def test_geometry_and_specs():
 
 def test_every_preset_section_names_its_source():
     for name in ("eerc", "specimens", "models"):
-        for key, section in _file(name).items():
+        for key, section in data(name).items():
             if isinstance(section, dict) and "kind" not in section and key not in (
                     "knob_factors", "control") and not any(isinstance(v, dict) and "source" in v
                                                            for v in section.values()):
@@ -187,7 +187,7 @@ def test_shear_building_limits_are_one_line_errors_without_delay():
 
 
 def test_specimen_frequencies_of_a_building_by_stiffness():
-    from vtable.params.specimen import specimen_frequencies
+    from vtable.analytic.structure import specimen_frequencies
 
     # two equal storeys m, k: ω² = (3 ∓ √5)/2 · k/m
     b = specimen_from_dict({"kind": "shear_building", "weights_kip": [386.08858, 386.08858],

@@ -119,7 +119,7 @@ def test_mdof_with_one_storey_is_the_hybrid_model():
     geo = presets.eerc_table().geometry
     spec = presets.specimen("table8_1")
     hyb = presets.hybrid("table8.1")
-    d = presets._file("models")["table8_1"]
+    d = presets.data("models")["table8_1"]
     building = ShearBuilding(weights=(spec.weight,), heights=(spec.height,), damping=spec.damping,
                              frequencies=(spec.frequency,))
     mdof = MDOFHybrid(hyb.open_loop, geo.mass, geo.pitch_inertia,
@@ -134,7 +134,7 @@ def test_mdof_with_one_storey_is_the_hybrid_model():
 def test_mdof_building_on_the_table():
     geo = presets.eerc_table().geometry
     hyb = presets.hybrid("table8.1")
-    rock = RockingSpring.from_dict(presets._file("models")["table8_1"]["rocking"])
+    rock = RockingSpring.from_dict(presets.data("models")["table8_1"]["rocking"])
     b = ShearBuilding.from_dict({"weights_kip": [20, 20, 20], "heights_in": [90, 150, 210],
                                  "damping": 0.02, "frequencies_hz": [3.0, 8.5, 12.5]})
     model = MDOFHybrid(hyb.open_loop, geo.mass, geo.pitch_inertia, rock, b)

@@ -7,10 +7,15 @@ from vtable.analytic.mechanical import MechanicalModel
 from vtable.analytic.pitch import HybridModel, TwoDirectionalTable
 from vtable.analytic.rcfilter import RCFilterServo
 from vtable.analytic.sdof import TableSDOF
-from vtable.analytic.servo import ServoLoop, open_loop_from_servo, servo_from_open_loop
+from vtable.analytic.servo import (
+    ServoLoop,
+    loop_row,
+    open_loop_from_servo,
+    servo_from_open_loop,
+)
 
 __all__ = [
     "HybridModel", "LinearModel", "MDOFHybrid", "Margins", "MechanicalModel", "Mode", "Modes",
-    "RCFilterServo", "ServoLoop", "TableSDOF", "TwoDirectionalTable", "open_loop_from_servo",
-    "servo_from_open_loop",
+    "RCFilterServo", "ServoLoop", "TableSDOF", "TwoDirectionalTable", "loop_row",
+    "open_loop_from_servo", "servo_from_open_loop",
 ]

@@ -57,6 +57,12 @@ def modes_of(eigenvalues: np.ndarray, tol: float = 1e-9) -> Modes:
     return Modes(tuple(modes), tuple(float(r) for r in real))
 
 
+def _residues(CV: np.ndarray, VB: np.ndarray) -> np.ndarray:
+    """The residue of every output/input pair at every pole, K[n, (p, m)] = CV[p, n] VB[n, m],
+    laid out so that H(s) - D = (1/(s - λ)) @ K for all frequencies in one product."""
+    return (CV.T[:, :, None] * VB[:, None, :]).reshape(CV.shape[1], -1)
+
+
 class LinearModel:
     """ẋ = A x + B u, y = C x + D u with named states, inputs and outputs."""
 
@@ -103,10 +109,13 @@ class LinearModel:
         With `output` and `input` named: a complex array shaped like f_hz; otherwise an
         array (n_f, n_outputs, n_inputs).
 
-        Evaluated in modal form, H = (C V) diag(1/(s - λ)) (V⁻¹ B) + D, which costs
-        O(n) per frequency. Where the modal sum could have lost more than ~1e-12 of its
-        value to rounding (estimated from cond(V) and the size of the cancelling terms),
-        and whenever A is defective, those frequencies are solved directly instead.
+        Evaluated in modal form, H = (C V) diag(1/(s - λ)) (V⁻¹ B) + D: every frequency
+        and output/input pair in one matrix product (n operations per value). Where the
+        modal sum could have lost more than ~1e-11 of a value to rounding (estimated from
+        cond(V) and the size of the cancelling terms; e.g. an acceleration output at low
+        frequency), and whenever A is defective, those frequencies are solved directly
+        (LU of sI - A, as python-control does without slycot), so the result agrees with
+        a direct solve to ~1e-10.
         """
         f = np.asarray(f_hz, dtype=float)
         s = 1j * TWO_PI * f.ravel()
@@ -122,10 +131,12 @@ class LinearModel:
             lam, V, Vinv, cond, t = modal  # A = T V Λ V⁻¹ T⁻¹ with T = diag(t)
             CV, VB = (C * t) @ V, Vinv @ (B / t[:, None])
             R = 1.0 / (s[:, None] - lam)  # (n_f, n)
-            H = np.einsum("pn,fn,nm->fpm", CV, R, VB) + D
-            size = np.einsum("pn,fn,nm->fpm", np.abs(CV), np.abs(R), np.abs(VB)) + np.abs(D)
+            # one product for every frequency and pair: H[f, (p, m)] = Σ_n R[f, n] K[n, (p, m)]
+            K = _residues(CV, VB)
+            H = (R @ K).reshape(H.shape) + D
+            size = (np.abs(R) @ _residues(np.abs(CV), np.abs(VB))).reshape(H.shape) + np.abs(D)
             bound = 1e-15 * max(cond, 1.0) * size
-            todo = np.any(bound > 1e-12 * np.abs(H), axis=(1, 2))
+            todo = np.any(bound > 1e-11 * np.abs(H), axis=(1, 2))
         if np.any(todo):
             st = s[todo]
             M = st[:, None, None] * np.eye(self.A.shape[0]) - self.A

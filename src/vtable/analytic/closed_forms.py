@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from vtable.errors import VtableError
-from vtable.params.loops import OpenLoop
+from vtable.params.loops import OpenLoop, spring_frequency
 
 TWO_PI = 2 * math.pi
 
@@ -176,6 +176,25 @@ def combined_rocking(k_p: float, c_p: float, inertia: float, pitch_loop: OpenLoo
     ξ_θ = c_θ/(2ω_θ I) (8.36), the pitch loop's springs taken at f_hz."""
     k_v, c_v = feedback_spring(inertia, pitch_loop, f_hz)
     k_t, c_t = k_p + float(k_v), c_p + float(c_v)
-    w = math.sqrt(k_t / inertia)
-    return {"k_theta": k_t, "c_theta": c_t, "f_theta": w / TWO_PI,
-            "xi_theta": c_t / (2 * w * inertia)}
+    f, xi = spring_frequency(k_t, c_t, inertia)
+    return {"k_theta": k_t, "c_theta": c_t, "f_theta": f, "xi_theta": xi}
+
+
+def stabilizer_rocking(k_theta: float, c_theta: float, inertia: float, pitch_loop: OpenLoop,
+                       f_hz: float) -> tuple[float, float]:
+    """The passive stabilizers' share k_p = k_θ - k_v(ω), c_p = c_θ - c_v(ω) of a rocking
+    spring and dashpot (eqs 8.32-8.33 solved for k_p, c_p; `combined_rocking` is the
+    inverse), the vertical actuators' pitch loop taken as a spring at f_hz (eqs 8.28-8.29).
+
+    Raises
+    ------
+    VtableError
+        When the pitch loop alone is stiffer than k_θ, or damps more than c_θ.
+    """
+    k_v, c_v = feedback_spring(inertia, pitch_loop, f_hz)
+    k_p, c_p = k_theta - float(k_v), c_theta - float(c_v)
+    if k_p <= 0 or c_p < 0:
+        raise VtableError(f"rocking spring {k_theta:.3g} N m/rad, dashpot {c_theta:.3g} "
+                          f"N m s/rad: the vertical actuators' pitch loop alone gives "
+                          f"{float(k_v):.3g} and {float(c_v):.3g} at {f_hz:g} Hz")
+    return k_p, c_p

@@ -23,6 +23,7 @@ inertia ratios v at most `MAX_INERTIA_RATIO`, shear buildings at most 50 storeys
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -180,8 +181,6 @@ def from_file(path: str | Path) -> LinearModel:
 def check_physical(p: Params, where: str) -> None:
     """Bounds the parameter classes leave open: damping ratios (structural ξ_s <= 1, loop
     and equivalent-spring ξ <= `XI_LOOP_MAX`) and the mass and inertia ratios."""
-    import dataclasses
-
     for f in dataclasses.fields(p):  # type: ignore[arg-type]
         v = getattr(p, f.name)
         key = f.metadata.get("key") or f.name

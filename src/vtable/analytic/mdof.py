@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from vtable.analytic.base import LinearModel
+from vtable.analytic.servo import loop_row
 from vtable.analytic.structure import building_matrices
 from vtable.params.loops import OpenLoop, RockingSpring
 from vtable.params.specimen import ShearBuilding
@@ -48,16 +49,14 @@ class MDOFHybrid(LinearModel):
         K[1, 1], C[1, 1] = rocking.k_theta, rocking.c_theta
         K[2:, 2:], C[2:, 2:] = Ks, Cs
         Minv = np.linalg.inv(M)
-        w, xi, k = open_loop.omega_o, open_loop.xi_o, open_loop.k_o
         ns = 2 * nq + 1
         A = np.zeros((ns, ns))
         A[:nq, nq:2 * nq] = np.eye(nq)
         A[nq:2 * nq, :nq] = -Minv @ K
         A[nq:2 * nq, nq:2 * nq] = -Minv @ C
         A[nq:2 * nq, -1] = Minv[:, 0] * table_mass
-        A[-1, 0], A[-1, nq], A[-1, -1] = -k * w**2, -w**2, -2 * xi * w
         B = np.zeros((ns, 1))
-        B[-1, 0] = k * w**2
+        A[-1, [0, nq, -1]], B[-1, 0] = loop_row(open_loop)
         e = np.eye(ns)
         he1 = float(m @ h**2 / (m @ h))  # eq 4.24
         self.effective_height = he1

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from vtable.analytic.base import LinearModel
+from vtable.analytic.servo import loop_row
 from vtable.params.loops import HybridParams, StructureRatios, TwoDirectionalParams
 
 TWO_PI = 2 * np.pi
@@ -53,11 +54,8 @@ class HybridModel(LinearModel):
         A[0:3, 3:6] = np.eye(3)
         A[3:6, 0:6] = _structure_rows(p.structure, wt, p.xi_theta)
         A[3, 6] = 1.0
-        A[6, 0] = -ol.k_o * ol.omega_o**2
-        A[6, 3] = -ol.omega_o**2
-        A[6, 6] = -2 * ol.xi_o * ol.omega_o
         B = np.zeros((7, 1))
-        B[6, 0] = ol.k_o * ol.omega_o**2
+        A[6, [0, 3, 6]], B[6, 0] = loop_row(ol)
         super().__init__(**self._build(A, B, self.STATES, ("x_c",), _outputs(7, A, height),
                                        title=title or p.title or "hybrid model (eq 8.37)"))
 
@@ -79,13 +77,10 @@ class TwoDirectionalTable(LinearModel):
         A[3:6, 0:6] = _structure_rows(p.structure, TWO_PI * p.f_p, p.xi_p)
         A[3, 6] = 1.0
         A[4, 7] = 1.0
-        A[6, 0], A[6, 3], A[6, 6] = (-ol.k_o * ol.omega_o**2, -ol.omega_o**2,
-                                     -2 * ol.xi_o * ol.omega_o)
-        A[7, 1], A[7, 4], A[7, 7] = (-pl.k_o * pl.omega_o**2, -pl.omega_o**2,
-                                     -2 * pl.xi_o * pl.omega_o)
         B = np.zeros((8, 2))
-        B[6, 0] = ol.k_o * ol.omega_o**2
-        B[7, 1] = pl.k_o * pl.omega_o**2 * p.height
+        A[6, [0, 3, 6]], B[6, 0] = loop_row(ol)
+        A[7, [1, 4, 7]], b = loop_row(pl)  # the pitch loop on x_r = θh, commanded θ_c h
+        B[7, 1] = b * p.height
         outputs = _outputs(8, A, p.height)
         outputs["x_m"] = (np.eye(8)[7], None)
         super().__init__(**self._build(A, B, self.STATES, ("x_c", "theta_c"), outputs,

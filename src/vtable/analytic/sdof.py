@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from vtable.analytic.base import LinearModel
+from vtable.analytic.servo import loop_row
 from vtable.params.loops import TableSDOFParams
 
 STATES = ("x_t", "v_t", "f_a", "x_st", "v_st")  # f_a = F_a/m_t
@@ -19,16 +20,16 @@ class TableSDOF(LinearModel):
     def __init__(self, p: TableSDOFParams, title: str = "") -> None:
         self.params = p
         ol, st = p.open_loop, p.structure
-        w, xi, k = ol.omega_o, ol.xi_o, ol.k_o
         ws, xs, u = st.omega_s, st.xi_s, st.u
+        row, b = loop_row(ol)
         A = np.array([
             [0, 1, 0, 0, 0],
             [-ws**2 * u, -2 * xs * ws * u, 1, ws**2 * u, 2 * xs * ws * u],
-            [-w**2 * k, -w**2, -2 * xi * w, 0, 0],
+            [*row, 0, 0],
             [0, 0, 0, 0, 1],
             [ws**2, 2 * xs * ws, 0, -ws**2, -2 * xs * ws],
         ])
-        B = np.array([[0], [0], [w**2 * k], [0], [0]])
+        B = np.array([[0], [0], [b], [0], [0]])
         e = np.eye(5)
         outputs = {"x_t": (e[0], None), "x_st": (e[3], None), "x_s": (e[3] - e[0], None),
                    "a_t": (A[1], None), "a_st": (A[4], None), "f_a": (e[2], None)}

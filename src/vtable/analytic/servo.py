@@ -1,8 +1,8 @@
 """The bare uni-directional table: a 3rd-order servo loop (report ch. 6).
 
-Open-loop parameters from physical constants (eq 6.14 without, eq 6.16 with feedback)
-and back; the closed loop in state form (eq 6.18); the Routh-Hurwitz conditions
-(eq 6.11, 6.17b).
+The servo law's row every closed-loop model shares (`loop_row`); open-loop parameters
+from physical constants (eq 6.14 without, eq 6.16 with feedback) and back; the closed
+loop in state form (eq 6.18); the Routh-Hurwitz conditions (eq 6.11, 6.17b).
 """
 
 from __future__ import annotations
@@ -20,6 +20,24 @@ from vtable.params.table import ServoConstants
 TWO_PI = 2 * math.pi
 
 
+def loop_row(ol: OpenLoop) -> tuple[np.ndarray, float]:
+    """The servo law's row of every closed-loop model (eqs 6.5a, 6.18, 7.7, 8.11, 8.16).
+
+    With x_f = F_a/m_t (ẍ_t on the bare table) the loop of eq 6.15 in state form is
+    ẋ_f = -k_o ω_o² x - ω_o² ẋ - 2ξ_o ω_o x_f + k_o ω_o² x_c, so the bare table's
+    x_t/x_c = k_o ω_o²/(s³ + 2ξ_o ω_o s² + ω_o² s + k_o ω_o²) (eq 6.15b).
+
+    Returns
+    -------
+    row : ndarray
+        Coefficients on (x, ẋ, x_f): (-k_o ω_o², -ω_o², -2ξ_o ω_o).
+    b : float
+        Coefficient on the command x_c: k_o ω_o².
+    """
+    w2 = ol.omega_o**2
+    return np.array([-ol.k_o * w2, -w2, -2 * ol.xi_o * ol.omega_o]), ol.k_o * w2
+
+
 def open_loop_from_servo(c: ServoConstants, feedback: bool = True) -> OpenLoop:
     """(f_o, ξ_o, k_o) from physical constants.
 
@@ -31,6 +49,7 @@ def open_loop_from_servo(c: ServoConstants, feedback: bool = True) -> OpenLoop:
     A viscous damping c of the mass (m ẍ = A P - c ẋ; the report's tables have none)
     generalises eq 6.16 with A_e = A + k k_v + c(k_ct + k k_p)/A in place of k k_v + A:
     ω_o² = 4βA A_e/(mV), 2ξ_o/ω_o = (m(k_ct + k k_p) + cV/4β)/(A A_e), k_o = k/A_e.
+    `servo_from_open_loop` is the inverse.
     """
     k, A = c.k_t, c.area
     k_v, k_p = (c.k_v, c.k_p) if feedback else (0.0, 0.0)
@@ -42,36 +61,71 @@ def open_loop_from_servo(c: ServoConstants, feedback: bool = True) -> OpenLoop:
                     source="eq 6.16" if feedback else "eq 6.14")
 
 
-def servo_from_open_loop(ol: OpenLoop, template: ServoConstants) -> ServoConstants:
-    """Invert eq 6.16: solve k_t, β and k_ct for (f_o, ξ_o, k_o), holding the template's
-    A, V, m, k_p (hence k_f), k_v and damping c fixed.
+#: the constants `servo_from_open_loop` may solve eq 6.16 for (the rest held)
+UNKNOWNS = {"leakage": ("k_t", "beta", "k_ct"), "feedback": ("k_t", "volume", "k_p")}
 
-    Without damping in closed form: k = k_o A/(1 - k_o k_v); β = ω_o² m V/(4A(k k_v + A));
-    k_c = 2ξ_o (k k_v + A)/(m ω_o) - k k_f; k_ct = A k_c. With damping the same equations
-    with A_e of `open_loop_from_servo`, solved by fixed-point iteration (c·k_ct/A ≪ A).
+
+def servo_from_open_loop(ol: OpenLoop, template: ServoConstants,
+                         solve_for: str = "leakage") -> ServoConstants:
+    """Invert eq 6.16 (with the damping of `open_loop_from_servo`): the constants that
+    give the loop `ol`, the others held at the template's.
+
+    Eq 6.16 fixes three combinations: k = k_o A_e, β/V = ω_o² m/(4A A_e) and
+    D = k_ct + k k_p = (2ξ_o A A_e/ω_o - cV/4β)/m, with A_e = A + k k_v + c D/A (solved
+    by fixed-point iteration when c > 0, c·D/A ≪ A; in closed form without damping).
+
+    Parameters
+    ----------
+    ol : OpenLoop
+        The loop (f_o, ξ_o, k_o) to realise.
+    template : ServoConstants
+        Supplies A, m, k_v, c and the constants held.
+    solve_for : {"leakage", "feedback"}
+        "leakage": k_t, β and k_ct (V and k_p held; a fitted loop back to constants);
+        "feedback": k_t, V and k_p (β and k_ct held; an actuator designed for a loop).
+
+    Raises
+    ------
+    VtableError
+        When no positive k_t exists (k_o k_v ≥ 1) or the damping asks for a negative
+        k_ct (resp. k_p).
     """
-    A, kv, kp, c, m, V = (template.area, template.k_v, template.k_p, template.damping or 0.0,
-                          template.mass, template.volume)
+    if solve_for not in UNKNOWNS:
+        raise VtableError(f"solve_for must be one of {', '.join(UNKNOWNS)}, got {solve_for!r}")
+    A, kv, c, m = template.area, template.k_v, template.damping or 0.0, template.mass
     if ol.k_o * kv >= 1:
         raise VtableError(f"k_o·k_v = {ol.k_o * kv:g} >= 1: no positive k_t gives k_o = "
                           f"{ol.k_o:g} with this velocity feedback")
     w = ol.omega_o
-    k_ct = 0.0
+    held_kp = solve_for == "leakage"
+    kp, k_ct = template.k_p, template.k_ct
+    beta, V = template.beta, template.volume
+    D = k_ct + (kp * ol.k_o * A if held_kp else 0.0)  # start: c = 0 guess of k_ct + k k_p
     for _ in range(50 if c else 1):
-        extra = c * k_ct / A
-        k = ol.k_o * (A + extra) / (1 - ol.k_o * (kv + c * kp / A))
-        A_e = A + k * kv + c * (k_ct + k * kp) / A
-        beta = w**2 * m * V / (4 * A * A_e)
-        new = (2 * ol.xi_o * A * A_e / w - c * V / (4 * beta)) / m - k * kp
-        if abs(new - k_ct) <= 1e-14 * max(abs(new), 1e-30):
-            k_ct = new
+        k = ol.k_o * (A + c * D / A) / (1 - ol.k_o * kv)
+        A_e = A + k * kv + c * D / A
+        beta_over_v = w**2 * m / (4 * A * A_e)
+        if held_kp:
+            beta = beta_over_v * V
+        else:
+            V = beta / beta_over_v
+        new = (2 * ol.xi_o * A * A_e / w - c / (4 * beta_over_v)) / m
+        done = abs(new - D) <= 1e-14 * max(abs(new), 1e-30)
+        D = new
+        if done:
             break
-        k_ct = new
-    if k_ct < 0:
-        raise VtableError(f"ξ_o = {ol.xi_o:g} is below what the pressure feedback and the "
-                          "damping alone give: the flow-pressure coefficient k_ct would be "
-                          "negative")
-    return dataclasses.replace(template, k_t=k, beta=beta, k_ct=k_ct)
+    if held_kp:
+        k_ct = D - k * kp
+        if k_ct < 0:
+            raise VtableError(f"ξ_o = {ol.xi_o:g} is below what the pressure feedback and "
+                              "the damping alone give: the flow-pressure coefficient k_ct "
+                              "would be negative")
+        return dataclasses.replace(template, k_t=k, beta=beta, k_ct=k_ct)
+    kp = (D - k_ct) / k
+    if kp < 0:
+        raise VtableError(f"ξ_o = {ol.xi_o:g} is below what the valve leakage k_ct and the "
+                          "damping alone give: the pressure feedback k_p would be negative")
+    return dataclasses.replace(template, k_t=k, volume=V, k_p=kp)
 
 
 def routh_conditions(c: ServoConstants) -> tuple[float, float, float]:
@@ -94,9 +148,9 @@ class ServoLoop(LinearModel):
 
     def __init__(self, open_loop: OpenLoop, title: str = "") -> None:
         self.open_loop = open_loop
-        w, xi, k = open_loop.omega_o, open_loop.xi_o, open_loop.k_o
-        A = np.array([[0, 1, 0], [0, 0, 1], [-w**2 * k, -w**2, -2 * xi * w]])
-        B = np.array([[0], [0], [w**2 * k]])
+        row, b = loop_row(open_loop)
+        A = np.vstack([[0, 1, 0], [0, 0, 1], row])
+        B = np.array([[0], [0], [b]])
         eye = np.eye(3)
         outputs = {"x_t": (eye[0], None), "v_t": (eye[1], None), "a_t": (eye[2], None),
                    "error": (-eye[0], [1.0])}

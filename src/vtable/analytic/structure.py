@@ -1,4 +1,5 @@
-"""Shear-building matrices (eq 4.5): mass, stiffness, modal damping, fixed-base modes."""
+"""Shear-building matrices (eq 4.5): mass, stiffness, modal damping, fixed-base modes;
+the fixed-base frequencies any specimen declares or implies."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import scipy.linalg
 import scipy.optimize
 
 from vtable.errors import VtableError
-from vtable.params.specimen import ShearBuilding
+from vtable.params.specimen import SDOFSpecimen, ShearBuilding, Specimen
 
 TWO_PI = 2 * np.pi
 
@@ -76,3 +77,17 @@ def building_matrices(b: ShearBuilding) -> tuple[np.ndarray, np.ndarray, np.ndar
     w, phi = fixed_base_modes(M, K)
     C = M @ phi @ np.diag(2 * b.damping * w) @ phi.T @ M
     return M, K, C
+
+
+def specimen_frequencies(spec: Specimen) -> list[float]:
+    """The fixed-base natural frequencies (Hz) a specimen declares or implies (a shear
+    building given by stiffnesses: its eq 4.5 modes); none for a bare table or a block."""
+    if isinstance(spec, SDOFSpecimen):
+        return [spec.frequency]
+    if isinstance(spec, ShearBuilding):
+        if spec.frequencies is not None:
+            return list(spec.frequencies)
+        M, K, _ = building_matrices(spec)
+        w, _ = fixed_base_modes(M, K)
+        return [float(x) for x in w / TWO_PI]
+    return []

@@ -31,6 +31,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from vtable.analytic.structure import specimen_frequencies
 from vtable.effects.physics import Physics, nominal_open_loop
 from vtable.errors import VtableError
 from vtable.params.bodies import slab_body
@@ -39,7 +40,6 @@ from vtable.params.specimen import (
     RigidBlock,
     SDOFSpecimen,
     ShearBuilding,
-    specimen_frequencies,
 )
 from vtable.params.virtual import VirtualTable
 from vtable.units import G

@@ -15,7 +15,7 @@ class FlowSaturation(Effect):
     signature = ("clipping when the command velocity exceeds the cap; large spans and "
                  "earthquakes only")
     params = (Param("v_max", "in/s",
-                    lambda: units.from_si(presets.eerc_table().specs.velocity_h, "in/s"),
+                    lambda: units.from_si(presets.eerc_table().rated_velocity(), "in/s"),
                     1.0, 60.0, log=True, source="Table 2.2: 25 in/s horizontal"),)
 
     def apply(self, m, p):

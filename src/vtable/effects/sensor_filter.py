@@ -16,8 +16,8 @@ class SensorFilter(Effect):
     section = "§2.3"
     signature = ("every measured channel lags the command by a delay ≈ 2.6/(2π f_c); phase "
                  "error growing linearly with frequency")
-    params = (Param("cutoff_hz", "Hz", lambda: presets._file("eerc")["acquisition"]
-                    ["anti_alias_hz"], 5.0, 400.0, log=True, source="§2.3"),)
+    params = (Param("cutoff_hz", "Hz", presets.anti_alias_hz, 5.0, 400.0, log=True,
+                    source="§2.3"),)
 
     def apply(self, m, p):
         fc = p["cutoff_hz"]

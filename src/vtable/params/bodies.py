@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vtable.analytic.structure import building_matrices, building_stiffnesses
 from vtable.errors import VtableError
 from vtable.params.specimen import NoSpecimen, RigidBlock, SDOFSpecimen, ShearBuilding, Specimen
 from vtable.params.virtual import VirtualTable
@@ -74,8 +75,6 @@ def specimen_bodies(spec: Specimen) -> list[Body]:
                      _box_inertia(spec.mass, MASS_BLOCK), joint="x_s",
                      stiffness=spec.stiffness)]
     if isinstance(spec, ShearBuilding):
-        from vtable.analytic.structure import building_stiffnesses
-
         k = building_stiffnesses(spec)
         out, parent, z_prev = [], "slab", 0.0
         for j, (mj, hj, kj) in enumerate(zip(spec.masses, spec.heights, k, strict=True), 1):
@@ -112,8 +111,6 @@ def specimen_damping(spec: Specimen) -> np.ndarray:
     if isinstance(spec, SDOFSpecimen):
         return np.array([[spec.damping_coefficient]])
     if isinstance(spec, ShearBuilding):
-        from vtable.analytic.structure import building_matrices
-
         _, _, C_u = building_matrices(spec)
         L = np.tril(np.ones_like(C_u))
         C_d = L.T @ C_u @ L

@@ -17,9 +17,12 @@ import dataclasses
 from dataclasses import dataclass
 from functools import cache
 
+from vtable.analytic.servo import open_loop_from_servo
 from vtable.errors import VtableError
 from vtable.params.loops import OpenLoop
 from vtable.params.table import ServoConstants
+from vtable.params.virtual import virtual_table
+from vtable.runs.table import table_from_dict
 
 
 @dataclass(frozen=True)
@@ -63,14 +66,10 @@ class LabTable:
     def open_loop(self) -> OpenLoop:
         """(f_o, ξ_o, k_o) of the bare table's horizontal loop (eq 6.16, with the platen's
         damping; the valve lag is not in eq 6.15)."""
-        from vtable.analytic.servo import open_loop_from_servo
-
         return open_loop_from_servo(self.servo)
 
 
 def _eerc(desc) -> LabTable:
-    from vtable.params.virtual import virtual_table
-
     vt = virtual_table()
     g, sp = vt.table.geometry, vt.table.specs
     n = len(vt.group("horizontal"))
@@ -105,8 +104,6 @@ def _only_preset(desc) -> bool:
 
 
 def _same_as_preset(desc) -> bool:
-    from vtable.runs.table import table_from_dict
-
     return desc == table_from_dict({"preset": desc.preset}, "preset")
 
 

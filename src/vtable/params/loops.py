@@ -10,10 +10,19 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from vtable.errors import VtableError
 from vtable.params.base import Params, plain, quantity
 from vtable.params.specimen import SDOFSpecimen
 
 TWO_PI = 2 * math.pi
+
+
+def spring_frequency(k: float, c: float, inertia: float) -> tuple[float, float]:
+    """Frequency (Hz) and damping ratio of a spring k and dashpot c on a mass or inertia:
+    ω² = k/J, ξ = c/(2ωJ) (eqs 8.35-8.36 for the rocking spring, A.8 for the horizontal,
+    8.10 for the stabilizers)."""
+    w = math.sqrt(k / inertia)
+    return w / TWO_PI, c / (2 * w * inertia)
 
 
 @dataclass(frozen=True)
@@ -108,10 +117,10 @@ class HybridParams(Params):
     def from_physical(cls, specimen: SDOFSpecimen, table_mass: float, table_inertia: float,
                       open_loop: OpenLoop, rocking: RockingSpring, **kw) -> HybridParams:
         """Table 8.1 style physical values -> Table 9.1 style ratios (eqs 8.10, 8.35, 8.36)."""
-        w = math.sqrt(rocking.k_theta / table_inertia)
+        f, xi = spring_frequency(rocking.k_theta, rocking.c_theta, table_inertia)
         return cls(open_loop=open_loop,
                    structure=StructureRatios.from_physical(specimen, table_mass, table_inertia),
-                   f_theta=w / TWO_PI, xi_theta=rocking.c_theta / (2 * w * table_inertia), **kw)
+                   f_theta=f, xi_theta=xi, **kw)
 
 
 @dataclass(frozen=True)
@@ -135,12 +144,10 @@ class MechanicalParams(Params):
                       horizontal: HorizontalSpring, rocking: RockingSpring,
                       **kw) -> MechanicalParams:
         """Table 5.1 style physical values -> Table 9.3 style ratios (eq A.8)."""
-        wh = math.sqrt(horizontal.k_h / table_mass)
-        wr = math.sqrt(rocking.k_theta / table_inertia)
+        f_h, xi_h = spring_frequency(horizontal.k_h, horizontal.c_h, table_mass)
+        f_r, xi_r = spring_frequency(rocking.k_theta, rocking.c_theta, table_inertia)
         return cls(structure=StructureRatios.from_physical(specimen, table_mass, table_inertia),
-                   f_h=wh / TWO_PI, xi_h=horizontal.c_h / (2 * wh * table_mass),
-                   f_theta=wr / TWO_PI, xi_theta=rocking.c_theta / (2 * wr * table_inertia),
-                   **kw)
+                   f_h=f_h, xi_h=xi_h, f_theta=f_r, xi_theta=xi_r, **kw)
 
 
 @dataclass(frozen=True)
@@ -164,8 +171,6 @@ class TwoDirectionalParams(Params):
 
 
 def _nested(cls, d, where, **sub):
-    from vtable.errors import VtableError
-
     where = where or cls.__name__
     if not isinstance(d, dict):
         raise VtableError(f"{where}: expected a table")

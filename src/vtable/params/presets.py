@@ -7,10 +7,13 @@ Names are ``family`` or ``family:row`` with the report's table number, e.g.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from functools import cache
 from importlib import resources
 from typing import Any
 
+from vtable import units
+from vtable.analytic.closed_forms import pitch_loop_from_springs, stabilizer_rocking
 from vtable.errors import VtableError
 from vtable.params.base import read_toml
 from vtable.params.loops import (
@@ -22,13 +25,16 @@ from vtable.params.loops import (
     StructureRatios,
     TableSDOFParams,
     TwoDirectionalParams,
+    spring_frequency,
 )
 from vtable.params.specimen import SDOFSpecimen, Specimen, specimen_from_dict
 from vtable.params.table import EERCTable
 
 
 @cache
-def _file(name: str) -> dict[str, Any]:
+def data(name: str) -> dict[str, Any]:
+    """The sections of data/NAME.toml as read (report units, read once): eerc, models,
+    specimens, uniaxial_multibody, lnec_st1d. Callers must not modify the result."""
     path = resources.files("vtable.params.data") / f"{name}.toml"
     with resources.as_file(path) as p:
         return read_toml(p)
@@ -37,12 +43,43 @@ def _file(name: str) -> dict[str, Any]:
 @cache
 def eerc_table() -> EERCTable:
     """The EERC table (data/eerc.toml)."""
-    return EERCTable.from_dict(_file("eerc"), "eerc.toml")
+    return EERCTable.from_dict(data("eerc"), "eerc.toml")
+
+
+def anti_alias_hz() -> float:
+    """The measurement chain's anti-aliasing cut-off (Hz), §2.3 (data/eerc.toml)."""
+    return float(data("eerc")["acquisition"]["anti_alias_hz"])
+
+
+@dataclass(frozen=True)
+class PitchSprings:
+    """§8.6.2: the vertical actuators' pitch loop as a spring k_v (N m/rad) and dashpot
+    c_v (N m s/rad) at the §8.6.3 coupled table-structure frequency f_coupled (Hz)."""
+
+    k_v: float
+    c_v: float
+    f_coupled: float
+
+
+def pitch_springs() -> PitchSprings:
+    """The §8.6.2 springs of the pitch loop, in SI (models.toml [section8_6_2])."""
+    d = data("models")["section8_6_2"]
+    return PitchSprings(units.to_si(d["k_v_lb_in_per_rad"], "lb-in/rad"),
+                        units.to_si(d["c_v_lb_in_s_per_rad"], "lb-in-s/rad"),
+                        float(d["f_coupled_hz"]))
+
+
+def pitch_loop(f_r: float, inertia: float) -> OpenLoop:
+    """The §8.6.2 pitch loop of open-loop frequency `f_r` (Hz) on a slab of pitch inertia
+    `inertia` whose spring and dashpot at the coupled frequency are `pitch_springs()`
+    (eqs 8.28-8.29 inverted)."""
+    sp = pitch_springs()
+    return pitch_loop_from_springs(sp.k_v, sp.c_v, sp.f_coupled, f_r, inertia)
 
 
 def specimen(name: str) -> Specimen:
     """A specimen from data/specimens.toml: none, concrete_blocks, sdof_frame, ..."""
-    d = _file("specimens")
+    d = data("specimens")
     if name not in d:
         raise VtableError(f"unknown specimen preset {name!r}; expected one of {', '.join(d)}")
     return specimen_from_dict(d[name], f"specimens.toml [{name}]")
@@ -50,7 +87,7 @@ def specimen(name: str) -> Specimen:
 
 def _row(family: str, name: str) -> dict[str, Any]:
     key = family.replace(".", "_")
-    rows = _file("models").get(key)
+    rows = data("models").get(key)
     if rows is None:
         raise VtableError(f"unknown preset family {family!r}")
     if name not in rows:
@@ -61,7 +98,7 @@ def _row(family: str, name: str) -> dict[str, Any]:
 
 def rows(family: str) -> list[str]:
     """Row names of a tabulated family (table6.1, table7.1, table7.2)."""
-    return list(_file("models")[family.replace(".", "_")])
+    return list(data("models")[family.replace(".", "_")])
 
 
 def _split(name: str, family: str) -> str:
@@ -89,7 +126,7 @@ def table_sdof(name: str) -> TableSDOFParams:
 def model_part(key: str, name: str, cls: type) -> Any:
     """One part of a physical parameter set, e.g. ``model_part("table8_1", "rocking",
     RockingSpring)`` reads models.toml [table8_1.rocking]."""
-    return cls.from_dict(_file("models")[key][name], f"models.toml [{key}.{name}]")
+    return cls.from_dict(data("models")[key][name], f"models.toml [{key}.{name}]")
 
 
 def _physical(key: str) -> tuple[SDOFSpecimen, float, float, Callable[[str, type], Any]]:
@@ -104,7 +141,7 @@ def _physical(key: str) -> tuple[SDOFSpecimen, float, float, Callable[[str, type
 def hybrid(name: str = "table9.1") -> HybridParams:
     """Table 9.1 (ratios as printed) or Table 8.1 (physical values, converted)."""
     if name == "table9.1":
-        return HybridParams.from_dict(_file("models")["table9_1"], "models.toml [table9_1]")
+        return HybridParams.from_dict(data("models")["table9_1"], "models.toml [table9_1]")
     if name == "table8.1":
         spec, m_t, inertia, part = _physical("table8_1")
         return HybridParams.from_physical(spec, m_t, inertia, part("open_loop", OpenLoop),
@@ -116,7 +153,7 @@ def hybrid(name: str = "table9.1") -> HybridParams:
 def mechanical(name: str = "table9.3") -> MechanicalParams:
     """Table 9.3 (ratios as printed) or Table 5.1 (physical values, converted)."""
     if name == "table9.3":
-        return MechanicalParams.from_dict(_file("models")["table9_3"], "models.toml [table9_3]")
+        return MechanicalParams.from_dict(data("models")["table9_3"], "models.toml [table9_3]")
     if name == "table5.1":
         spec, m_t, inertia, part = _physical("table5_1")
         return MechanicalParams.from_physical(spec, m_t, inertia,
@@ -132,25 +169,19 @@ def two_directional(f_r: float = 21.0) -> TwoDirectionalParams:
 
     The pitch loop (open-loop frequency `f_r` Hz, 13 or 21 in the report) is chosen so
     its spring and dashpot at 2.58 Hz are the vertical actuators' k_v, c_v (eqs 8.28-8.29
-    inverted); the passive stabilizers carry k_p = k_θ - k_v and c_p = c_θ - c_v.
+    inverted); the passive stabilizers carry k_p = k_θ - k_v and c_p = c_θ - c_v
+    (eqs 8.32-8.33, `stabilizer_rocking`).
     """
-    import math
-
-    from vtable import units
-    from vtable.analytic.closed_forms import pitch_loop_from_springs
-
-    d = _file("models")["section8_6_2"]
-    k_v = units.to_si(d["k_v_lb_in_per_rad"], "lb-in/rad")
-    c_v = units.to_si(d["c_v_lb_in_s_per_rad"], "lb-in-s/rad")
     spec, m_t, inertia, part = _physical("table8_1")
     rock = part("rocking", RockingSpring)
-    pitch = pitch_loop_from_springs(k_v, c_v, d["f_coupled_hz"], f_r, inertia)
-    k_p, c_p = rock.k_theta - k_v, rock.c_theta - c_v
-    w_p = math.sqrt(k_p / inertia)
+    pitch = pitch_loop(f_r, inertia)
+    k_p, c_p = stabilizer_rocking(rock.k_theta, rock.c_theta, inertia, pitch,
+                                  pitch_springs().f_coupled)
+    f_p, xi_p = spring_frequency(k_p, c_p, inertia)
     return TwoDirectionalParams(
         open_loop=part("open_loop", OpenLoop), pitch_loop=pitch,
         structure=StructureRatios.from_physical(spec, m_t, inertia),
-        f_p=w_p / (2 * math.pi), xi_p=c_p / (2 * w_p * inertia), height=spec.height,
+        f_p=f_p, xi_p=xi_p, height=spec.height,
         title=f"two-directional table, pitch loop f_r = {f_r:g} Hz (§8.6.2)",
         source="§8.6.2, Table 8.1")
 

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from vtable.errors import VtableError
-from vtable.params.base import Params, plain, quantity
+from vtable.params.base import Params, check_number, plain, quantity
 from vtable.units import G
 
 KINDS = ("none", "rigid", "sdof", "shear_building")
@@ -182,26 +182,8 @@ def specimen_from_dict(d: dict[str, Any], where: str = "specimen") -> Specimen:
     return _BY_KIND[kind].from_dict(d, where)
 
 
-def specimen_frequencies(spec: Specimen) -> list[float]:
-    """The fixed-base natural frequencies (Hz) a specimen declares or implies (a shear
-    building given by stiffnesses: its eq 4.5 modes); none for a bare table or a block."""
-    if isinstance(spec, SDOFSpecimen):
-        return [spec.frequency]
-    if isinstance(spec, ShearBuilding):
-        if spec.frequencies is not None:
-            return list(spec.frequencies)
-        from vtable.analytic.structure import building_matrices, fixed_base_modes
-
-        M, K, _ = building_matrices(spec)
-        w, _ = fixed_base_modes(M, K)
-        return [float(x) for x in w / (2 * np.pi)]
-    return []
-
-
 def _sdof_from_stiffness(d: dict[str, Any], where: str) -> SDOFSpecimen:
     """Table 5.1 style: weight, height, k_s (kip/in) and c_s (lb-s/in)."""
-    from vtable.params.base import check_number
-
     if "damping_lb_s_per_in" not in d:
         raise VtableError(f"{where}: stiffness_kip_per_in needs damping_lb_s_per_in")
     k_s = check_number(d.pop("stiffness_kip_per_in"), f"{where}.stiffness_kip_per_in", "kip/in")

@@ -202,6 +202,29 @@ class EERCTable:
         raise VtableError(f"no actuator {name!r}; the table has "
                           f"{', '.join(a.name for a in self.actuators)}")
 
+    def rated_velocity(self, kind: str = "horizontal") -> float:
+        """The servovalves' rating as the actuators' top speed (m/s): Table 2.2's 25 in/s
+        horizontal, 15 in/s vertical. The one source of the rating: the appendix C valve's
+        rated flow (`rated_flow`) and the flow_saturation effect's cap both read it.
+
+        Table 2.1's catalogue flow of the valves (`ActuatorSpec.flow`, 170 gpm, i.e.
+        25.8 in/s over the 25.4 in² piston) is the valve's nameplate, not the table's
+        rating; it is kept as data (and for the per-actuator exceedance check).
+        """
+        if kind not in ("horizontal", "vertical"):
+            raise VtableError(f"no rated velocity for {kind!r} actuators (horizontal or "
+                              "vertical)")
+        return self.specs.velocity_h if kind == "horizontal" else self.specs.velocity_v
+
+    def rated_flow(self, name: str) -> float:
+        """Rated flow (m³/s) of actuator `name`'s servovalve, fully open: the rated
+        velocity of its group times its piston area, q = A v_max (eq C.14's spool stroke
+        limit)."""
+        kind = {"H": "horizontal", "V": "vertical"}.get(name[:1])
+        if kind is None:
+            raise VtableError(f"actuator {name} has no servovalve (H* and V* have)")
+        return self.rated_velocity(kind) * self.actuator(name).area
+
     def horizontal_servo(self, settings: DirectionSettings | None = None) -> ServoConstants:
         """Table B.5 constants re-scaled to other horizontal knob settings.
 

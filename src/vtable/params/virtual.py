@@ -20,7 +20,10 @@ from typing import Any
 import numpy as np
 
 from vtable import units
+from vtable.analytic.closed_forms import stabilizer_rocking
+from vtable.analytic.servo import servo_from_open_loop
 from vtable.errors import VtableError
+from vtable.params import presets
 from vtable.params.base import Params, plain, quantity
 from vtable.params.loops import OpenLoop
 from vtable.params.table import (
@@ -201,85 +204,64 @@ def _actuators(table: EERCTable, lay: MultibodyLayout) -> tuple[Actuator, ...]:
 
 def vertical_servo_for_pitch_loop(ol: OpenLoop, inertia: float, lever: float, n: int,
                                   area: float, beta: float, k_ct: float) -> ServoConstants:
-    """Per-actuator constants whose pitch DOF loop is `ol` (eq 6.16 solved for k_t, V, k_p
-    with k_v = 0): m = I/(n·lever²), k = k_o A, V = 4βA²/(m ω_o²),
-    k_f = (2ξ_o A/(m ω_o) - k_c)/k."""
+    """Per-actuator constants whose pitch DOF loop is `ol`: eq 6.16 solved for k_t, V and
+    k_p (`servo_from_open_loop`, solve_for="feedback") with k_v = 0 and the equivalent
+    mass m = I/(n·lever²): k = k_o A, V = 4βA²/(m ω_o²), k_f = (2ξ_o A/(m ω_o) - k_c)/k."""
     m = inertia / (n * lever**2)
-    k = ol.k_o * area
-    V = 4 * beta * area**2 / (m * ol.omega_o**2)
-    k_f = (2 * ol.xi_o * area / (m * ol.omega_o) - k_ct / area) / k
-    if k_f < 0:
-        raise VtableError("vertical-valve leakage alone gives more pitch damping than the "
-                          "§8.6.2 loop; lower vertical_k_ct")
-    return ServoConstants(k_p=k_f * area, k_t=k, k_ct=k_ct, rc=0.01, mass=m, beta=beta,
-                          area=area, volume=V, k_v=0.0,
+    held = ServoConstants(k_p=0.0, k_t=1.0, k_ct=k_ct, rc=0.01, mass=m, beta=beta, area=area,
+                          volume=1.0, k_v=0.0,  # k_t, V, k_p: solved below
                           source="derived: pitch DOF loop = §8.6.2 loop (params/virtual.py)")
+    return servo_from_open_loop(ol, held, solve_for="feedback")
 
 
 def split_rocking(k_theta: float, c_theta: float, vt: VirtualTable) -> tuple[float, float]:
     """Per-piston stabilizer stiffness and damping so that, with the pitch loop of the
     vertical actuators, the table's rocking spring and dashpot at the §8.6.3 coupled
-    frequency (2.58 Hz) are k_θ and c_θ (eqs 8.32-8.33, 8.4)."""
-    from vtable.analytic.closed_forms import feedback_spring
-    from vtable.params import presets
-
-    f_c = presets._file("models")["section8_6_2"]["f_coupled_hz"]
+    frequency (2.58 Hz) are k_θ and c_θ: the stabilizers' share (eqs 8.32-8.33,
+    `stabilizer_rocking`) over d_p² (eq 8.4)."""
     g = vt.table.geometry
-    k_v, c_v = feedback_spring(g.pitch_inertia, vt.pitch_loop, f_c)
+    k_p, c_p = stabilizer_rocking(k_theta, c_theta, g.pitch_inertia, vt.pitch_loop,
+                                  presets.pitch_springs().f_coupled)
     d_p = g.stabilizer_square
-    k, c = (k_theta - float(k_v)) / d_p**2, (c_theta - float(c_v)) / d_p**2
-    if k <= 0 or c < 0:
-        raise VtableError(f"rocking spring {k_theta:.3g} N m/rad is weaker than the vertical "
-                          f"actuators' pitch loop alone ({float(k_v):.3g})")
-    return k, c
+    return k_p / d_p**2, c_p / d_p**2
+
+
+def _stabilizers(vt: VirtualTable, k_theta: float, c_theta: float) -> Stabilizers:
+    """The stabilizers of `vt` retuned to a rocking spring/dashpot (k_θ, c_θ); the oil
+    volume per side from F/Δx = 2β A²/V (eq 8.3)."""
+    k, c = split_rocking(k_theta, c_theta, vt)
+    a_p = vt.table.actuator("P1").area
+    s = vt.stabilizers
+    return replace(s, stiffness=k, damping=c, volume=2 * s.beta * a_p**2 / k)
 
 
 def with_rocking(vt: VirtualTable, k_theta: float, c_theta: float) -> VirtualTable:
     """The table with its stabilizers retuned to a rocking spring/dashpot (k_θ, c_θ)."""
-    k, c = split_rocking(k_theta, c_theta, vt)
-    a_p = vt.table.actuator("P1").area
-    s = vt.stabilizers
-    return replace(vt, stabilizers=replace(s, stiffness=k, damping=c,
-                                           volume=2 * s.beta * a_p**2 / k))
+    return replace(vt, stabilizers=_stabilizers(vt, k_theta, c_theta))
 
 
 def virtual_table(table: EERCTable | None = None,
                   layout: MultibodyLayout | None = None) -> VirtualTable:
-    """The EERC virtual table from the presets."""
-    from vtable.analytic.closed_forms import feedback_spring, pitch_loop_from_springs
-    from vtable.params import presets
-
+    """The EERC virtual table from the presets: the stabilizers carry Table 8.1's rocking
+    spring less the pitch loop's (`with_rocking`)."""
     table = table or presets.eerc_table()
     if layout is None:
-        layout = MultibodyLayout.from_dict(presets._file("eerc")["multibody"],
+        layout = MultibodyLayout.from_dict(presets.data("eerc")["multibody"],
                                            "eerc.toml [multibody]")
-    acts = _actuators(table, layout)
     g = table.geometry
-    d = presets._file("models")["section8_6_2"]
-    k_v = units.to_si(d["k_v_lb_in_per_rad"], "lb-in/rad")
-    c_v = units.to_si(d["c_v_lb_in_s_per_rad"], "lb-in-s/rad")
-    f_c = d["f_coupled_hz"]
-    rock = presets.hybrid_rocking()
-    pitch = pitch_loop_from_springs(k_v, c_v, f_c, layout.pitch_loop_f, g.pitch_inertia)
-    k_vc, c_vc = feedback_spring(g.pitch_inertia, pitch, f_c)
-    # stabilizers: k_p = k_θ - k_v(ω_c) = (F/Δx) d_p² (eq 8.4), F/Δx = 2β A²/V (eq 8.3)
-    d_p = g.stabilizer_square
-    k_piston = (rock.k_theta - float(k_vc)) / d_p**2
-    c_piston = (rock.c_theta - float(c_vc)) / d_p**2
-    a_p = table.actuator("P1").area
-    if k_piston <= 0 or c_piston < 0:
-        raise VtableError("Table 8.1 rocking spring is weaker than the pitch loop's alone")
-    stab = Stabilizers(pairs=(("P1", "P2"), ("P4", "P3")), stiffness=k_piston,
-                       damping=c_piston, volume=2 * layout.stabilizer_beta * a_p**2 / k_piston,
-                       beta=layout.stabilizer_beta)
+    pitch = presets.pitch_loop(layout.pitch_loop_f, g.pitch_inertia)
     v1 = table.actuator("V1")
     vert = vertical_servo_for_pitch_loop(pitch, g.pitch_inertia, g.vertical_square / 2, 4,
                                          v1.area, table.servo.beta, layout.vertical_k_ct)
     settings = {k: getattr(table.standard, k) for k in
                 ("horizontal", "pitch", "vertical", "roll", "twist")}
-    return VirtualTable(table=table, layout=layout, actuators=acts,
-                        horizontal_servo=table.servo, vertical_servo=vert, pitch_loop=pitch,
-                        stabilizers=stab, settings=settings)
+    unset = Stabilizers(pairs=(("P1", "P2"), ("P4", "P3")), stiffness=0.0, damping=0.0,
+                        volume=0.0, beta=layout.stabilizer_beta)
+    vt = VirtualTable(table=table, layout=layout, actuators=_actuators(table, layout),
+                      horizontal_servo=table.servo, vertical_servo=vert, pitch_loop=pitch,
+                      stabilizers=unset, settings=settings)
+    rock = presets.hybrid_rocking()
+    return with_rocking(vt, rock.k_theta, rock.c_theta)
 
 
 def virtual_table_for(lab) -> VirtualTable:
@@ -312,9 +294,7 @@ def uniaxial_table(lab) -> VirtualTable:
     by side), their loop from the lab's description, physical gains (no knobs). The shape
     the description does not give — a steel plate of the platen's mass, the actuators' pin
     lengths — comes from params/data/uniaxial_multibody.toml (each number marked assumed)."""
-    from vtable.params import presets
-
-    d = presets._file("uniaxial_multibody")
+    d = presets.data("uniaxial_multibody")
     lay = MultibodyLayout.from_dict(d["layout"], "uniaxial_multibody.toml [layout]")
     rho, aspect = d["plate"]["density_kg_m3"], d["plate"]["width_over_thickness"]
     m = lab.platen_mass

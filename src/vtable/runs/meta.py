@@ -14,8 +14,9 @@ from pathlib import Path
 from typing import Any
 
 from vtable import units
+from vtable.analytic.structure import specimen_frequencies
 from vtable.errors import VtableError
-from vtable.params.specimen import Specimen, specimen_frequencies, specimen_from_dict
+from vtable.params.specimen import Specimen, specimen_from_dict
 from vtable.runs.channels import channel_dimension
 from vtable.runs.format import FORMAT, CommandDescription, check_control, command_from_dict
 from vtable.runs.table import TableDescription, table_from_dict

@@ -220,7 +220,7 @@ def _eerc() -> dict[str, Any]:
 def _data(name: str) -> Callable[[], dict[str, Any]]:
     """A preset written as a [table] description in params/data/NAME.toml."""
     def load() -> dict[str, Any]:
-        return {k: v for k, v in presets._file(name).items() if k != "source"}
+        return {k: v for k, v in presets.data(name).items() if k != "source"}
     return load
 
 
