@@ -2,7 +2,8 @@
 calibration, ranking tables with evidence and fit flags, the error waterfall and
 transfer-function overlays (matplotlib, embedded PNGs). Every axis names its unit; transfer
 functions are shown in the run format's units per inch of command. It renders the stages
-the diagnosis kept (models, predictions, comparisons) and simulates nothing."""
+the diagnosis kept (models, predictions, comparisons) and simulates nothing; `d` is a
+`vtable.diagnose.result.Diagnosis`, which draws itself through this module (`plot`)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import base64
 import html
 import io
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
@@ -18,9 +19,6 @@ from vtable import units
 from vtable.diagnose.groups import GROUP_UNITS, group_prediction, group_signal, short
 from vtable.fileio import write_text
 from vtable.ident.tf import transfer_function
-
-if TYPE_CHECKING:  # the diagnosis draws itself through this module (`Diagnosis.plot`)
-    from vtable.diagnose.result import Diagnosis
 
 PRETTY = {"rad/s2": "rad/s²"}
 
@@ -34,7 +32,7 @@ def _png(fig) -> str:
     return base64.b64encode(buf.getvalue()).decode()
 
 
-def waterfall(d: Diagnosis):
+def waterfall(d: Any):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -60,7 +58,7 @@ def waterfall(d: Diagnosis):
     return fig
 
 
-def tf_overlay(d: Diagnosis, group: str):
+def tf_overlay(d: Any, group: str):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -98,7 +96,7 @@ def _plus(effects) -> str:
     return (" + " + ", ".join(effects)) if effects else ""
 
 
-def write_report(d: Diagnosis, path: str | Path) -> Path:
+def write_report(d: Any, path: str | Path) -> Path:
     """Write the HTML report of `d` to `path`."""
     e = html.escape
     start = "—" if d.start_error is None else f"{d.start_error:.2%}"
