@@ -295,3 +295,58 @@ def test_rayleigh_damping_from_two_pairs():
     with pytest.raises(truth.TruthError):
         truth.building([1.0, 1.0], [10.0, 20.0], storey_k_kip_in=[1.0, 1.0],
                        rayleigh=((2.0, 0.02), (2.0, 0.05)))
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 18's scorecard cases (tests/scorecard.py CASES_18): data that simulates
+
+
+def test_issue_18_cases_cover_what_it_asks():
+    import scorecard as sc
+
+    cases = sc.CASES_18
+    assert len(cases) >= 20 and len(sc.BY_NAME_18) == len(cases)
+    kinds = {k: [c for c in cases if c.kind == k] for k in sc.KINDS_18}
+    assert {c.table.controller for c in cases} == {"three_variable", "pid", "tvc"}
+    assert any(c.table.law and c.table.law.feedforward_velocity > 0
+               and c.table.controller == "pid" for c in cases)
+    assert {c.table.preset for c in cases} == {"eerc", "lnec-st1d"}
+    assert sum(c.specimen.is_rayleigh for c in cases if c.specimen.n >= 2) >= 3
+    assert sum("platen_resonator" in c.table.effects for c in cases) >= 3
+    assert all(c.expected == ("platen_resonator",) for c in cases
+               if "platen_resonator" in c.table.effects)
+    assert all(c.expected == sc.SUSPECT and c.suspect for c in kinds["beyond_bounds"])
+    assert {s for c in kinds["beyond_bounds"] for s in c.suspect} >= {
+        "specimen.frequency_hz", "table.platen_mass"}
+    assert all(c.expected == sc.UNEXPLAINED for c in kinds["outside"])
+    assert all(c.expected == () for c in kinds["null"])
+    for c in cases:
+        if c.kind == "beyond_bounds" and c.suspect[0].startswith("specimen."):
+            df = np.array(c.declared.frequencies_hz()) / np.array(c.specimen.frequencies_hz())
+            assert np.allclose(np.abs(df - 1), 0.08, rtol=1e-9), c.name  # 8 % off
+        elif c.kind != "beyond_bounds" and c.specimen.n:
+            df = np.array(c.declared.frequencies_hz()) / np.array(c.specimen.frequencies_hz())
+            assert np.all(np.abs(df - 1) <= 0.05), c.name  # within the ±5 % bound
+    mass = {c.name: c.table.platen_mass for c in kinds["beyond_bounds"]}
+    assert mass["eerc_platen_mass_20pct"] == pytest.approx(1.2 * 100e3 * const.LBF / const.G)
+    assert mass["lnec_platen_mass_minus_20pct"] == pytest.approx(0.8 * 1975.1)
+    # every configuration is a stable loop (backlash's dead zone linearises to nothing)
+    for c in cases:
+        lam = np.linalg.eigvals(jacobian(build(c.table, c.specimen, 5e-4))[0])
+        assert lam.real.max() < (1e-9 if "backlash" in c.table.effects else -0.2), c.name
+    # a declared digital controller is in the run's [table]
+    c = sc.BY_NAME_18["eerc_tvc_friction"]
+    assert c.declared_table["controller"]["kind"] == "tvc"
+    assert c.declared_table["force_measured"] == "load_cell"
+
+
+def test_every_issue_18_case_simulates_for_2_s(tmp_path):
+    import scorecard as sc
+
+    for c in sc.CASES_18:
+        paths = c.write_campaign(tmp_path / c.name, duration_s=2.0)
+        assert len(paths) == 3, c.name
+        meta = tomllib.loads(paths[0].read_text())
+        assert meta["table"] == c.declared_table and meta["specimen"] == c.declared.declared()
+        data = np.loadtxt(paths[1].with_suffix(".csv"), delimiter=",", skiprows=1)
+        assert data.shape[0] == int(2.0 * c.fs) + 1 and np.all(np.isfinite(data)), c.name
