@@ -13,17 +13,24 @@ directly, the LNEC uniaxial table, its own commands, and its own writer of the r
     res = truth.simulate(table, spec, cmd, fs=256.0)
     decl = truth.perturb(spec, seed=5)
     truth.write_run("out/run0", res, declared=decl, noise=0.02, seed=11)
+
+Issue 18 adds: digital controllers (`truth.controllers`: three_variable, pid, tvc, notches,
+ΔP stabilisation) on both tables, the undeclared `platen_resonator`, `force_measured`
+("load_cell" | "delta_p"), per-mode and Rayleigh specimen damping, exact mis-declarations
+(`misdeclare`, `platen_mass_factor`) and the linearised response x_c -> x_t (`response`).
 """
 
+from . import controllers
 from .commands import Command, earthquake_command, random_command, sine_command
 from .errors import TruthError
-from .linearize import jacobian, modes
+from .linearize import jacobian, modes, response
 from .runfile import campaign, write_run
 from .simulate import Result, simulate
-from .specimens import Specimen, building, none, perturb, rigid, sdof
-from .tables import EFFECTS, OUTSIDE_CATALOG, Table, eerc_table, lnec_table
+from .specimens import Specimen, building, misdeclare, none, perturb, rigid, sdof
+from .tables import EFFECTS, NEW_EFFECTS, OUTSIDE_CATALOG, Table, eerc_table, lnec_table
 
-__all__ = ["EFFECTS", "OUTSIDE_CATALOG", "Command", "Result", "Specimen", "Table",
-           "TruthError", "building", "campaign", "earthquake_command", "eerc_table",
-           "jacobian", "lnec_table", "modes", "none", "perturb", "random_command", "rigid",
-           "sdof", "simulate", "sine_command", "write_run"]
+__all__ = ["EFFECTS", "NEW_EFFECTS", "OUTSIDE_CATALOG", "Command", "Result", "Specimen",
+           "Table", "TruthError", "building", "campaign", "controllers", "earthquake_command",
+           "eerc_table", "jacobian", "lnec_table", "misdeclare", "modes", "none", "perturb",
+           "random_command", "response", "rigid", "sdof", "simulate", "sine_command",
+           "write_run"]

@@ -54,8 +54,18 @@ class Built:
             act += [m.S_XP, m.S_VP]
         if fl[m.F_FOUND]:
             act += [m.S_XF, m.S_VF]
-        if fl[m.F_PID] and self.p[m.P_PIDI] != 0:
+        if fl[m.F_CTRL] and self.p[m.P_PIDI] != 0:
             act.append(m.S_INT)
+        if fl[m.F_RES]:
+            act += [m.S_XR, m.S_VR]
+        if fl[m.F_DFILT]:
+            act.append(m.S_DF)
+        if fl[m.F_REFG]:
+            act += [m.S_XG, m.S_VG]
+        if fl[m.F_NOTCH1]:
+            act += [m.S_N1A, m.S_N1B]
+        if fl[m.F_NOTCH2]:
+            act += [m.S_N2A, m.S_N2B]
         if fl[m.F_YIELD]:
             act.append(m.S_Z)
         act += list(range(m.N_BASE, self.n_state))
@@ -112,11 +122,27 @@ def build(table: Table, spec: Specimen, dt: float) -> Built:
         p[m.P_IR] = table.pitch_inertia
         p[m.P_WR], p[m.P_XIR], p[m.P_KR] = pitch_act["w_r"], pitch_act["xi_r"], pitch_act["k_r"]
         p[m.P_KPAS], p[m.P_CPAS] = pitch_act["k_p"], pitch_act["c_p"]
-    if table.controller == "pid":
-        fl[m.F_PID] = 1
-        p[m.P_KQ], p[m.P_KD] = table.valve_gain, table.disp_gain
-        p[m.P_PIDP], p[m.P_PIDI], p[m.P_PIDD] = table.pid
-        p[m.P_FF] = table.feedforward
+    law = table.law
+    if law is not None:
+        fl[m.F_CTRL] = 1
+        p[m.P_KQ], p[m.P_KD] = table.valve_gain, law.displacement_gain
+        p[m.P_PIDP], p[m.P_PIDI], p[m.P_PIDD] = law.p, law.i, law.d
+        p[m.P_TV], p[m.P_TA] = law.feedforward_velocity, law.feedforward_acceleration
+        p[m.P_KVF], p[m.P_KAF] = law.velocity_gain, law.acceleration_gain
+        p[m.P_KDP] = law.pressure_gain
+        if law.derivative_filter > 0:
+            fl[m.F_DFILT] = 1
+            p[m.P_TDF] = law.derivative_filter
+        if law.reference is not None:
+            fl[m.F_REFG] = 1
+            p[m.P_WG], p[m.P_ZG] = 2 * math.pi * law.reference[0], law.reference[1]
+        for k, nt in enumerate(law.notches):
+            zz, zp = nt.zetas
+            fl[m.F_NOTCH1 + k] = 1 if nt.on == "error" else 2
+            base = (m.P_N1W, m.P_N2W)[k]
+            p[base], p[base + 1], p[base + 2] = 2 * math.pi * nt.frequency_hz, zz, zp
+    if table.force_measured == "load_cell":
+        fl[m.F_LOADCELL] = 1
     # --- effects ------------------------------------------------------------------------
     if "force_feedback_filter" in eff:
         fl[m.F_FFILT] = 1
@@ -154,6 +180,12 @@ def build(table: Table, spec: Specimen, dt: float) -> Built:
         wf = 2 * math.pi * eff["foundation_compliance"]["f_f"]
         p[m.P_MF], p[m.P_KF] = mf, mf * wf**2
         p[m.P_CF] = 2 * eff["foundation_compliance"]["xi_f"] * mf * wf
+    if "platen_resonator" in eff:
+        r = eff["platen_resonator"]
+        fl[m.F_RES] = 1
+        wr = 2 * math.pi * r["f_r"]
+        p[m.P_MRES], p[m.P_KRES] = r["m_r"], r["m_r"] * wr**2
+        p[m.P_CRES] = 2 * r["xi_r"] * r["m_r"] * wr
     if "backlash" in eff:
         fl[m.F_BACK] = 1
         mp = PISTON_MASS_FRACTION * table.platen_mass

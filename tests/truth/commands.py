@@ -36,6 +36,12 @@ class Command:
         v = np.gradient(self.x, self.t)
         return np.interp(tq, self.t, self.x), np.interp(tq, self.t, v)
 
+    def acceleration(self, tq: np.ndarray) -> np.ndarray:
+        """Command acceleration at times tq (second difference, linear interpolation): what
+        an acceleration feedforward without a reference generator uses."""
+        a = np.gradient(np.gradient(self.x, self.t), self.t)
+        return np.interp(tq, self.t, a)
+
 
 def _grid(duration_s: float, fs: float) -> np.ndarray:
     if not duration_s > 0:

@@ -40,6 +40,9 @@ EERC_STROKE = 5.0 * INCH  # Table 2.2: ±5 in horizontal
 EERC_TABLE_TOP = 29.7 * INCH  # table top above the horizontal actuator line (run format, §4.2.1)
 EERC_VERTICAL_ARM = 72.0 * INCH  # vertical actuators on a 12 ft square (§2.2)
 EERC_STABILIZER_ARM = 102.0 * INCH  # passive stabilizers on a 17 ft square (§2.2)
+#: a digital controller on the EERC table: transducer gain ±10 V over the ±5 in stroke (an
+#: assumption of this simulator, not in the report)
+EERC_DISPLACEMENT_GAIN = 10.0 / (5.0 * INCH)  # V/m
 SENSOR_CUTOFF = 100.0  # Hz, analog low-pass before digitizing (§2.3)
 
 # --- Table 8.1 / 9.1: hybrid model of the loaded table -----------------------------------

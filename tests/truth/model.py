@@ -25,43 +25,97 @@ import numpy as np
 from numba import njit
 
 # ---- state indices -----------------------------------------------------------------------
-S_X, S_V, S_TH, S_OM, S_PL, S_PF, S_Q, S_XP, S_VP, S_XF, S_VF, S_MR, S_INT, S_Z = range(14)
-N_BASE = 14  # floors follow: x_i at N_BASE + i, v_i at N_BASE + n + i
+(S_X, S_V, S_TH, S_OM, S_PL, S_PF, S_Q, S_XP, S_VP, S_XF, S_VF, S_MR, S_INT, S_Z, S_XR, S_VR,
+ S_DF, S_XG, S_VG, S_N1A, S_N1B, S_N2A, S_N2B) = range(23)
+N_BASE = 23  # floors follow: x_i at N_BASE + i, v_i at N_BASE + n + i
 
 # ---- parameter indices -------------------------------------------------------------------
 (P_MT, P_MTE, P_I, P_MB, P_MBH, P_IB, P_A, P_V, P_BETA, P_KCT, P_KT, P_KP, P_RC, P_PS,
  P_VMAX, P_TAU, P_DELAY, P_AIR, P_FRIC, P_VEPS, P_KTH, P_CTH, P_IR, P_WR, P_XIR, P_KR,
  P_KPAS, P_CPAS, P_MF, P_KF, P_CF, P_GAP, P_KC, P_CC, P_MP, P_PUMP, P_CPLAT, P_KQ, P_KD,
- P_PIDP, P_PIDI, P_PIDD, P_FF, P_K1, P_DY, P_ALPHA, P_BWN) = range(47)
-N_PARAM = 47
+ P_PIDP, P_PIDI, P_PIDD, P_TV, P_K1, P_DY, P_ALPHA, P_BWN, P_MRES, P_KRES, P_CRES, P_TA,
+ P_KVF, P_KAF, P_KDP, P_TDF, P_WG, P_ZG, P_N1W, P_N1ZZ, P_N1ZP, P_N2W, P_N2ZZ,
+ P_N2ZP) = range(63)
+N_PARAM = 63
 
 # ---- flags ---------------------------------------------------------------------------------
-(F_PITCH, F_PID, F_FFILT, F_ORIFICE, F_FRIC, F_SAT, F_LAG, F_DELAY, F_AIR, F_FOUND, F_BACK,
- F_PUMP, F_YIELD, F_ADD, F_N) = range(15)
-N_FLAG = 15
+# F_CTRL: 0 the analog three-variable loop in flow units (Table B.5), 1 the law in volts
+# (controllers.py); F_NOTCH1/2: 0 none, 1 on the error, 2 on the drive
+(F_PITCH, F_CTRL, F_FFILT, F_ORIFICE, F_FRIC, F_SAT, F_LAG, F_DELAY, F_AIR, F_FOUND, F_BACK,
+ F_PUMP, F_YIELD, F_ADD, F_RES, F_DFILT, F_REFG, F_NOTCH1, F_NOTCH2, F_LOADCELL,
+ F_N) = range(21)
+N_FLAG = 21
 
 # ---- auxiliary outputs of the right-hand side ----------------------------------------------
-(A_FH, A_ACC, A_ALPHA, A_MR, A_MP, A_XM, A_VM, A_AF, A_QCMD, A_U, A_VBASE) = range(11)
-N_AUX = 11
+# A_U: valve command after delay and lag; A_UC: the controller's own output (before them);
+# A_ROD: the force the actuator rod transmits to the platen (A·ΔP - friction, or the
+# backlash connection force)
+(A_FH, A_ACC, A_ALPHA, A_MR, A_MP, A_XM, A_VM, A_AF, A_QCMD, A_U, A_VBASE, A_UC,
+ A_ROD) = range(13)
+N_AUX = 13
 
 
 @njit(cache=True)
-def controller(t, s, xc, vc, p, fl):
-    """Valve command u (m³/s of flow it asks for) from the current state."""
+def notch(s, ds, i0, w, zz, zp, x, xd):
+    """One second-order notch N(s) = 1 + 2(ζ_z - ζ_p)ω s/(s² + 2ζ_p ω s + ω²) on input x
+    (rate xd), states z1 = s[i0], z2 = s[i0+1] with Z2/X = s/(s² + 2ζ_p ω s + ω²).
+    Returns the output and its rate; writes the states' rates."""
+    z1 = s[i0]
+    z2 = s[i0 + 1]
+    dz2 = -w * w * z1 - 2.0 * zp * w * z2 + x
+    ds[i0] = z2
+    ds[i0 + 1] = dz2
+    c = 2.0 * (zz - zp) * w
+    return x + c * z2, xd + c * dz2
+
+
+@njit(cache=True)
+def controller(s, xc, vc, ac, ax, p, fl, ds):
+    """Valve command u (m³/s of flow it asks for) from the state, the command (x_c, ẋ_c,
+    ẍ_c) and the platen acceleration ẍ_t; writes the controller states' rates into ds.
+
+    F_CTRL 0: u = k_t[(x_c - x_m) - k_p P_fb] (eqs 6.1-6.4, Table B.5).
+    F_CTRL 1: u = K_q V with V the law of controllers.py (PID with a filtered derivative,
+    feedforward, velocity/acceleration/ΔP feedback, reference generator, notches)."""
     xm = s[S_XP] - s[S_XF] if fl[F_BACK] else s[S_X] - s[S_XF]
     vm = s[S_VP] - s[S_VF] if fl[F_BACK] else s[S_V] - s[S_VF]
-    if fl[F_PID]:
-        e = p[P_KD] * (xc - xm)  # volts
-        ed = p[P_KD] * (vc - vm)
-        uv = p[P_PIDP] * e + p[P_PIDI] * s[S_INT] + p[P_PIDD] * ed
-        return p[P_KQ] * uv + p[P_FF] * p[P_A] * vc
     pfb = s[S_PF] if fl[F_FFILT] else s[S_PL]
-    return p[P_KT] * ((xc - xm) - p[P_KP] * pfb)
+    if fl[F_CTRL] == 0:
+        return p[P_KT] * ((xc - xm) - p[P_KP] * pfb)
+    xr, vr, ar = xc, vc, ac
+    if fl[F_REFG]:  # x_r/x_c = ω_g²/(s² + 2ζ_g ω_g s + ω_g²)
+        wg = p[P_WG]
+        ar = wg * wg * (xc - s[S_XG]) - 2.0 * p[P_ZG] * wg * s[S_VG]
+        xr, vr = s[S_XG], s[S_VG]
+        ds[S_XG] = vr
+        ds[S_VG] = ar
+    e = xr - xm
+    ed = vr - vm
+    if fl[F_NOTCH1] == 1:
+        e, ed = notch(s, ds, S_N1A, p[P_N1W], p[P_N1ZZ], p[P_N1ZP], e, ed)
+    if fl[F_NOTCH2] == 1:
+        e, ed = notch(s, ds, S_N2A, p[P_N2W], p[P_N2ZZ], p[P_N2ZP], e, ed)
+    ds[S_INT] = e
+    if fl[F_DFILT]:  # D(s) = s/(τ_f s + 1)
+        dterm = (e - s[S_DF]) / p[P_TDF]
+        ds[S_DF] = dterm
+    else:
+        dterm = ed
+    kd = p[P_KD]
+    v = (kd * (p[P_PIDP] * e + p[P_PIDI] * s[S_INT] + p[P_PIDD] * dterm)
+         + kd * (p[P_TV] * vr + p[P_TA] * ar) - p[P_KVF] * vm - p[P_KAF] * ax - p[P_KDP] * pfb)
+    if fl[F_NOTCH1] == 2:
+        v, _ = notch(s, ds, S_N1A, p[P_N1W], p[P_N1ZZ], p[P_N1ZP], v, 0.0)
+    if fl[F_NOTCH2] == 2:
+        v, _ = notch(s, ds, S_N2A, p[P_N2W], p[P_N2ZZ], p[P_N2ZP], v, 0.0)
+    return p[P_KQ] * v
 
 
 @njit(cache=True)
-def rhs(t, s, xc, vc, udel, p, fl, Ms, Ks, Cs, hs, c2s, ds, aux):
-    """ds = ṡ. `udel` is the delayed valve command (used when F_DELAY is set)."""
+def rhs(t, s, xc, vc, ac, udel, p, fl, Ms, Ks, Cs, hs, c2s, ds, aux):
+    """ds = ṡ. `udel` is the delayed valve command (used when F_DELAY is set). The
+    mechanics come first (they depend on the state only), then the controller (which may
+    feed back the platen acceleration), the valve and the oil column."""
     n = fl[F_N]
     for i in range(ds.shape[0]):
         ds[i] = 0.0
@@ -70,53 +124,7 @@ def rhs(t, s, xc, vc, udel, p, fl, Ms, Ks, Cs, hs, c2s, ds, aux):
     vf = s[S_VF] if fl[F_FOUND] else 0.0
     vpist = s[S_VP] if fl[F_BACK] else s[S_V]
     vrel = vpist - vf
-    # --- valve: command, spool lag (and delay), orifice, rated-flow cap -----------------------
-    u = controller(t, s, xc, vc, p, fl)
-    if fl[F_PID]:
-        ds[S_INT] = p[P_KD] * (xc - ((s[S_XP] if fl[F_BACK] else s[S_X]) - s[S_XF]))
-    if fl[F_DELAY]:
-        u = udel
-    if fl[F_LAG]:
-        ds[S_Q] = (u - s[S_Q]) / p[P_TAU]  # first-order spool lag; the state is in flow units
-        u = s[S_Q]
     pl = s[S_PL]
-    ps0 = p[P_PS]
-    qc = u
-    if fl[F_ORIFICE]:
-        # eq C.14 normalised so that the no-load gain is the linear one
-        sg = 1.0 if u >= 0.0 else -1.0
-        cc = ps0 - sg * pl
-        if fl[F_PUMP] and cc > 0.0:
-            # supply sags with the flow: q = a sqrt(C - r q), a = |u|/sqrt(P_s0), so
-            # q² + a² r q - a² C = 0
-            a2 = u * u / ps0
-            r = p[P_PUMP]
-            qa = 0.5 * (-a2 * r + np.sqrt(a2 * a2 * r * r + 4.0 * a2 * cc))
-            qc = sg * qa
-        else:
-            root = np.sqrt(abs(cc) / ps0)
-            qc = u * root if cc >= 0.0 else -u * root
-    if fl[F_SAT]:
-        qmax = A * p[P_VMAX]
-        if qc > qmax:
-            qc = qmax
-        elif qc < -qmax:
-            qc = -qmax
-    q = qc
-    # --- oil column (eqs 6.3, B.6, C.6-C.11) ------------------------------------------------
-    flow = q - p[P_KCT] * pl - A * vrel
-    if fl[F_AIR]:
-        pmin = 0.02 * ps0
-        p1 = max(0.5 * ps0 + 0.5 * pl, pmin)
-        p2 = max(0.5 * ps0 - 0.5 * pl, pmin)
-        b1 = 1.0 / (1.0 / p[P_BETA] + p[P_AIR] / (1.4 * p1))
-        b2 = 1.0 / (1.0 / p[P_BETA] + p[P_AIR] / (1.4 * p2))
-        dpl = 2.0 * (b1 + b2) / p[P_V] * flow
-    else:
-        dpl = 4.0 * p[P_BETA] / p[P_V] * flow
-    ds[S_PL] = dpl
-    if fl[F_FFILT]:
-        ds[S_PF] = -s[S_PF] / p[P_RC] + dpl  # eq B.4
     fh = A * pl
     ffr = 0.0
     if fl[F_FRIC]:
@@ -135,7 +143,13 @@ def rhs(t, s, xc, vc, udel, p, fl, Ms, Ks, Cs, hs, c2s, ds, aux):
         fx = fc
     else:
         fx = fh - ffr
+    frod = fx
     fx -= p[P_CPLAT] * (s[S_V] - vf)
+    if fl[F_RES]:  # an undeclared mass-spring-damper on the platen (actuator line level)
+        fres = p[P_KRES] * (s[S_XR] - s[S_X]) + p[P_CRES] * (s[S_VR] - s[S_V])
+        ds[S_XR] = s[S_VR]
+        ds[S_VR] = -fres / p[P_MRES]
+        fx += fres
     mth = 0.0
     # --- pitch ------------------------------------------------------------------------------
     th = s[S_TH]
@@ -209,6 +223,51 @@ def rhs(t, s, xc, vc, udel, p, fl, Ms, Ks, Cs, hs, c2s, ds, aux):
         af = ff / p[P_MF]
         ds[S_XF] = s[S_VF]
         ds[S_VF] = af
+    # --- valve: command, spool lag (and delay), orifice, rated-flow cap -----------------------
+    u = controller(s, xc, vc, ac, ax, p, fl, ds)
+    uc = u
+    if fl[F_DELAY]:
+        u = udel
+    if fl[F_LAG]:
+        ds[S_Q] = (u - s[S_Q]) / p[P_TAU]  # first-order spool lag; the state is in flow units
+        u = s[S_Q]
+    ps0 = p[P_PS]
+    qc = u
+    if fl[F_ORIFICE]:
+        # eq C.14 normalised so that the no-load gain is the linear one
+        sg = 1.0 if u >= 0.0 else -1.0
+        cc = ps0 - sg * pl
+        if fl[F_PUMP] and cc > 0.0:
+            # supply sags with the flow: q = a sqrt(C - r q), a = |u|/sqrt(P_s0), so
+            # q² + a² r q - a² C = 0
+            a2 = u * u / ps0
+            r = p[P_PUMP]
+            qa = 0.5 * (-a2 * r + np.sqrt(a2 * a2 * r * r + 4.0 * a2 * cc))
+            qc = sg * qa
+        else:
+            root = np.sqrt(abs(cc) / ps0)
+            qc = u * root if cc >= 0.0 else -u * root
+    if fl[F_SAT]:
+        qmax = A * p[P_VMAX]
+        if qc > qmax:
+            qc = qmax
+        elif qc < -qmax:
+            qc = -qmax
+    q = qc
+    # --- oil column (eqs 6.3, B.6, C.6-C.11) ------------------------------------------------
+    flow = q - p[P_KCT] * pl - A * vrel
+    if fl[F_AIR]:
+        pmin = 0.02 * ps0
+        p1 = max(0.5 * ps0 + 0.5 * pl, pmin)
+        p2 = max(0.5 * ps0 - 0.5 * pl, pmin)
+        b1 = 1.0 / (1.0 / p[P_BETA] + p[P_AIR] / (1.4 * p1))
+        b2 = 1.0 / (1.0 / p[P_BETA] + p[P_AIR] / (1.4 * p2))
+        dpl = 2.0 * (b1 + b2) / p[P_V] * flow
+    else:
+        dpl = 4.0 * p[P_BETA] / p[P_V] * flow
+    ds[S_PL] = dpl
+    if fl[F_FFILT]:
+        ds[S_PF] = -s[S_PF] / p[P_RC] + dpl  # eq B.4
     aux[A_FH] = fh
     aux[A_ACC] = ax
     aux[A_ALPHA] = al
@@ -220,13 +279,26 @@ def rhs(t, s, xc, vc, udel, p, fl, Ms, Ks, Cs, hs, c2s, ds, aux):
     aux[A_QCMD] = qc
     aux[A_U] = u
     aux[A_VBASE] = vbase
+    aux[A_UC] = uc
+    aux[A_ROD] = frod
 
 
 @njit(cache=True)
-def integrate(p, fl, Ms, Ks, Cs, hs, c2s, s0, xc, vc, dt, nsteps, every, ndelay):
+def _delayed(uh, j, i0):
+    """The valve command at half step j from the history of whole steps up to i0 (a half
+    step between two stored whole steps is their mean; the newest one is held)."""
+    if j < 0:
+        return 0.0
+    if j % 2 == 1:
+        return 0.5 * (uh[j - 1] + uh[j + 1]) if j + 1 <= i0 else uh[j - 1]
+    return uh[j]
+
+
+@njit(cache=True)
+def integrate(p, fl, Ms, Ks, Cs, hs, c2s, s0, xc, vc, ac, dt, nsteps, every, ndelay):
     """RK4 at step dt; the command is given at half steps (xc[2k] at t_k, xc[2k+1] at
-    t_k + dt/2). Returns states, aux and state derivatives every `every` steps (from
-    step 0).
+    t_k + dt/2), with its velocity vc and acceleration ac. Returns states, aux and state
+    derivatives every `every` steps (from step 0).
 
     The valve delay is `ndelay` half steps (≥ 2), applied to the valve command u."""
     ns = s0.shape[0]
@@ -248,28 +320,14 @@ def integrate(p, fl, Ms, Ks, Cs, hs, c2s, s0, xc, vc, dt, nsteps, every, ndelay)
     for k in range(nsteps + 1):
         t = k * dt
         i0 = 2 * k
-        # history: u at t_k from the current state
-        uh[i0] = controller(t, s, xc[i0], vc[i0], p, fl)
-        ud0 = 0.0
+        ud0 = _delayed(uh, i0 - ndelay, i0 - 2) if fl[F_DELAY] else 0.0
+        rhs(t, s, xc[i0], vc[i0], ac[i0], ud0, p, fl, Ms, Ks, Cs, hs, c2s, k1, aux)
+        uh[i0] = aux[A_UC]  # the controller's output at t_k, from the current state
         ud1 = 0.0
         ud2 = 0.0
         if fl[F_DELAY]:
-            j = i0 - ndelay
-            ud0 = uh[j] if j >= 0 else 0.0
-            j1 = i0 + 1 - ndelay
-            if j1 >= 0:
-                # the half-step value is interpolated between whole steps already stored
-                if j1 % 2 == 1:
-                    ud1 = 0.5 * (uh[j1 - 1] + uh[j1 + 1]) if j1 + 1 <= i0 else uh[j1 - 1]
-                else:
-                    ud1 = uh[j1]
-            j2 = i0 + 2 - ndelay
-            if j2 >= 0:
-                if j2 % 2 == 1:
-                    ud2 = 0.5 * (uh[j2 - 1] + uh[j2 + 1]) if j2 + 1 <= i0 else uh[j2 - 1]
-                else:
-                    ud2 = uh[j2]
-        rhs(t, s, xc[i0], vc[i0], ud0, p, fl, Ms, Ks, Cs, hs, c2s, k1, aux)
+            ud1 = _delayed(uh, i0 + 1 - ndelay, i0)
+            ud2 = _delayed(uh, i0 + 2 - ndelay, i0)
         if k % every == 0:
             S[rec, :] = s
             X[rec, :] = aux
@@ -279,15 +337,16 @@ def integrate(p, fl, Ms, Ks, Cs, hs, c2s, s0, xc, vc, dt, nsteps, every, ndelay)
             break
         for i in range(ns):
             tmp[i] = s[i] + 0.5 * dt * k1[i]
-        rhs(t + 0.5 * dt, tmp, xc[i0 + 1], vc[i0 + 1], ud1, p, fl, Ms, Ks, Cs, hs, c2s, k2,
-            dummy)
+        rhs(t + 0.5 * dt, tmp, xc[i0 + 1], vc[i0 + 1], ac[i0 + 1], ud1, p, fl, Ms, Ks, Cs, hs,
+            c2s, k2, dummy)
         for i in range(ns):
             tmp[i] = s[i] + 0.5 * dt * k2[i]
-        rhs(t + 0.5 * dt, tmp, xc[i0 + 1], vc[i0 + 1], ud1, p, fl, Ms, Ks, Cs, hs, c2s, k3,
-            dummy)
+        rhs(t + 0.5 * dt, tmp, xc[i0 + 1], vc[i0 + 1], ac[i0 + 1], ud1, p, fl, Ms, Ks, Cs, hs,
+            c2s, k3, dummy)
         for i in range(ns):
             tmp[i] = s[i] + dt * k3[i]
-        rhs(t + dt, tmp, xc[i0 + 2], vc[i0 + 2], ud2, p, fl, Ms, Ks, Cs, hs, c2s, k4, dummy)
+        rhs(t + dt, tmp, xc[i0 + 2], vc[i0 + 2], ac[i0 + 2], ud2, p, fl, Ms, Ks, Cs, hs, c2s,
+            k4, dummy)
         for i in range(ns):
             s[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
     return S, X, D

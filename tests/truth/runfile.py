@@ -85,13 +85,36 @@ def _toml_value(v) -> str:
     raise TruthError(f"write_run: cannot write {type(v).__name__} to TOML")
 
 
-def toml_text(d: dict) -> str:
-    lines = [f"{k} = {_toml_value(v)}" for k, v in d.items() if not isinstance(v, dict)]
+def toml_text(d: dict, inline: tuple[str, ...] = ("control",), prefix: str = "") -> str:
+    """TOML for a dict of scalars, lists and tables; a table inside a table becomes its own
+    [a.b] section, except inside the top-level sections named in `inline` (written as
+    inline tables, as [control] is)."""
+    lines = []
     for k, v in d.items():
-        if isinstance(v, dict):
-            lines.append(f"\n[{k}]")
-            lines += [f"{kk} = {_toml_value(vv)}" for kk, vv in v.items()]
-    return "\n".join(lines) + "\n"
+        if not isinstance(v, dict) or (prefix and prefix.split(".")[0] in inline):
+            lines.append(f"{k} = {_toml_value(v)}")
+    text = "\n".join(lines) + ("\n" if lines else "")
+    for k, v in d.items():
+        if isinstance(v, dict) and not (prefix and prefix.split(".")[0] in inline):
+            name = f"{prefix}.{k}" if prefix else k
+            text += f"\n[{name}]\n" + toml_text(v, inline, name)
+    return text
+
+
+def table_declared(table: Table) -> dict:
+    """The run's [table]: the preset, and what issue 18's format adds when the truth has it:
+    force_measured, and the controller when it is not the preset's own ([table.controller];
+    on the EERC table also the valve flow gain per actuator it needs, in
+    [table.horizontal])."""
+    out: dict = {"preset": table.preset}
+    if table.force_measured is not None:
+        out["force_measured"] = table.force_measured
+    if table.declare_controller and table.law is not None:
+        if table.preset == "eerc":
+            out["horizontal"] = {"valve_flow_gain_m3_per_s_v": table.valve_gain
+                                 / table.actuators}
+        out["controller"] = table.law.declared()
+    return out
 
 
 def _noisy(res: Result, noise: float, seed: int) -> dict[str, np.ndarray]:
@@ -180,8 +203,8 @@ def write_run(path: str | Path, res: Result, declared: Specimen | dict, noise: f
         rows.append(repr(float(ti)) + "," + ",".join(f"{v:.9g}" for v in row) + "\n")
     meta: dict = {"format": FORMAT,
                   "title": title or f"truth: {res.command.title} on {res.table.preset}"}
-    meta["table"] = {"preset": res.table.preset}
-    if res.table.preset == "eerc" and res.table.physical:
+    meta["table"] = table_declared(res.table)
+    if res.table.preset == "eerc" and res.table.physical and res.table.law is None:
         meta["control"] = EERC_STANDARD_CONTROL
     meta["specimen"] = declared.declared() if isinstance(declared, Specimen) else dict(declared)
     meta["command"] = cmd_table

@@ -28,6 +28,10 @@ class Result:
     reaction mass); avg_hacc is the platen's absolute acceleration at the actuator line;
     h*_force is A·ΔP per actuator; v*_force and p*_stab are the dynamic increments (the
     static weight is carried by the pit air pressure, §2.2); pot_*/floor*_disp are absolute.
+    With the table's force_measured = "load_cell", h*_force is the force the rod transmits
+    to the platen: A·ΔP less the actuator friction (eq C.12), or the piston-platen
+    connection force when the piston is a body of its own (backlash); the platen's own
+    viscous damping and a platen resonator act after the load cell.
 
     `sensors` maps each channel to the physical sensor group it belongs to; channels of
     the same quantity measured by different sensors (h1_disp..h3_disp, acc_n_ne/acc_n_nw,
@@ -84,12 +88,14 @@ def simulate(table: Table, spec: Specimen, cmd: Command, fs: float = 256.0) -> R
     nsteps = (n_out - 1) * n_sub
     th = np.arange(2 * nsteps + 3) * (0.5 * dt)
     xc, vc = cmd.at(th)
+    ac = cmd.acceleration(th) if built.p[m.P_TA] != 0 and not built.fl[m.F_REFG] else (
+        np.zeros_like(th))
     filt = table.effects.get("sensor_filter")
     every = 1 if filt else n_sub
     ndelay = round(2 * built.delay / dt) if built.delay > 0 else 0
     s0 = np.zeros(built.n_state)
     S, X, D = m.integrate(built.p, built.fl, built.Ms, built.Ks, built.Cs, built.hs, built.c2s,
-                          s0, xc, vc, dt, nsteps, every, ndelay)
+                          s0, xc, vc, ac, dt, nsteps, every, ndelay)
     if not np.all(np.isfinite(S)):
         raise TruthError("simulate: the response diverged (unstable configuration)")
     ch, internal = _channels(built, S, X, D)
@@ -115,8 +121,9 @@ def _channels(b: Built, S: np.ndarray, X: np.ndarray, D: np.ndarray):
     ch["avg_hdisp"] = xm
     ch["h_vel"] = vm
     ch["avg_hacc"] = D[:, m.S_V]
+    force = X[:, m.A_ROD] if b.fl[m.F_LOADCELL] else X[:, m.A_FH]
     for i in range(1, na + 1):
-        ch[f"h{i}_force"] = X[:, m.A_FH] / na
+        ch[f"h{i}_force"] = force / na
     if tab.pitch != "none":
         ch["pitch_acc"] = D[:, m.S_OM]
         ch["pitch_disp"] = S[:, m.S_TH]
@@ -129,6 +136,7 @@ def _channels(b: Built, S: np.ndarray, X: np.ndarray, D: np.ndarray):
     internal = {"x_t": S[:, m.S_X], "v_t": S[:, m.S_V], "theta": S[:, m.S_TH],
                 "omega": S[:, m.S_OM], "m_pitch": X[:, m.A_MR] + X[:, m.A_MP],
                 "p_load": S[:, m.S_PL], "x_f": S[:, m.S_XF], "q_cmd": X[:, m.A_QCMD],
+                "f_rod": X[:, m.A_ROD], "x_r": S[:, m.S_XR],
                 "base_shear": X[:, m.A_VBASE]}
     if n:
         x0, v0 = m.N_BASE, m.N_BASE + n

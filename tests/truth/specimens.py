@@ -2,9 +2,12 @@
 n-storey shear building; and the lab's *declared* version of a specimen (`perturb`).
 
 Heights are measured from the horizontal actuator line (the run format's convention,
-29.7 in below the table top). Storey damping is classical modal damping: every fixed-base
-mode has the damping ratio `xi` (C = M Φ diag(2 ξ ω) Φᵀ M with mass-normalised Φ), or
-Rayleigh damping through modes 1 and 2 when `damping="rayleigh"`.
+29.7 in below the table top). Storey damping is classical: C = M Φ diag(2 ξ_i ω_i) Φᵀ M
+with mass-normalised Φ (Chopra, Dynamics of Structures, §11.4: the modal damping matrix),
+every fixed-base mode at the ratio `xi` or each at its own (`mode_xi`); or Rayleigh damping
+C = α M + β K (Chopra §11.4.1), whose ratio in mode i is ξ_i = α/(2ω_i) + β ω_i/2, with
+α, β fixed by two (frequency, ratio) pairs (`rayleigh`), or by ξ at modes 1 and 2 when
+`damping="rayleigh"`. A run declares the ratio of every mode (a list).
 """
 
 from __future__ import annotations
@@ -34,6 +37,8 @@ class Specimen:
     xi: float = 0.0
     damping: str = "modal"  # "modal" | "rayleigh"
     inertia_kip_in_s2: float = 0.0  # rigid block: own pitch inertia about its c.g.
+    mode_xi: tuple[float, ...] = ()  # one ratio per fixed-base mode (overrides xi)
+    rayleigh: tuple[tuple[float, float], tuple[float, float]] | None = None  # (f Hz, ξ) x 2
 
     @property
     def n(self) -> int:
@@ -74,15 +79,39 @@ class Specimen:
             return []
         return [float(w / (2 * math.pi)) for w in self.modes()[0]]
 
+    def rayleigh_coefficients(self) -> tuple[float, float]:
+        """(α, β) of C = α M + β K with ξ(ω) = α/(2ω) + β ω/2 through the two pairs (or
+        through modes 1 and 2 at `xi` for damping="rayleigh")."""
+        if self.rayleigh is not None:
+            (f1, x1), (f2, x2) = self.rayleigh
+            w1, w2 = 2 * math.pi * f1, 2 * math.pi * f2
+        else:
+            w = self.modes()[0]
+            w1, w2, x1, x2 = w[0], w[1], self.xi, self.xi
+        a0, a1 = np.linalg.solve([[1 / (2 * w1), w1 / 2], [1 / (2 * w2), w2 / 2]], [x1, x2])
+        return float(a0), float(a1)
+
+    @property
+    def is_rayleigh(self) -> bool:
+        return self.rayleigh is not None or (self.damping == "rayleigh" and self.n >= 2)
+
+    def modal_damping(self) -> np.ndarray:
+        """The damping ratio of each fixed-base mode, from the bottom one up."""
+        w = self.modes()[0]
+        if self.is_rayleigh:
+            a0, a1 = self.rayleigh_coefficients()
+            return a0 / (2 * w) + a1 * w / 2
+        if self.mode_xi:
+            return np.array(self.mode_xi, dtype=float)
+        return np.full(len(w), self.xi)
+
     def damping_matrix(self) -> np.ndarray:
         M = np.diag(self.masses())
         w, phi = self.modes()
-        if self.damping == "rayleigh" and len(w) >= 2:
-            # C = a0 M + a1 K with ξ at modes 1 and 2
-            a0, a1 = np.linalg.solve([[1 / (2 * w[0]), w[0] / 2], [1 / (2 * w[1]), w[1] / 2]],
-                                     [self.xi, self.xi])
+        if self.is_rayleigh:
+            a0, a1 = self.rayleigh_coefficients()
             return a0 * M + a1 * self.stiffness()
-        return M @ phi @ np.diag(2 * self.xi * w) @ phi.T @ M
+        return M @ phi @ np.diag(2 * self.modal_damping() * w) @ phi.T @ M
 
     def declared(self) -> dict:
         """The run format's [specimen] table for this specimen."""
@@ -95,9 +124,11 @@ class Specimen:
             return {"kind": "sdof", "weight_kip": self.weights_kip[0],
                     "height_in": self.heights_in[0],
                     "frequency_hz": self.frequencies_hz()[0], "damping": self.xi}
+        damping = (self.xi if not (self.mode_xi or self.is_rayleigh)
+                   else [float(x) for x in self.modal_damping()])
         return {"kind": "shear_building", "weights_kip": list(self.weights_kip),
                 "heights_in": list(self.heights_in),
-                "frequencies_hz": self.frequencies_hz(), "damping": self.xi}
+                "frequencies_hz": self.frequencies_hz(), "damping": damping}
 
 
 def _positive(name: str, v: float) -> float:
@@ -134,11 +165,16 @@ def sdof(weight_kip: float, height_in: float, f_hz: float, xi: float) -> Specime
 
 def building(weights_kip: list[float], heights_in: list[float],
              storey_k_kip_in: list[float] | None = None,
-             frequencies_hz: list[float] | None = None, xi: float = 0.02,
-             damping: str = "modal") -> Specimen:
+             frequencies_hz: list[float] | None = None, xi: float | list[float] = 0.02,
+             damping: str = "modal",
+             rayleigh: tuple[tuple[float, float], tuple[float, float]] | None = None
+             ) -> Specimen:
     """An n-storey shear building, floors from the bottom. Give the storey stiffnesses
     (kip/in) or the n fixed-base frequencies (the stiffnesses are then solved for, from
-    a uniform-stiffness start; an unreachable set of frequencies is an error)."""
+    a uniform-stiffness start; an unreachable set of frequencies is an error).
+
+    Damping: `xi` one ratio for every mode or a list (one per mode, from the bottom one);
+    `rayleigh` ((f₁ Hz, ξ₁), (f₂ Hz, ξ₂)): C = α M + β K through those two pairs."""
     n = len(weights_kip)
     if n == 0 or len(heights_in) != n:
         raise TruthError(f"specimen: weights_kip and heights_in must have the same "
@@ -151,8 +187,23 @@ def building(weights_kip: list[float], heights_in: list[float],
         raise TruthError(f"specimen: damping must be 'modal' or 'rayleigh', got {damping!r}")
     if (storey_k_kip_in is None) == (frequencies_hz is None):
         raise TruthError("specimen: give exactly one of storey_k_kip_in or frequencies_hz")
+    mode_xi: tuple[float, ...] = ()
+    if isinstance(xi, list | tuple):
+        if len(xi) != n or not all(0 <= x < 1 for x in xi):
+            raise TruthError(f"specimen: xi as a list needs {n} ratios in [0, 1), got {xi}")
+        mode_xi, xi = tuple(float(x) for x in xi), float(xi[0])
+    if rayleigh is not None:
+        pairs = tuple((float(f), float(x)) for f, x in rayleigh)
+        if (len(pairs) != 2 or pairs[0][0] == pairs[1][0]
+                or not all(f > 0 and 0 < x < 1 for f, x in pairs)):
+            raise TruthError(f"specimen: rayleigh needs two (frequency Hz > 0, ratio in (0, "
+                             f"1)) pairs at different frequencies, got {rayleigh}")
+        if mode_xi:
+            raise TruthError("specimen: give xi as a list or rayleigh, not both")
+        rayleigh, xi = pairs, pairs[0][1]
     base = Specimen("shear_building", tuple(map(float, weights_kip)),
-                    tuple(map(float, heights_in)), (), float(xi), damping)
+                    tuple(map(float, heights_in)), (), float(xi), damping, mode_xi=mode_xi,
+                    rayleigh=rayleigh)
     if storey_k_kip_in is not None:
         if len(storey_k_kip_in) != n:
             raise TruthError(f"specimen: storey_k_kip_in needs {n} values")
@@ -197,10 +248,35 @@ def perturb(spec: Specimen, seed: int, frequency: float = 0.03, damping: float =
     if spec.kind == "rigid":
         return replace(spec, weights_kip=w, heights_in=h)
     xi = spec.xi * float(damping ** (rng.choice([-1, 1]) * rng.uniform(0.5, 1.0)))
+    mode_xi: tuple[float, ...] = ()
+    if spec.mode_xi or spec.is_rayleigh:
+        # each mode's ratio moved on its own (the declaration is then a list, per mode)
+        mode_xi = tuple(float(x * damping ** (rng.choice([-1, 1]) * rng.uniform(0.5, 1.0)))
+                        for x in spec.modal_damping())
     df = rel(frequency)
     # stiffness follows the weight (same frequency) times the frequency change squared
     ratio = [wn / wo for wn, wo in zip(w, spec.weights_kip, strict=True)]
     k = tuple(kk * ratio[j] * (1 + df) ** 2 for j, kk in enumerate(spec.storey_k_kip_in))
     if spec.kind == "shear_building":
         k = tuple(kk * (1 + 0.3 * rel(frequency)) for kk in k)  # a little shape change too
+    if mode_xi:
+        return replace(spec, weights_kip=w, heights_in=h, storey_k_kip_in=k, xi=mode_xi[0],
+                       mode_xi=mode_xi, rayleigh=None, damping="modal")
     return replace(spec, weights_kip=w, heights_in=h, storey_k_kip_in=k, xi=xi)
+
+
+def misdeclare(spec: Specimen, frequency: float = 0.0, damping: float = 1.0,
+               weight: float = 0.0) -> Specimen:
+    """A declaration off by exactly the given amounts (not random): every fixed-base
+    frequency x (1 + frequency) (stiffnesses x (1 + frequency)² and x the weight change),
+    every damping ratio x damping, every weight x (1 + weight)."""
+    if spec.kind == "none":
+        return spec
+    w = tuple(x * (1 + weight) for x in spec.weights_kip)
+    if spec.kind == "rigid":
+        return replace(spec, weights_kip=w)
+    k = tuple(kk * (1 + weight) * (1 + frequency) ** 2 for kk in spec.storey_k_kip_in)
+    mode_xi = (tuple(float(x * damping) for x in spec.modal_damping())
+               if spec.mode_xi or spec.is_rayleigh else ())
+    return replace(spec, weights_kip=w, storey_k_kip_in=k, xi=spec.xi * damping,
+                   mode_xi=mode_xi, rayleigh=None, damping="modal" if mode_xi else spec.damping)

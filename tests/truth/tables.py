@@ -11,6 +11,8 @@ import math
 from dataclasses import dataclass, field
 
 from . import constants as c
+from . import controllers as ctl
+from .controllers import Controller
 from .errors import TruthError
 
 #: name -> {parameter: (unit, default, lower, upper)}
@@ -38,18 +40,28 @@ EFFECTS: dict[str, dict[str, tuple[str, float | None, float, float]]] = {
     "pump_pressure_drop": {"drop_psi_per_gpm": ("psi/gpm", 1.0, 0.0, 50.0)},
 }
 OUTSIDE_CATALOG = ("backlash", "yielding_storey", "pump_pressure_drop")
+#: catalog effects issue 18 adds (kept out of EFFECTS, whose catalog part issue 12's
+#: scorecard covers case by case); accepted wherever EFFECTS are
+NEW_EFFECTS: dict[str, dict[str, tuple[str, float | None, float, float]]] = {
+    # an undeclared mass-spring-damper on the platen: m_r ẍ_r = -k_r(x_r - x_t) - c_r(ẋ_r -
+    # ẋ_t), k_r = m_r ω_r², c_r = 2 ξ_r m_r ω_r (an undocumented specimen, a table mode)
+    "platen_resonator": {"f_r": ("Hz", 8.0, 0.5, 200.0), "xi_r": ("1", 0.02, 1e-4, 1.0),
+                         "m_r": ("kg", 1000.0, 1.0, 1e6)},
+}
+FORCE_MEASURED = ("load_cell", "delta_p")
 PITCH_FAMILIES = ("none", "hybrid", "two_directional")
 
 
 def check_effects(effects: dict | None, where: str) -> dict[str, dict[str, float]]:
     """Fill defaults; unknown names, unknown parameters and out-of-range values are errors."""
     out: dict[str, dict[str, float]] = {}
+    known = {**EFFECTS, **NEW_EFFECTS}
     for name, params in (effects or {}).items():
-        if name not in EFFECTS:
-            raise TruthError(f"{where}: unknown effect {name!r}; known: {', '.join(EFFECTS)}")
+        if name not in known:
+            raise TruthError(f"{where}: unknown effect {name!r}; known: {', '.join(known)}")
         if not isinstance(params, dict):
             raise TruthError(f"{where}: effect {name!r} needs a dict of parameters")
-        spec = EFFECTS[name]
+        spec = known[name]
         for k in params:
             if k not in spec:
                 raise TruthError(f"{where}: effect {name!r} has no parameter {k!r}; expected "
@@ -82,13 +94,13 @@ class Table:
     volume: float  # m³, lumped oil volume (both chambers)
     beta: float  # Pa
     leakage: float  # m³/s/Pa (k_ct or the LNEC leakage)
-    controller: str  # "three_variable" | "pid"
-    k_t: float = 0.0  # m²/s, lumped flow per metre of error (three_variable)
-    k_p: float = 0.0  # m/Pa, ΔP feedback (three_variable)
-    valve_gain: float = 0.0  # m³/s/V (pid)
-    disp_gain: float = 0.0  # V/m (pid)
-    pid: tuple[float, float, float] = (1.0, 0.0, 0.0)  # P (1), I (1/s), D (s)
-    feedforward: float = 0.0  # fraction of the ideal velocity feedforward A·v_c/K_q (pid)
+    controller: str  # "three_variable" | "pid" | "tvc"
+    k_t: float = 0.0  # m²/s, lumped flow per metre of error (analog three_variable)
+    k_p: float = 0.0  # m/Pa, ΔP feedback (analog three_variable)
+    valve_gain: float = 0.0  # m³/s/V, lumped K_q (a law in volts)
+    law: Controller | None = None  # None: the analog loop of Table B.5 (k_t, k_p)
+    declare_controller: bool = False  # write [table.controller] (not the preset's own)
+    force_measured: str | None = None  # None: A·ΔP, undeclared (the runs before issue 18)
     valve_tau: float = 0.0  # s, intrinsic servovalve lag (LNEC); 0 = none
     platen_damping: float = 0.0  # N·s/m
     supply_pressure: float = c.EERC_SUPPLY_PRESSURE  # Pa, sets chamber pressures P_s/2
@@ -103,8 +115,19 @@ class Table:
         return self.open_loop is None
 
 
+def _check_common(where: str, force_measured: str | None, platen_mass_factor: float) -> None:
+    if force_measured is not None and force_measured not in FORCE_MEASURED:
+        raise TruthError(f"{where}: force_measured must be one of {', '.join(FORCE_MEASURED)} "
+                         f"or None, got {force_measured!r}")
+    if not (math.isfinite(platen_mass_factor) and 0.2 <= platen_mass_factor <= 5.0):
+        raise TruthError(f"{where}: platen_mass_factor must be in [0.2, 5], got "
+                         f"{platen_mass_factor!r}")
+
+
 def eerc_table(pitch: str = "none", com_height_in: float = 0.0, effects: dict | None = None,
-               open_loop: tuple[float, float, float] | None = None) -> Table:
+               open_loop: tuple[float, float, float] | None = None,
+               controller: Controller | None = None, force_measured: str | None = None,
+               platen_mass_factor: float = 1.0) -> Table:
     """The EERC table: 3 horizontal actuators lumped into one (Table B.5 x 3), platen
     100 kips/g and 1251 kip-in-s² (Table 8.1), c.o.m. `com_height_in` above the actuator
     line.
@@ -114,8 +137,16 @@ def eerc_table(pitch: str = "none", com_height_in: float = 0.0, effects: dict | 
     passive stabilizers, together matching k_θ, c_θ at 2.58 Hz).
     open_loop: (f_o Hz, ξ_o, k_o 1/s) instead of the physical constants (eq 6.15/7.6 form,
     normalised by the bare platen mass, as Tables 7.1, 8.1 and 9.1 are).
+    controller: a digital controller (controllers.py) instead of the analog loop; the
+    valve flow gain is K_q = k_t / k_d at the assumed transducer gain k_d =
+    `EERC_DISPLACEMENT_GAIN`, so that p = 1, k_dp = k_p k_d is the Table B.5 loop.
+    force_measured: what the force channels measure and the run declares ("load_cell",
+    "delta_p"); None: A·ΔP, not declared.
+    platen_mass_factor: the true platen mass over the preset's (the run still declares
+    the preset: a mis-declared platen).
     """
     eff = check_effects(effects, "eerc_table")
+    _check_common("eerc_table", force_measured, platen_mass_factor)
     if pitch not in PITCH_FAMILIES:
         raise TruthError(f"eerc_table: pitch must be one of {', '.join(PITCH_FAMILIES)}, "
                          f"got {pitch!r}")
@@ -142,26 +173,45 @@ def eerc_table(pitch: str = "none", com_height_in: float = 0.0, effects: dict | 
         beta = m_t * w_o**2 * volume / (4 * area**2)
         k_t, k_p, k_ct = k_o * area, 0.0, 2 * xi_o * area**2 / (m_t * w_o)
     ps = eff.get("valve_flow_nonlinearity", {}).get("supply_pressure", 3000.0) * c.PSI
-    return Table("eerc", pitch, m_t, c.EERC_PITCH_INERTIA, com_height_in * c.INCH, n, area,
-                 volume, beta, k_ct, "three_variable", k_t=k_t, k_p=k_p, supply_pressure=ps,
-                 k_theta=k_th, c_theta=c_th, open_loop=open_loop, effects=eff)
+    kind = "three_variable" if controller is None else controller.kind
+    return Table("eerc", pitch, m_t * platen_mass_factor, c.EERC_PITCH_INERTIA,
+                 com_height_in * c.INCH, n, area, volume, beta, k_ct, kind, k_t=k_t, k_p=k_p,
+                 valve_gain=k_t / c.EERC_DISPLACEMENT_GAIN, law=controller,
+                 declare_controller=controller is not None, force_measured=force_measured,
+                 supply_pressure=ps, k_theta=k_th, c_theta=c_th, open_loop=open_loop,
+                 effects=eff)
 
 
 def lnec_table(effects: dict | None = None, pid: tuple[float, float, float] = (1.0, 0.0, 0.0),
-               feedforward: float = 0.0) -> Table:
+               feedforward: float = 0.0, controller: Controller | None = None,
+               force_measured: str | None = None, platen_mass_factor: float = 1.0) -> Table:
     """The LNEC uniaxial table ("lnec-st1d"): one actuator, PID on the displacement error in
-    volts (P 1, I 0, D 0 by default), optional velocity feedforward (a fraction of A·v_c/K_q),
-    intrinsic servovalve lag 0.0246 s (the effect valve_dynamics replaces it), no pitch."""
+    volts (P 1, I 0, D 0 by default), optional velocity feedforward (a fraction of A·v_c/K_q,
+    i.e. T_v = fraction·A/(K_q k_d)), intrinsic servovalve lag 0.0246 s (the effect
+    valve_dynamics replaces it), no pitch. These two are the preset's own loop, not
+    declared; `controller` (controllers.py) replaces them and is declared in the run.
+    force_measured, platen_mass_factor: as for `eerc_table`."""
     eff = check_effects(effects, "lnec_table")
-    for bad in ("pitch_flexibility", "force_feedback_filter"):
-        if bad in eff:
-            raise TruthError(f"lnec_table: effect {bad!r} does not apply (no pitch, no ΔP "
-                             "feedback on this table)")
+    _check_common("lnec_table", force_measured, platen_mass_factor)
+    if controller is not None and (tuple(pid) != (1.0, 0.0, 0.0) or feedforward):
+        raise TruthError("lnec_table: give pid/feedforward or controller, not both")
     L = c.LNEC
+    if controller is None:
+        law = ctl.pid(L["disp_gain"], *(float(x) for x in pid),
+                      feedforward_velocity=float(feedforward) * L["area"]
+                      / (L["valve_gain"] * L["disp_gain"]))
+    else:
+        law = controller
+    if "pitch_flexibility" in eff:
+        raise TruthError("lnec_table: effect 'pitch_flexibility' does not apply (no pitch on "
+                         "this table)")
+    if "force_feedback_filter" in eff and law.pressure_gain == 0:
+        raise TruthError("lnec_table: effect 'force_feedback_filter' does not apply (no ΔP "
+                         "feedback on this table's controller)")
     ps = eff.get("valve_flow_nonlinearity", {}).get("supply_pressure", 3000.0) * c.PSI
-    return Table("lnec-st1d", "none", L["platen_mass"], 0.0, 0.0, 1, L["area"], L["volume"],
-                 L["beta"], L["leakage"], "pid", valve_gain=L["valve_gain"],
-                 disp_gain=L["disp_gain"], pid=tuple(float(x) for x in pid),
-                 feedforward=float(feedforward), valve_tau=L["valve_tau"],
-                 platen_damping=L["damping"], supply_pressure=ps,
+    return Table("lnec-st1d", "none", L["platen_mass"] * platen_mass_factor, 0.0, 0.0, 1,
+                 L["area"], L["volume"], L["beta"], L["leakage"], law.kind,
+                 valve_gain=L["valve_gain"], law=law,
+                 declare_controller=controller is not None, force_measured=force_measured,
+                 valve_tau=L["valve_tau"], platen_damping=L["damping"], supply_pressure=ps,
                  foundation_mass=50 * L["platen_mass"], effects=eff)
