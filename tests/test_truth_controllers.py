@@ -157,7 +157,7 @@ def test_controllers_are_declared_as_the_format_says(tmp_path):
     path = truth.write_run(tmp_path / "r", res, NONE)[0]
     meta = tomllib.loads(path.read_text())
     assert meta["table"] == {
-        "preset": "lnec-st1d", "force_measured": "delta_p",
+        "preset": "lnec-st1d", "horizontal": {"force_measured": "delta_p"},
         "controller": {"kind": "pid", "displacement_gain_v_per_m": 129.93, "p": 1.1,
                        "i_per_s": 0.4, "d_s": 0.002, "derivative_filter_s": 0.001,
                        "feedforward_velocity_s": 0.01,
@@ -337,7 +337,7 @@ def test_issue_18_cases_cover_what_it_asks():
     # a declared digital controller is in the run's [table]
     c = sc.BY_NAME_18["eerc_tvc_friction"]
     assert c.declared_table["controller"]["kind"] == "tvc"
-    assert c.declared_table["force_measured"] == "load_cell"
+    assert c.declared_table["horizontal"]["force_measured"] == "load_cell"
 
 
 def test_every_issue_18_case_simulates_for_2_s(tmp_path):

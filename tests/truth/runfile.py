@@ -103,17 +103,19 @@ def toml_text(d: dict, inline: tuple[str, ...] = ("control",), prefix: str = "")
 
 def table_declared(table: Table) -> dict:
     """The run's [table]: the preset, and what issue 18's format adds when the truth has it:
-    force_measured, and the controller when it is not the preset's own ([table.controller];
-    on the EERC table also the valve flow gain per actuator it needs, in
-    [table.horizontal])."""
+    force_measured (in [table.horizontal], as the format places it), and the controller
+    when it is not the preset's own ([table.controller]; on the EERC table also the valve
+    flow gain per actuator it needs, in [table.horizontal])."""
     out: dict = {"preset": table.preset}
-    if table.force_measured is not None:
-        out["force_measured"] = table.force_measured
+    horizontal: dict = {}
+    if table.force_measured is not None:  # the spec's [table.horizontal] key
+        horizontal["force_measured"] = table.force_measured
     if table.declare_controller and table.law is not None:
         if table.preset == "eerc":
-            out["horizontal"] = {"valve_flow_gain_m3_per_s_v": table.valve_gain
-                                 / table.actuators}
+            horizontal["valve_flow_gain_m3_per_s_v"] = table.valve_gain / table.actuators
         out["controller"] = table.law.declared()
+    if horizontal:
+        out["horizontal"] = horizontal
     return out
 
 
