@@ -15,12 +15,15 @@ data's own scale. The structures are compared by Akaike's criterion
 AIC = n ln(χ²/n) + 2p over the n = 2 x lines real numbers.
 
 The DC gain: a valve-integrator loop follows a static command exactly (type 1, DC gain
-1); `dc_gain` measures it on the lines below k_o/(2π·`DC_BELOW`) (there a type-1 loop's
-|H| is within 5 % of 1; a record without such lines has its DC gain not judged, with a
-note). The loop
-is *not* eq 6.15 when g differs from 1 (|g - 1| > max(3σ_g, `DC_TOL`)) or when the type-0
-structure's AIC is lower than both type-1 structures' by more than `AIC_MARGIN`; then
-its eq 6.15 parameters are not quoted, and the structure that fits is named.
+1); `dc_gain` measures it from the lowest resolved lines alone (|H| extrapolated to
+ω -> 0 by a short series in ω², `dc_window`), with a standard error from the lines'
+random errors and scatter plus the extrapolation's own, and no model of the loop: a loop
+whose |H| rises to a low-frequency peak (a PI controller, feedforward) is judged below
+the peak, not through a structure that cannot follow it. A record without two resolved
+lines has its DC gain not judged, with a note. The loop is *not* eq 6.15 when g
+differs from 1 (|g - 1| > max(3σ_g, `DC_TOL`)) or when the type-0 structure's AIC is
+lower than both type-1 structures' by more than `AIC_MARGIN`; then its eq 6.15
+parameters are not quoted, and the structure that fits is named.
 
 With ``delay=True`` every structure carries a pure delay e^{jωΔ} (Δ > 0: the input
 leads the output by Δ beyond the loop's own lag): the lag of a drive file played by the
@@ -57,8 +60,16 @@ EPS_MIN = 2e-3
 AIC_MARGIN = 10.0
 #: a DC gain within this of 1 is a type-1 loop whatever its standard error
 DC_TOL = 0.03
-#: the DC gain is judged only from records with lines below k_o/(2π DC_BELOW)
-DC_BELOW = 3.0
+#: the DC gain's lines start at this bin of the frame (bin 1's Hann main lobe reaches
+#: the DC bin, which each frame's mean removal empties)
+DC_FIRST_BIN = 2
+#: the DC gain's window: the lowest lines whose |H| is within this of the lowest line's
+DC_SPAN = 0.05
+#: ... and at least this many lines
+DC_MIN_LINES = 4
+#: a type-1 fit whose residuals are more than this many times the lines' random errors
+#: (`misfit`) is noted as describing the loop only roughly
+MISFIT_NOTE = 5.0
 #: the delays scanned for a start (s, relative to the coarse alignment)
 DELAY_SCAN = (-0.5, 1.0)
 
@@ -105,21 +116,36 @@ class Prior:
 class LoopData:
     """The lines of an H1 estimate a loop is fitted to: f, H, their random errors σ
     (per real and imaginary part) and the fit context (resolution, coherence,
-    averages)."""
+    averages); `low`, the same estimate's lines from its lowest resolved one up (below
+    the fitting band too), which the DC gain is measured on (`dc_gain`)."""
 
     f: np.ndarray
     H: np.ndarray
     sigma: np.ndarray
     context: dict[str, float]
+    low: LoopData | None = None
 
     @classmethod
     def from_tf(cls, tf: TransferFunction, band: tuple[float, float],
                 min_coherence: float = 0.9) -> LoopData:
         f, H, w, ctx = _select(tf.f, tf.H, tf.coherence, band, min_coherence)
-        g2 = np.clip(w**2, 1e-12, 1.0)
-        eps = np.sqrt((1 - g2) / (g2 * 2 * max(tf.averages, 1)))
-        sigma = np.abs(H) * np.maximum(eps, EPS_MIN)
-        return cls(f, H, sigma, {**ctx, "averages": float(tf.averages)})
+        ctx = {**ctx, "averages": float(tf.averages)}
+        low = None
+        first = DC_FIRST_BIN * tf.resolution_hz * (1 - 1e-9)
+        try:
+            fl, Hl, wl, _ = _select(tf.f, tf.H, tf.coherence, (first, band[1]), min_coherence)
+            low = cls(fl, Hl, _sigma(Hl, wl, tf.averages), ctx)
+        except VtableError:
+            pass
+        return cls(f, H, _sigma(H, w, tf.averages), ctx, low)
+
+
+def _sigma(H: np.ndarray, w: np.ndarray, averages: int) -> np.ndarray:
+    """The random error ε|H| of H1 lines with coherence w² from `averages` averages,
+    ε = √(1 - γ²)/(|γ|√(2 n_d)) floored at `EPS_MIN`."""
+    g2 = np.clip(w**2, 1e-12, 1.0)
+    eps = np.sqrt((1 - g2) / (g2 * 2 * max(averages, 1)))
+    return np.abs(H) * np.maximum(eps, EPS_MIN)
 
 
 def _resid(st: Structure, data: LoopData, delay: bool, gain: bool):
@@ -226,6 +252,12 @@ def fit_structure(key: str, data: LoopData, prior: Prior | None = None,
     return best
 
 
+def misfit(fit: Fit) -> float:
+    """√(χ²/ν) of a weighted complex fit: its residuals in units of the lines' random
+    errors (about 1 for a structure that holds the loop)."""
+    return math.sqrt(2 * fit.extra["cost"] / max(fit.n_points - len(fit.params), 1))
+
+
 def aic(fit: Fit) -> float:
     """Akaike's criterion n ln(χ²/n) + 2p of a weighted complex fit."""
     n = fit.n_points
@@ -258,7 +290,7 @@ class LoopStructure:
         g, sg = self.dc
         return {"fits_eq_6_15": self.fits_eq_6_15, "best": self.best,
                 "best_name": STRUCTURES[self.best].name, "why": self.why,
-                "dc_gain": g, "dc_gain_stderr": sg,
+                "dc_gain": g, "dc_gain_stderr": sg, "dc_gain_how": self.dc_gain.method,
                 "candidates": {k: {"name": STRUCTURES[k].name, "aic": self.aic[k],
                                    "delta_aic": self.aic[k] - self.aic[self.best],
                                    **f.to_json()} for k, f in self.fits.items()},
@@ -267,33 +299,62 @@ class LoopStructure:
                 "notes": list(self.notes)}
 
 
-def dc_gain(data: LoopData, type1: Fit, f_dc: float) -> Fit:
-    """The DC gain g from the lines below `f_dc`: the weighted mean of the real part of
-    H/H₁, H₁ the fitted type-1 loop (its own |H₁| -> 1 at DC, so g is the data's static
-    gain with the loop's small roll-off there removed, not an extrapolation across the
-    band); its standard error from the lines' random errors and their scatter. No lines:
-    g = NaN, n_points 0."""
-    st = STRUCTURES[_key_of(type1)]
-    low = data.f <= f_dc
-    if not low.any():
+def dc_window(data: LoopData) -> int:
+    """How many of the lowest lines the DC gain is read from: those whose |H| stays
+    within `DC_SPAN` of the lowest line's (contiguous from it), at least `DC_MIN_LINES`.
+    |H|, not H: a delay between command and response (a drive file not aligned) leaves
+    it unchanged."""
+    m = np.abs(data.H)
+    inside = np.abs(m / m[0] - 1) <= DC_SPAN
+    n = int(np.argmin(inside)) if not inside.all() else len(m)
+    return min(max(n, DC_MIN_LINES), len(m))
+
+
+def _poly_fit(w2: np.ndarray, m: np.ndarray, sig: np.ndarray,
+              order: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """Weighted least squares of m = Σ c_k (ω²)^k, k < order: the coefficients, their
+    covariance (scaled by χ²/ν when that exceeds 1) and χ²/ν."""
+    A = np.vander(w2, order, increasing=True) / sig[:, None]
+    y = m / sig
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    r = y - A @ coef
+    dof = len(m) - order
+    chi2_red = float(r @ r) / dof if dof > 0 else 1.0
+    return coef, np.linalg.pinv(A.T @ A) * max(chi2_red, 1.0), chi2_red
+
+
+def dc_gain(data: LoopData) -> Fit:
+    """The DC gain g: |H| extrapolated to ω -> 0 from the lowest resolved lines.
+
+    Near ω = 0, |H(jω)|² of any rational loop is a series in ω², so on the lowest lines
+    (`dc_window`, from `LoopData.low`) |H| = g + b ω² + c ω⁴ is fitted by weighted least
+    squares, each line weighted by its H1 random error ε|H| (ε² = (1 - γ²)/(2 n_d γ²),
+    Bendat & Piersol) and the covariance scaled by χ²/ν when the lines scatter more than
+    their random errors say. g's standard error adds to that statistical one the
+    extrapolation's own: the change in g when the ω⁴ term is dropped (how far the
+    series is from converged on these lines). No model of the loop enters, so a loop
+    whose response rises to a low-frequency peak is measured below it whatever its
+    structure. Fewer than 2 lines: g = NaN, n_points 0."""
+    lines = data.low if data.low is not None else data
+    if len(lines.f) < 2:
         return Fit({"gain": float("nan")}, {"gain": float("nan")}, float("nan"),
                    float("nan"), 0, "DC gain: no lines")
-    names = st.params
-    hm = st.h(data.f[low], *[type1.params[k] for k in names])
-    if "delay" in type1.params:
-        hm = hm * np.exp(1j * TWO_PI * data.f[low] * type1.params["delay"])
-    r = (data.H[low] / hm).real
-    w = (np.abs(hm) / data.sigma[low]) ** 2
-    g = float(np.sum(w * r) / np.sum(w))
-    n = int(low.sum())
-    scatter = float(np.sqrt(np.sum(w * (r - g) ** 2) / np.sum(w) / max(n - 1, 1)))
-    sg = float(max(np.sqrt(1 / np.sum(w)), scatter))
-    return Fit({"gain": g}, {"gain": sg}, float("nan"), float("nan"), n,
-               f"DC gain: H/H₁ on {n} lines below {f_dc:.3g} Hz")
-
-
-def _key_of(fit: Fit) -> str:
-    return "eq_6_15_lag" if "tau" in fit.params else "eq_6_15"
+    n = dc_window(lines)
+    f, m, sig = lines.f[:n], np.abs(lines.H[:n]), lines.sigma[:n]
+    w2 = (TWO_PI * f) ** 2
+    if n < 4:
+        (g, _), cov, chi2_red = _poly_fit(w2, m, sig, 2)
+        g2, how = g, "g + bω²"
+    else:
+        (g, *_), cov, chi2_red = _poly_fit(w2, m, sig, 3)
+        (g2, _), *_ = _poly_fit(w2, m, sig, 2)
+        how = "g + bω² + cω⁴"
+    stat = float(np.sqrt(cov[0, 0]))
+    sg = float(np.hypot(stat, g - g2))
+    return Fit({"gain": float(g)}, {"gain": sg}, float("nan"), float("nan"), n,
+               f"DC gain: |H| = {how} on the {n} lowest lines, {f[0]:.3g}-{f[-1]:.3g} Hz",
+               {"chi2_red": chi2_red, "stat": stat, "extrapolation": float(abs(g - g2)),
+                "f_low_hz": float(f[0]), "f_high_hz": float(f[-1])})
 
 
 def compare_structures(data: LoopData, prior: Prior | None = None,
@@ -305,15 +366,12 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
     best = min(crit, key=crit.__getitem__)
     type1 = min(crit["eq_6_15"], crit["eq_6_15_lag"])
     reasons, notes = [], []
-    t1 = min(("eq_6_15", "eq_6_15_lag"), key=crit.__getitem__)
-    f_dc = fits[t1].params["k_o"] / (TWO_PI * DC_BELOW)
-    dc = dc_gain(data, fits[t1], f_dc)
+    dc = dc_gain(data)
     g, sg = dc.params["gain"], dc.stderr["gain"]
     measured = dc.n_points > 0
     if not measured:
-        notes.append(f"DC gain not measured: the lowest usable line {data.f[0]:.3g} Hz is "
-                     f"above k_o/(2π·{DC_BELOW:g}) = {f_dc:.3g} Hz, where a type-1 loop's "
-                     "|H| has reached 1 (the free-gain fit would extrapolate)")
+        notes.append("DC gain not measured: fewer than 2 resolved lines with the coherence "
+                     "required")
     elif not math.isfinite(sg) or abs(g - 1) > max(3 * sg, DC_TOL):
         reasons.append(f"its DC gain is {g:.3f} ± {sg:.2g}, not 1: a valve-integrator "
                        "(type-1) loop follows a static command exactly")
@@ -323,6 +381,13 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
                        f"{type1 - crit['type_0']:.0f}): its phase tends to -180°, not to the "
                        "-270° of a valve-integrator loop")
     ok = not reasons
+    t1 = min(("eq_6_15", "eq_6_15_lag"), key=crit.__getitem__)
+    spread = misfit(fits[t1])
+    if ok and spread > MISFIT_NOTE:
+        notes.append(f"{STRUCTURES[t1].name} leaves residuals {spread:.0f}x the lines' random "
+                     f"errors (R² {fits[t1].r2:.4f}): x_t/x_c holds dynamics it does not "
+                     "model (a specimen, another controller), and its parameters describe "
+                     "the loop only roughly")
     if ok:
         margin = min((a - crit[best] for k, a in crit.items() if k != best), default=0.0)
         dc_text = f"DC gain {g:.3f} ± {sg:.2g}" if measured else "DC gain not measured"
