@@ -412,7 +412,9 @@ class Diagnoser:
                              f"({floor:.2%}), above the {NOISE_FACTOR:g} x noise alone explains;"
                              f" it lives in {unexp['where']}")
         base = self.base_table(current)
-        at_bounds = base_at_bounds(base, self.calibration) if err is not None else []
+        start = getattr(self, "start_fitted", None)
+        at_bounds = [] if err is None else base_at_bounds(
+            base, self.calibration, None if start is None else self.base_table(start))
         if at_bounds:  # deliverable 6 of issue 18: the suspect declarations named
             parts.append(bounds_verdict(at_bounds, self.calibration))
         if reason:

@@ -199,7 +199,8 @@ class Diagnosis:
                                             for r in d["rounds"] if r["added"]]))
         out += base_lines(d["base"])
         for b in d["base_at_bounds"]:
-            out.append(f"at its bound: {b['parameter']} (declared {b['declared']:.4g}, "
+            out.append(f"at its bound ({b['model']} model): {b['parameter']} (declared "
+                       f"{b['declared']:.4g}, "
                        f"fitted {b['fitted']:.4g}, {b['side']} bound {b['bound']:.4g}); "
                        f"--calibrate {b['calibrate']} lets it move")
         u = d["unexplained"]
@@ -280,14 +281,27 @@ def localise(d: Diagnosis) -> str:
     return d.localisation
 
 
-def base_at_bounds(base: dict[str, dict[str, Any]], calibration: Calibration
-                   ) -> list[dict[str, Any]]:
-    """The declared values the calibrated base `base` (`TableModel.base_table`) ends at a
-    bound of: within `AT_BOUND` of its range from the bound, on the fitted scale (the
-    logarithm for a factor bound), and bounded by a `--calibrate` setting. Each:
-    {parameter, declared, fitted, bound, side, unit, calibrate}, `calibrate` the
-    --calibrate text of the widened calibration (`Calibration.widened`) that would let it
-    move (the settings already given kept)."""
+def base_at_bounds(base: dict[str, dict[str, Any]], calibration: Calibration,
+                   start: dict[str, dict[str, Any]] | None = None) -> list[dict[str, Any]]:
+    """The declared values the calibrated base ends at a bound of: within `AT_BOUND` of its
+    range from the bound, on the fitted scale (the logarithm for a factor bound), and bounded
+    by a `--calibrate` setting. `base` is the final model's (`TableModel.base_table`),
+    `start` the calibrated starting model's: a value at its bound there but not in the final
+    model is listed too (`model` "start": the effects added may stand in for a wrong
+    declaration). Each: {parameter, model, declared, fitted, bound, side, unit, calibrate},
+    `calibrate` the --calibrate text of the calibration with this bound widened
+    (`Calibration.widened`; the settings already given kept)."""
+    out = _at_bounds(base, "final")
+    final = {b["parameter"] for b in out}
+    out += [b for b in _at_bounds(start or {}, "start") if b["parameter"] not in final]
+    for b in out:
+        name = bounding_setting(b["parameter"], b["side"])
+        b["calibrate"] = dataclasses.replace(
+            calibration, **{name: getattr(calibration.widened([name]), name)}).text()
+    return out
+
+
+def _at_bounds(base: dict[str, dict[str, Any]], model: str) -> list[dict[str, Any]]:
     out = []
     for key, v in base.items():
         lo, hi = v["bounds"]
@@ -298,38 +312,42 @@ def base_at_bounds(base: dict[str, dict[str, Any]], calibration: Calibration
             f = math.log if WIDEN[name][0] == "factor" and lo > 0 else (lambda z: z)
             pos = (f(v["fitted"]) - f(lo)) / (f(hi) - f(lo))
             if (pos <= AT_BOUND) if side == "lower" else (pos >= 1 - AT_BOUND):
-                out.append({"parameter": key, "declared": v["declared"],
+                out.append({"parameter": key, "model": model, "declared": v["declared"],
                             "fitted": v["fitted"], "bound": bound, "side": side,
-                            "unit": v["unit"], "setting": name})
-    wider = calibration.widened([b["setting"] for b in out])
-    for b in out:
-        one = dataclasses.replace(calibration, **{b["setting"]:
-                                                  getattr(wider, b["setting"])})
-        b["calibrate"] = one.text()
-        del b["setting"]
+                            "unit": v["unit"]})
     return out
 
 
 def bounds_verdict(at_bounds: list[dict[str, Any]], calibration: Calibration) -> str:
-    """The verdict's sentence on a base ending at its bounds: which declarations the data
-    push beyond their bounds (the suspects), and the --calibrate setting that lets them
-    move."""
+    """The verdict's sentence on a base at its bounds (`base_at_bounds`): which
+    declarations the data push beyond their bounds (the suspects), and the --calibrate
+    setting that lets them all move."""
     if not at_bounds:
         return ""
-    names = []
-    for b in at_bounds:
+
+    def named(b: dict[str, Any]) -> str:
         u = "" if b["unit"] == "1" else f" {b['unit']}"
         moved = b["fitted"] / b["declared"] - 1 if b["declared"] else float("nan")
-        names.append(f"{b['parameter']} (declared {b['declared']:.4g}{u}, fitted "
-                     f"{b['fitted']:.4g}{u} at its {b['side']} bound, {moved:+.1%})")
+        return (f"{b['parameter']} (declared {b['declared']:.4g}{u}, fitted "
+                f"{b['fitted']:.4g}{u} at its {b['side']} bound, {moved:+.1%})")
+
+    parts = []
+    final = [named(b) for b in at_bounds if b["model"] == "final"]
+    start = [named(b) for b in at_bounds if b["model"] == "start"]
+    if final:
+        parts.append("the calibrated base ends at its bounds: " + ", ".join(final))
+    if start:
+        parts.append("the calibrated starting model (no effect added) ended at its bounds: "
+                     + ", ".join(start) + "; an effect added may stand in for a wrong "
+                     "declaration")
     wider = calibration.widened([bounding_setting(b["parameter"], b["side"])
                                  for b in at_bounds])
-    return ("the calibrated base ends at its bounds: the data push "
+    return ("; ".join(parts) + "; the data push "
             + ("this declaration" if len(at_bounds) == 1 else "these declarations")
-            + " beyond what the calibration allows, so "
-            + ("it is" if len(at_bounds) == 1 else "they are") + " the suspect: "
-            + ", ".join(names) + f"; --calibrate {wider.text()} lets "
-            + ("it" if len(at_bounds) == 1 else "them") + " move")
+            + " beyond the calibration's bounds, so "
+            + ("it is" if len(at_bounds) == 1 else "they are") + f" the suspect: "
+            f"--calibrate {wider.text()} lets " + ("it" if len(at_bounds) == 1 else "them")
+            + " move")
 
 
 def base_lines(base: dict[str, Any], indent: str = "") -> list[str]:
