@@ -202,7 +202,8 @@ class Diagnosis:
             out.append(f"at its bound ({b['model']} model): {b['parameter']} (declared "
                        f"{b['declared']:.4g}, "
                        f"fitted {b['fitted']:.4g}, {b['side']} bound {b['bound']:.4g}); "
-                       f"--calibrate {b['calibrate']} lets it move")
+                       + (f"--calibrate {b['calibrate']} lets it move" if b["calibrate"]
+                          else "its bound is at its widest"))
         u = d["unexplained"]
         out.append("unexplained: " + ("none (the final error is consistent with the noise "
                                       "floor)" if u is None else
@@ -296,8 +297,9 @@ def base_at_bounds(base: dict[str, dict[str, Any]], calibration: Calibration,
     out += [b for b in _at_bounds(start or {}, "start") if b["parameter"] not in final]
     for b in out:
         name = bounding_setting(b["parameter"], b["side"])
-        b["calibrate"] = dataclasses.replace(
-            calibration, **{name: getattr(calibration.widened([name]), name)}).text()
+        wider = getattr(calibration.widened([name]), name)
+        b["calibrate"] = (None if wider == getattr(calibration, name) else  # at its widest
+                          dataclasses.replace(calibration, **{name: wider}).text())
     return out
 
 
@@ -342,12 +344,14 @@ def bounds_verdict(at_bounds: list[dict[str, Any]], calibration: Calibration) ->
                      "declaration")
     wider = calibration.widened([bounding_setting(b["parameter"], b["side"])
                                  for b in at_bounds])
+    one = len(at_bounds) == 1
+    how = (f"--calibrate {wider.text()} lets {'it' if one else 'them'} move"
+           if wider != calibration else
+           "the bounds are at their widest: the declaration must be corrected")
     return ("; ".join(parts) + "; the data push "
-            + ("this declaration" if len(at_bounds) == 1 else "these declarations")
-            + " beyond the calibration's bounds, so "
-            + ("it is" if len(at_bounds) == 1 else "they are") + f" the suspect: "
-            f"--calibrate {wider.text()} lets " + ("it" if len(at_bounds) == 1 else "them")
-            + " move")
+            + ("this declaration" if one else "these declarations")
+            + " beyond the calibration's bounds, so " + ("it is" if one else "they are")
+            + f" the suspect: {how}")
 
 
 def base_lines(base: dict[str, Any], indent: str = "") -> list[str]:
