@@ -350,13 +350,17 @@ def judge(case: Case, r: dict) -> dict:
 
 def calibration_errors(r: dict) -> tuple[float, float]:
     """How far the calibrated base ends from the truth's specimen: (largest |relative
-    error| of a mode's frequency, |relative error| of the damping ratio)."""
+    error| of a mode's frequency, largest |relative error| of a mode's damping ratio: a
+    building's are calibrated per mode)."""
     base, true = r["diagnosis"]["base"], r["true"]
     f_true = true.get("frequencies_hz") or [true["frequency_hz"]]
     keys = (["specimen.frequency_hz"] if "specimen.frequency_hz" in base else
             [f"specimen.mode{k}.frequency_hz" for k in range(1, len(f_true) + 1)])
     df = max(abs(base[k]["fitted"] / f - 1) for k, f in zip(keys, f_true, strict=True))
-    return df, abs(base["specimen.damping"]["fitted"] / true["damping"] - 1)
+    xi = [base[k]["fitted"] for k in (["specimen.damping"] if "specimen.damping" in base else
+                                      [f"specimen.mode{j}.damping"
+                                       for j in range(1, len(f_true) + 1)])]
+    return df, max(abs(x / true["damping"] - 1) for x in xi)
 
 
 def totals(results: list[tuple[Case, dict]]) -> dict[str, Any]:

@@ -182,3 +182,93 @@ def _building_campaign() -> tuple[str, ...]:
                            noise=0.01, seed=4, duration_s=4.0, spans_in=(0.1, 0.3),
                            quake_peak_in=1.0)
     return tuple(str(p) for p in paths)
+
+
+@functools.cache
+def beyond_bounds() -> tuple[str, ...]:
+    """The misdeclared_null campaign's truth (no pitch, the SDOF frame), its runs declaring
+    the frame 8 % stiff in frequency (3.10 Hz for 2.87 Hz): beyond the ±5 % bound."""
+    folder = Path(tempfile.mkdtemp(prefix="vtable-beyond-"))
+    spec = truth.sdof(weight_kip=W_S, height_in=219.0, f_hz=F_S, xi=XI_S)
+    declared = truth.sdof(weight_kip=W_S, height_in=219.0, f_hz=1.08 * F_S, xi=XI_S)
+    paths = truth.campaign(folder, truth.eerc_table(pitch="none"), spec, declared, fs=200.0,
+                           noise=0.01, seed=3, duration_s=14.0, spans_in=(0.1, 0.5),
+                           quake_peak_in=2.0)
+    return tuple(str(p) for p in paths)
+
+
+def _diagnose(tmp_path: Path, paths, *extra: str) -> dict:
+    out = tmp_path / "d.json"
+    assert main(["diagnose", *paths, "--json", str(out), *extra]) == 0
+    return json.loads(out.read_text())
+
+
+def test_a_declaration_beyond_its_bound_is_named_with_the_setting_that_frees_it(tmp_path,
+                                                                                capsys):
+    """Issue 18, deliverable 6: the calibrated base pushed to its bounds names the suspect
+    declaration and the --calibrate setting that lets it move; with that setting the
+    frequency is recovered within 0.5 % and nothing is added."""
+    paths = beyond_bounds()
+    d = _diagnose(tmp_path, paths)
+    printed = capsys.readouterr().out
+    f = {b["parameter"]: b for b in d["base_at_bounds"]}["specimen.frequency_hz"]
+    assert f["declared"] == pytest.approx(1.08 * F_S, rel=1e-4)
+    assert f["side"] == "lower" and f["bound"] == pytest.approx(0.95 * f["declared"])
+    assert f["fitted"] == pytest.approx(f["bound"], rel=1e-3)
+    assert f["calibrate"] == "frequency=0.1"
+    setting = d["verdict"].split("--calibrate ")[1].split(" ")[0]
+    assert "frequency=0.1" in setting.split(",")
+    assert "specimen.frequency_hz (declared 3.1 Hz" in d["verdict"]
+    assert "the suspect" in d["verdict"] and f"--calibrate {setting}" in printed
+    assert "at its bound (" in printed
+    freed = _diagnose(tmp_path, paths, "--calibrate", setting)
+    b = freed["base"]["specimen.frequency_hz"]
+    assert b["bounds"][0] == pytest.approx(0.9 * b["declared"])
+    assert b["fitted"] == pytest.approx(F_S, rel=0.005)
+    assert freed["final_effects"] == [] and freed["unexplained"] is None, freed["verdict"]
+    assert freed["base_at_bounds"] == [] and "suspect" not in freed["verdict"]
+
+
+def test_a_buildings_damping_is_calibrated_per_mode_within_its_bounds():
+    """Each mode's ratio is a base parameter (declared ×/÷ 3, a log prior of half that),
+    for one ratio, one per mode, or Rayleigh damping; moving one mode's ratio holds the
+    others (Rayleigh's become one ratio per mode at the modes' own)."""
+    import numpy as np
+
+    from vtable.analytic.structure import modal_damping
+    from vtable.diagnose.calibration import base_params
+    from vtable.effects.physics import Physics, nominal_open_loop
+    from vtable.params.specimen import specimen_from_dict
+    from vtable.params.virtual import virtual_table
+
+    vt = virtual_table()
+    geo = {"kind": "shear_building", "weights_kip": [25.0] * 3,
+           "heights_in": [110.0, 160.0, 210.0], "frequencies_hz": [3.0, 8.0, 12.0]}
+    for damping, xi in (({"damping": 0.02}, [0.02] * 3),
+                        ({"damping": [0.01, 0.03, 0.05]}, [0.01, 0.03, 0.05]),
+                        ({"damping_rayleigh": [[3.0, 0.02], [12.0, 0.05]]},
+                         [0.02, 0.035, 0.05])):
+        b = specimen_from_dict({**geo, **damping})
+        ps = {p.key: p for p in base_params(b, vt, Calibration(), pitch=False)}
+        assert "specimen.damping" not in ps
+        for k, x in enumerate(xi, 1):
+            p = ps[f"specimen.mode{k}.damping"]
+            assert (p.lower, p.declared, p.upper) == pytest.approx((x / 3, x, 3 * x), rel=1e-9)
+            assert p.log and p.prior == pytest.approx(np.log(3) / 2)
+        ph = ps["specimen.mode2.damping"].set(Physics(nominal_open_loop(vt), b), 0.06)
+        assert list(modal_damping(ph.specimen)) == pytest.approx([xi[0], 0.06, xi[2]],
+                                                                 rel=1e-9)
+    one = {p.key for p in base_params(specimen_from_dict(
+        {"kind": "sdof", "weight_kip": 68.0, "height_in": 219.0, "frequency_hz": 2.87,
+         "damping": 0.01}), vt, Calibration(), pitch=False)}
+    assert "specimen.damping" in one  # a SDOF's one mode keeps its name
+
+
+def test_the_calibrate_text_round_trips_and_widens():
+    cal = Calibration.parse("mass=0.2")
+    assert cal.text() == "mass=0.2" and Calibration.parse(cal.text()) == cal
+    assert Calibration().text() == "" and Calibration(enabled=False).text() == "none"
+    w = cal.widened(["frequency", "damping", "mass", "frequency"])
+    assert (w.frequency, w.damping, w.mass) == (0.1, 9.0, 0.4)
+    assert w.text() == "frequency=0.1,damping=9,mass=0.4"
+    assert Calibration(frequency=0.4).widened(["frequency"]).frequency == 0.5  # its limit

@@ -169,10 +169,15 @@ def test_the_readers_refuse_what_run_format_md_says_they_do_not_read_yet():
         table_from_dict({"controller": {"kind": "tvc"}})
     with pytest.raises(VtableError, match="'opensees'"):
         specimen_from_dict({"kind": "opensees", "model": "frame.py"})
+    # one damping ratio per mode is read now (issue 18), and the page no longer lists it
+    b = specimen_from_dict({"kind": "shear_building", "weights_kip": [10, 10],
+                            "heights_in": [50, 100], "frequencies_hz": [2, 6],
+                            "damping": [0.02, 0.03]})
+    assert b.damping == (0.02, 0.03) and "damping = [0.02" not in text
     with pytest.raises(VtableError, match="expected a number"):
         specimen_from_dict({"kind": "shear_building", "weights_kip": [10, 10],
                             "heights_in": [50, 100], "frequencies_hz": [2, 6],
-                            "damping": [0.02, 0.03]})
+                            "damping": [0.02, 0.03, 0.04]})
     with pytest.raises(VtableError, match="unknown key 'mass_kg'"):
         specimen_from_dict({"kind": "sdof", "mass_kg": 3e4, "height_in": 219,
                             "frequency_hz": 2.87, "damping": 0.01})

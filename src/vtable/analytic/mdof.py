@@ -8,7 +8,9 @@ motion x_t + h_j θ); heights from the actuator line. Neglecting gravity, as the
   structure:  M_s (r_t ẍ_t + r_θ θ̈ + ẍ_s) + C_s ẋ_s + K_s x_s = 0   (eq 4.5)
 
 and the horizontal servo loop on x_f = F_a/m_t as in eq 8.11. With one storey this is
-exactly eq 8.37.
+exactly eq 8.37. C_s is the building's classical damping (`analytic.structure.
+building_matrices`): each fixed-base mode at its declared ratio, one for all, one per mode,
+or Rayleigh's α M_s + β K_s.
 """
 
 from __future__ import annotations

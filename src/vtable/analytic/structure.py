@@ -69,14 +69,23 @@ def _storey_stiffnesses_cached(masses: tuple[float, ...],
 
 
 def building_matrices(b: ShearBuilding) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """M, K and the modal damping matrix C = M Φ diag(2ξω) Φᵀ M (every mode at ξ), in the
-    storeys' displacements relative to the base (`params.bodies.specimen_damping` gives C
-    on the storey drifts the multibody chain uses)."""
+    """M, K and the classical damping matrix C = M Φ diag(2 ξ_i ω_i) Φᵀ M, each fixed-base
+    mode i at its own ratio ξ_i (`ShearBuilding.damping_ratios`: one ratio, one per mode, or
+    Rayleigh's, for which C = α M + β K exactly), in the storeys' displacements relative to
+    the base (`params.bodies.specimen_damping` gives C on the storey drifts the multibody
+    chain uses)."""
     M = np.diag(b.masses)
     K = stiffness_matrix(building_stiffnesses(b))
     w, phi = fixed_base_modes(M, K)
-    C = M @ phi @ np.diag(2 * b.damping * w) @ phi.T @ M
+    C = M @ phi @ np.diag(2 * b.damping_ratios(w) * w) @ phi.T @ M
     return M, K, C
+
+
+def modal_damping(b: ShearBuilding) -> np.ndarray:
+    """The damping ratio of each fixed-base mode of `b`, lowest mode first."""
+    M = np.diag(b.masses)
+    w, _ = fixed_base_modes(M, stiffness_matrix(building_stiffnesses(b)))
+    return b.damping_ratios(w)
 
 
 def specimen_frequencies(spec: Specimen) -> list[float]:

@@ -6,9 +6,10 @@ The base parameters of a campaign (`base_params`):
 
 - the servo loop (f_o, ξ_o, k_o) of eq 6.15: free within wide bounds, no prior (Table B.5
   through eq 6.16 is a design value, not a measurement);
-- each specimen mode's fixed-base frequency (declared ± `Calibration.frequency`), the
-  specimen's damping ratio (declared ×/÷ `Calibration.damping`, one ratio for every mode as
-  the run format declares it) and its mass (± `Calibration.mass`; a building's storeys
+- each specimen mode's fixed-base frequency (declared ± `Calibration.frequency`), each
+  mode's damping ratio (declared ×/÷ `Calibration.damping`, every mode on its own: a
+  building declared with one ratio, or Rayleigh damping, is fitted one ratio per mode) and
+  its mass (± `Calibration.mass`; a building's storeys
   each on their own; the frequencies are held, so the stiffnesses follow);
 - the platen's mass (± `Calibration.mass`);
 - when the model lets the platen pitch: the platen's centre-of-mass height above the
@@ -28,10 +29,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from vtable.analytic.structure import specimen_frequencies
+from vtable.analytic.structure import modal_damping, specimen_frequencies
 from vtable.effects.physics import Physics, nominal_open_loop
 from vtable.errors import VtableError
 from vtable.params.bodies import slab_body
@@ -59,7 +60,7 @@ class Calibration:
     frequency
         Relative bound on each specimen mode's frequency (0.05: ±5 %).
     damping
-        Factor bound on the specimen's damping ratio (3: declared ×/÷ 3).
+        Factor bound on each specimen mode's damping ratio (3: declared ×/÷ 3).
     mass
         Relative bound on the specimen's and the platen's masses (0.10: ±10 %).
     com_height
@@ -107,6 +108,53 @@ class Calibration:
             except ValueError:
                 raise VtableError(f"--calibrate {key}: {value!r} is not a number") from None
         return cls(**kw)
+
+    def text(self) -> str:
+        """The --calibrate text of this calibration: the settings that differ from the
+        defaults ('' for the defaults, 'none' when disabled); `parse(text())` gives it
+        back."""
+        if not self.enabled:
+            return "none"
+        default = Calibration()
+        return ",".join(f"{f.name}={getattr(self, f.name):g}" for f in dataclasses.fields(self)
+                        if f.name != "enabled" and getattr(self, f.name) != getattr(default,
+                                                                                    f.name))
+
+    def widened(self, names: Sequence[str]) -> Calibration:
+        """This calibration with the bounds `names` widened: a relative bound doubled, a
+        factor bound squared, each within its allowed range."""
+        kw = {}
+        for name in dict.fromkeys(names):
+            v, (kind, top) = getattr(self, name), WIDEN[name]
+            kw[name] = min(v * v if kind == "factor" else 2 * v, top)
+        return dataclasses.replace(self, **kw)
+
+
+#: each bound of the calibration: how it bounds ("relative": ± x, "factor": ×/÷ x, "upper":
+#: up to x × the declared), and the largest value it may take
+WIDEN = {"frequency": ("relative", 0.5), "damping": ("factor", 100.0),
+         "mass": ("relative", 0.9), "com_height": ("upper", 100.0),
+         "pitch_inertia": ("factor", 100.0)}
+
+
+def bounding_setting(key: str, side: str) -> str | None:
+    """The `Calibration` bound (a --calibrate NAME) that bounds base parameter `key` on
+    `side` ("lower" or "upper"); None for the servo loop (fixed wide bounds) and for the
+    centre-of-mass height's lower bound (the actuator line itself)."""
+    owner, _, name = key.partition(".")
+    if owner == "servo_loop":
+        return None
+    if name.endswith("frequency_hz"):
+        return "frequency"
+    if name.endswith("damping"):
+        return "damping"
+    if name.endswith("mass_kg"):
+        return "mass"
+    if name == "com_height_m":
+        return "com_height" if side == "upper" else None
+    if name == "pitch_inertia_kg_m2":
+        return "pitch_inertia"
+    return None
 
 
 @dataclass(frozen=True)
@@ -167,6 +215,47 @@ def _with_mass(spec, m: float):
     return dataclasses.replace(spec, weight=spec.weight * s)
 
 
+def _mode_damping(spec) -> list[float]:
+    """Each fixed-base mode's damping ratio (a SDOF: its one mode), lowest mode first."""
+    if isinstance(spec, SDOFSpecimen):
+        return [float(spec.damping)]
+    if isinstance(spec.damping, tuple):
+        return list(spec.damping)
+    return [float(x) for x in modal_damping(spec)]
+
+
+def _with_mode_damping(spec, i: int, xi: float):
+    """`spec` with mode i's damping ratio at `xi`, the other modes' held: a building's
+    damping becomes one ratio per mode (Rayleigh's included, at the modes' ratios now)."""
+    if isinstance(spec, SDOFSpecimen):
+        return dataclasses.replace(spec, damping=xi)
+    ratios = _mode_damping(spec)
+    ratios[i] = xi
+    return dataclasses.replace(spec, damping=tuple(ratios), rayleigh=None)
+
+
+def _damping_params(spec, cal: Calibration) -> list[BaseParam]:
+    """Each mode's damping ratio, declared ×/÷ `cal.damping` with a log prior of half that
+    width (a SDOF's one ratio is `specimen.damping`, a building's mode K's
+    `specimen.modeK.damping`); an undamped mode is held at zero."""
+    out = []
+    for i, xi in enumerate(_mode_damping(spec)):
+        if not xi > 0:
+            continue
+        key = ("specimen.damping" if isinstance(spec, SDOFSpecimen)
+               else f"specimen.mode{i + 1}.damping")
+
+        def get(ph: Physics, i: int = i) -> float:
+            return float(_mode_damping(ph.specimen)[i])
+
+        def put(ph: Physics, v: float, i: int = i) -> Physics:
+            return dataclasses.replace(ph, specimen=_with_mode_damping(ph.specimen, i, v))
+
+        out.append(BaseParam(key, "1", xi, xi / cal.damping, min(xi * cal.damping, 0.99),
+                             True, math.log(cal.damping) / 2 or None, "specimen", get, put))
+    return out
+
+
 def _specimen_params(spec, cal: Calibration) -> list[BaseParam]:
     out: list[BaseParam] = []
     if isinstance(spec, NoSpecimen):
@@ -186,18 +275,7 @@ def _specimen_params(spec, cal: Calibration) -> list[BaseParam]:
             out.append(BaseParam(key, "Hz", f0, f0 * (1 - cal.frequency),
                                  f0 * (1 + cal.frequency), False,
                                  f0 * cal.frequency / 2 or None, "specimen", get, put))
-        xi = spec.damping
-        if xi > 0:
-            def get_xi(ph: Physics) -> float:
-                return float(ph.specimen.damping)
-
-            def put_xi(ph: Physics, v: float) -> Physics:
-                return dataclasses.replace(ph, specimen=dataclasses.replace(ph.specimen,
-                                                                            damping=v))
-
-            out.append(BaseParam("specimen.damping", "1", xi, xi / cal.damping,
-                                 min(xi * cal.damping, 0.99), True,
-                                 math.log(cal.damping) / 2 or None, "specimen", get_xi, put_xi))
+        out += _damping_params(spec, cal)
     if isinstance(spec, ShearBuilding) and spec.n > 1:  # each storey's mass on its own
         for j, w0 in enumerate(spec.weights):
             m0 = w0 / G

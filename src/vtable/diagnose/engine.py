@@ -60,6 +60,8 @@ from vtable.diagnose.result import (
     DiagnosisInterrupted,
     Round,
     Stage,
+    base_at_bounds,
+    bounds_verdict,
     evidence,
     localise,
 )
@@ -409,12 +411,18 @@ class Diagnoser:
                              f"{err:.2%} is {unexp['ratio_to_floor']:.1f} x the noise floor "
                              f"({floor:.2%}), above the {NOISE_FACTOR:g} x noise alone explains;"
                              f" it lives in {unexp['where']}")
+        base = self.base_table(current)
+        start = getattr(self, "start_fitted", None)
+        at_bounds = [] if err is None else base_at_bounds(
+            base, self.calibration, None if start is None else self.base_table(start))
+        if at_bounds:  # deliverable 6 of issue 18: the suspect declarations named
+            parts.append(bounds_verdict(at_bounds, self.calibration))
         if reason:
             parts.append(reason)
         return Diagnosis(list(self.start.effects), st.start_err, floor, list(st.rounds),
                          current, err, "; ".join(parts), st.cmp0, final_cmp,
-                         self.base_table(current), unexp, list(self.notes), interrupted,
-                         list(st.stages), list(self.runs))
+                         base, unexp, list(self.notes), interrupted,
+                         list(st.stages), list(self.runs), base_at_bounds=at_bounds)
 
     def _partial(self, st: _State) -> Diagnosis:
         """The diagnosis of the rounds that finished, without another simulation."""

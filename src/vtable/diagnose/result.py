@@ -10,13 +10,16 @@ and the verdict; `DiagnosisInterrupted` carries the rounds finished on Ctrl-C.
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from vtable.diagnose.model import SCREEN, TableModel
+from vtable.diagnose.calibration import WIDEN, Calibration, bounding_setting
+from vtable.diagnose.model import AT_BOUND, SCREEN, TableModel
 from vtable.diagnose.noise import UNEXPLAINED_RULE
 from vtable.diagnose.prose import localisation_text, unexplained
 from vtable.diagnose.selection import SELECTION, failing
@@ -110,6 +113,8 @@ class Diagnosis:
     runs: list[Run] = field(default_factory=list, repr=False)
     #: the files written from it (`plot`: the Rerun recording, the HTML report)
     files: list[Path] = field(default_factory=list)
+    #: declared values the calibrated base ends at a bound of (`base_at_bounds`)
+    base_at_bounds: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def final_effects(self) -> list[str]:
@@ -157,6 +162,7 @@ class Diagnosis:
                            "k_o_per_s": self.final.open_loop.k_o},
             "final_error": self.final_error,
             "unexplained": self.unexplained,
+            "base_at_bounds": self.base_at_bounds,
             "verdict": self.verdict,
             "interrupted": self.interrupted,
             "notes": self.notes,
@@ -192,6 +198,12 @@ class Diagnosis:
             [f"{d['start_error']:.2%}"] + [f"{r['error']:.2%} (+{r['added']})"
                                             for r in d["rounds"] if r["added"]]))
         out += base_lines(d["base"])
+        for b in d["base_at_bounds"]:
+            out.append(f"at its bound ({b['model']} model): {b['parameter']} (declared "
+                       f"{b['declared']:.4g}, "
+                       f"fitted {b['fitted']:.4g}, {b['side']} bound {b['bound']:.4g}); "
+                       + (f"--calibrate {b['calibrate']} lets it move" if b["calibrate"]
+                          else "its bound is at its widest"))
         u = d["unexplained"]
         out.append("unexplained: " + ("none (the final error is consistent with the noise "
                                       "floor)" if u is None else
@@ -268,6 +280,78 @@ def evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
 def localise(d: Diagnosis) -> str:
     """`Diagnosis.localisation`."""
     return d.localisation
+
+
+def base_at_bounds(base: dict[str, dict[str, Any]], calibration: Calibration,
+                   start: dict[str, dict[str, Any]] | None = None) -> list[dict[str, Any]]:
+    """The declared values the calibrated base ends at a bound of: within `AT_BOUND` of its
+    range from the bound, on the fitted scale (the logarithm for a factor bound), and bounded
+    by a `--calibrate` setting. `base` is the final model's (`TableModel.base_table`),
+    `start` the calibrated starting model's: a value at its bound there but not in the final
+    model is listed too (`model` "start": the effects added may stand in for a wrong
+    declaration). Each: {parameter, model, declared, fitted, bound, side, unit, calibrate},
+    `calibrate` the --calibrate text of the calibration with this bound widened
+    (`Calibration.widened`; the settings already given kept)."""
+    out = _at_bounds(base, "final")
+    final = {b["parameter"] for b in out}
+    out += [b for b in _at_bounds(start or {}, "start") if b["parameter"] not in final]
+    for b in out:
+        name = bounding_setting(b["parameter"], b["side"])
+        wider = getattr(calibration.widened([name]), name)
+        b["calibrate"] = (None if wider == getattr(calibration, name) else  # at its widest
+                          dataclasses.replace(calibration, **{name: wider}).text())
+    return out
+
+
+def _at_bounds(base: dict[str, dict[str, Any]], model: str) -> list[dict[str, Any]]:
+    out = []
+    for key, v in base.items():
+        lo, hi = v["bounds"]
+        for side, bound in (("lower", lo), ("upper", hi)):
+            name = bounding_setting(key, side)
+            if name is None or not hi > lo:
+                continue
+            f = math.log if WIDEN[name][0] == "factor" and lo > 0 else (lambda z: z)
+            pos = (f(v["fitted"]) - f(lo)) / (f(hi) - f(lo))
+            if (pos <= AT_BOUND) if side == "lower" else (pos >= 1 - AT_BOUND):
+                out.append({"parameter": key, "model": model, "declared": v["declared"],
+                            "fitted": v["fitted"], "bound": bound, "side": side,
+                            "unit": v["unit"]})
+    return out
+
+
+def bounds_verdict(at_bounds: list[dict[str, Any]], calibration: Calibration) -> str:
+    """The verdict's sentence on a base at its bounds (`base_at_bounds`): which
+    declarations the data push beyond their bounds (the suspects), and the --calibrate
+    setting that lets them all move."""
+    if not at_bounds:
+        return ""
+
+    def named(b: dict[str, Any]) -> str:
+        u = "" if b["unit"] == "1" else f" {b['unit']}"
+        moved = b["fitted"] / b["declared"] - 1 if b["declared"] else float("nan")
+        return (f"{b['parameter']} (declared {b['declared']:.4g}{u}, fitted "
+                f"{b['fitted']:.4g}{u} at its {b['side']} bound, {moved:+.1%})")
+
+    parts = []
+    final = [named(b) for b in at_bounds if b["model"] == "final"]
+    start = [named(b) for b in at_bounds if b["model"] == "start"]
+    if final:
+        parts.append("the calibrated base ends at its bounds: " + ", ".join(final))
+    if start:
+        parts.append("the calibrated starting model (no effect added) ended at its bounds: "
+                     + ", ".join(start) + "; an effect added may stand in for a wrong "
+                     "declaration")
+    wider = calibration.widened([bounding_setting(b["parameter"], b["side"])
+                                 for b in at_bounds])
+    one = len(at_bounds) == 1
+    how = (f"--calibrate {wider.text()} lets {'it' if one else 'them'} move"
+           if wider != calibration else
+           "the bounds are at their widest: the declaration must be corrected")
+    return ("; ".join(parts) + "; the data push "
+            + ("this declaration" if one else "these declarations")
+            + " beyond the calibration's bounds, so " + ("it is" if one else "they are")
+            + f" the suspect: {how}")
 
 
 def base_lines(base: dict[str, Any], indent: str = "") -> list[str]:

@@ -12,6 +12,7 @@ import scipy.linalg
 
 from vtable import units
 from vtable.analytic import closed_forms
+from vtable.analytic.structure import modal_damping
 from vtable.errors import VtableError
 from vtable.ident import channels
 from vtable.ident.fits import Fit, amplitude_fit, circle_fit, fit_mode
@@ -181,12 +182,13 @@ def _structure_guess(run: Run) -> tuple[float, float]:
     if isinstance(spec, SDOFSpecimen):
         return spec.frequency, spec.damping
     if isinstance(spec, ShearBuilding):
+        xi_1 = float(modal_damping(spec)[0])  # the first mode's ratio
         if spec.frequencies is not None:
-            return min(spec.frequencies), spec.damping
+            return min(spec.frequencies), xi_1
         k = np.asarray(spec.stiffnesses, dtype=float)  # storey stiffnesses, eq 4.5
         K = np.diag(k + np.append(k[1:], 0.0)) - np.diag(k[1:], 1) - np.diag(k[1:], -1)
         w2 = scipy.linalg.eigh(K, np.diag(spec.masses), eigvals_only=True)
-        return float(np.sqrt(w2.min()) / TWO_PI), spec.damping
+        return float(np.sqrt(w2.min()) / TWO_PI), xi_1
     raise VtableError(f"{run.name}: Table 3.1 needs a structure (sdof or shear_building)")
 
 

@@ -265,8 +265,9 @@ def _add_specimen_damping(s, spec: Specimen, joints: list[str]) -> None:
     drifts d and damping λ_k, and its passive force -λ_k v_kᵀ ḋ acts on the joints through
     the tendon Jacobian v_k: -λ_k v_k v_kᵀ ḋ, the rank-one term. MuJoCo's Euler integrator
     takes joint damping implicitly but tendon damping explicitly; the explicit step is
-    stable while h·2ξω_n (ω_n the building's highest mode) is well below 2 (2e-2 for
-    ξ = 5 % and a 30 Hz top mode at the 1 kHz step).
+    stable while h·2ξ_nω_n (ω_n the building's highest mode, ξ_n its own ratio: per mode,
+    or Rayleigh's α/(2ω_n) + βω_n/2, which grows with ω_n) is well below 2 (2e-2 for
+    ξ_n = 5 % and a 30 Hz top mode at the 1 kHz step).
     """
     C_d = specimen_damping(spec)
     if len(joints) != C_d.shape[0]:

@@ -94,9 +94,11 @@ def specimen_damping(spec: Specimen) -> np.ndarray:
 
     A SDOF frame: [[c_s]]. A shear building: the slides chain (storey j's joint is its
     drift d_j relative to storey j-1), so the storeys' displacements relative to the table
-    are u = L d with L lower-triangular ones, and the modal damping C_u = M Φ diag(2ξω) Φᵀ M
-    of `analytic.structure.building_matrices` (ξ in every fixed-base mode) becomes
-    C_d = Lᵀ C_u L. A bare table or a rigid block: an empty (0, 0) matrix.
+    are u = L d with L lower-triangular ones, and the classical damping
+    C_u = M Φ diag(2 ξ_i ω_i) Φᵀ M of `analytic.structure.building_matrices` (each fixed-base
+    mode i at its declared ratio ξ_i: one for all, one per mode, or Rayleigh's
+    α/(2ω_i) + βω_i/2, for which C_u = α M + β K) becomes C_d = Lᵀ C_u L. A bare table or
+    a rigid block: an empty (0, 0) matrix.
 
     Parameters
     ----------

@@ -5,11 +5,14 @@ Heights are measured from the horizontal actuator line (29.7 in below the table 
 
 Damping ratios are fractions of critical (0.02, not 2 %): a ratio above 1 (an
 overdamped structure, or a percentage written as a fraction) is refused. A shear
-building has at most `MAX_STOREYS` storeys.
+building has at most `MAX_STOREYS` storeys; its damping is classical (its fixed-base modes
+stay its damped modes): one ratio for every mode, one ratio per mode, or Rayleigh damping
+C = α M + β K through two anchors (f₁, ξ₁), (f₂, ξ₂).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -106,17 +109,28 @@ class SDOFSpecimen(Params):
 @dataclass(frozen=True)
 class ShearBuilding(Params):
     """An n-storey shear building (eq 4.5): storey weights and heights, and either
-    storey stiffnesses or fixed-base frequencies; modal damping ξ in every mode."""
+    storey stiffnesses or fixed-base frequencies; classical damping given by exactly one of
+
+    - `damping`: one modal ratio ξ for every mode, or a tuple of n ratios, one per
+      fixed-base mode, lowest mode first (C = M Φ diag(2 ξ_i ω_i) Φᵀ M);
+    - `rayleigh`: Rayleigh damping C = α M + β K through two anchors ((f₁, ξ₁), (f₂, ξ₂))
+      (Hz, fraction of critical): ξ(ω) = α/(2ω) + βω/2 passes through both, so mode i has
+      ξ_i = ξ(ω_i) (`rayleigh_coefficients`, `damping_ratios`).
+    """
 
     weights: tuple[float, ...] = quantity("kip", "weights_kip", vector=True)
     heights: tuple[float, ...] = quantity("in", "heights_in", vector=True,
                                           doc="floor heights above the actuator line")
-    damping: float = quantity("1", "damping", minimum=0, exclusive=False,
-                              maximum=MAX_DAMPING, fraction=True)
+    damping: float | tuple[float, ...] | None = quantity(
+        "1", "damping", default=None, minimum=0, exclusive=False, maximum=MAX_DAMPING,
+        fraction=True, doc="modal ratio: one for every mode, or one per mode")
     stiffnesses: tuple[float, ...] | None = quantity("kip/in", "stiffnesses_kip_per_in",
                                                      default=None, vector=True)
     frequencies: tuple[float, ...] | None = quantity("Hz", "frequencies_hz", default=None,
                                                      vector=True)
+    rayleigh: tuple[tuple[float, float], tuple[float, float]] | None = plain(
+        "damping_rayleigh", default=None,
+        doc="Rayleigh damping through [[f1_hz, xi1], [f2_hz, xi2]]")
     kind: str = plain(default="shear_building")
     title: str = plain(default="shear building")
     source: str = plain(default="")
@@ -145,6 +159,14 @@ class ShearBuilding(Params):
             raise VtableError(f"{name}.{key}: {len(given)} values for {n} storeys")
         if any(not v > 0 for v in given):
             raise VtableError(f"{name}.{key}: every value must be > 0")
+        if (self.damping is None) == (self.rayleigh is None):
+            raise VtableError(f"{name}: give exactly one of damping and damping_rayleigh")
+        if isinstance(self.damping, tuple) and len(self.damping) != n:
+            raise VtableError(f"{name}.damping: expected a number, got "
+                              f"{list(self.damping)}: a list gives one ratio per mode, "
+                              f"{n} here")
+        if self.rayleigh is not None:
+            self.rayleigh_coefficients()  # checks the anchors
 
     @property
     def masses(self) -> np.ndarray:
@@ -157,6 +179,93 @@ class ShearBuilding(Params):
     @property
     def n(self) -> int:
         return len(self.weights)
+
+    def rayleigh_coefficients(self) -> tuple[float, float]:
+        """(α, β) of C = α M + β K through the two anchors: ξ(ω) = α/(2ω) + βω/2 equals
+        ξ₁ at ω₁ = 2π f₁ and ξ₂ at ω₂ = 2π f₂ (α in 1/s, β in s). Anchors at one
+        frequency, or a pair that needs a negative α or β (ξ₂/ξ₁ above ω₂/ω₁, or ξ₂ω₂
+        below ξ₁ω₁: a damping matrix that is not positive), are refused."""
+        where = "ShearBuilding.damping_rayleigh"
+        if self.rayleigh is None:
+            raise VtableError(f"{where}: not given")
+        (f1, x1), (f2, x2) = sorted(self.rayleigh)
+        w1, w2 = 2 * math.pi * f1, 2 * math.pi * f2
+        if not w2 > w1 * (1 + 1e-9):
+            raise VtableError(f"{where}: the two anchors need two different frequencies, "
+                              f"got {f1:g} and {f2:g} Hz")
+        alpha, beta = np.linalg.solve([[1 / (2 * w1), w1 / 2], [1 / (2 * w2), w2 / 2]],
+                                      [x1, x2])
+        tol = 1e-9 * max(x1, x2)  # rounding of an α or β that is exactly zero
+        if alpha < -tol * w1 or beta < -tol / w2:
+            raise VtableError(f"{where}: ξ {x1:g} at {f1:g} Hz and {x2:g} at {f2:g} Hz need "
+                              f"a negative {'α' if alpha < 0 else 'β'} (α {alpha:.3g} 1/s, "
+                              f"β {beta:.3g} s): Rayleigh damping cannot pass through them")
+        return float(max(alpha, 0.0)), float(max(beta, 0.0))
+
+    def damping_ratios(self, omega: np.ndarray) -> np.ndarray:
+        """Each fixed-base mode's damping ratio, the modes' circular frequencies `omega`
+        (rad/s) ascending: the one ratio repeated, the per-mode ratios, or Rayleigh's
+        ξ_i = α/(2ω_i) + βω_i/2."""
+        omega = np.asarray(omega, dtype=float)
+        if self.rayleigh is not None:
+            alpha, beta = self.rayleigh_coefficients()
+            return alpha / (2 * omega) + beta * omega / 2
+        return np.broadcast_to(np.asarray(self.damping, dtype=float), omega.shape).copy()
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any], where: str = "") -> ShearBuilding:
+        """The TOML table; `damping` one ratio or a list (one per mode), or
+        `damping_rayleigh = [[f1_hz, xi1], [f2_hz, xi2]]`."""
+        where = where or cls.__name__
+        if not isinstance(d, dict):
+            raise VtableError(f"{where}: expected a table, got {type(d).__name__}")
+        d = dict(d)
+        per_mode = anchors = None
+        xi = d.get("damping")
+        if isinstance(xi, list):
+            n = len(d["weights_kip"]) if isinstance(d.get("weights_kip"), list) else None
+            if not xi or (n is not None and len(xi) != n):
+                raise VtableError(f"{where}.damping: expected a number, got {xi!r}: a list "
+                                  "gives one ratio per mode" + (f", {n} here" if n else ""))
+            per_mode = tuple(check_number(x, f"{where}.damping[{i}]")
+                             for i, x in enumerate(xi))
+            d["damping"] = 0.0  # checked below, with the per-mode ratios in place
+        if "damping_rayleigh" in d:
+            if "damping" in d:
+                raise VtableError(f"{where}: give exactly one of damping and damping_rayleigh")
+            anchors = _rayleigh_anchors(d.pop("damping_rayleigh"), f"{where}.damping_rayleigh")
+            d["damping"] = 0.0
+        base = super().from_dict(d, where)
+        if per_mode is None and anchors is None:
+            return base
+        try:
+            return dataclasses.replace(base, damping=per_mode, rayleigh=anchors)
+        except VtableError as e:
+            raise VtableError(f"{where}: {e}") from None
+
+    def to_dict(self) -> dict[str, Any]:
+        d = super().to_dict()
+        if self.rayleigh is not None:
+            d["damping_rayleigh"] = [list(a) for a in self.rayleigh]
+        return d
+
+
+def _rayleigh_anchors(v: Any, where: str) -> tuple[tuple[float, float], tuple[float, float]]:
+    """[[f1_hz, xi1], [f2_hz, xi2]] -> two (Hz, ratio) pairs, each checked."""
+    if not (isinstance(v, list | tuple) and len(v) == 2
+            and all(isinstance(a, list | tuple) and len(a) == 2 for a in v)):
+        raise VtableError(f"{where}: expected [[f1_hz, xi1], [f2_hz, xi2]], got {v!r:.60}")
+    out = []
+    for i, (f, xi) in enumerate(v):
+        f = check_number(f, f"{where}[{i}][0]", "Hz")
+        xi = check_number(xi, f"{where}[{i}][1]")
+        if not f > 0:
+            raise VtableError(f"{where}[{i}][0]: a frequency must be > 0, got {f:g}")
+        if not 0 <= xi <= MAX_DAMPING:
+            raise VtableError(f"{where}[{i}][1] is a fraction of critical damping, from 0 "
+                              f"to {MAX_DAMPING:g}; got {xi:g} ({xi:g} means {100 * xi:g} %)")
+        out.append((f, xi))
+    return out[0], out[1]
 
 
 Specimen = NoSpecimen | RigidBlock | SDOFSpecimen | ShearBuilding

@@ -111,7 +111,8 @@ def equivalent_sdof(spec: Specimen) -> SDOFSpecimen:
         w, _ = fixed_base_modes(M, K)
         m, h = np.diag(M), np.asarray(spec.heights)
         return SDOFSpecimen(weight=modal_mass(m, h) * G, height=effective_height_first_mode(m, h),
-                            frequency=float(w[0]) / TWO_PI, damping=spec.damping,
+                            frequency=float(w[0]) / TWO_PI,
+                            damping=float(spec.damping_ratios(w)[0]),
                             title=f"{spec.title}: first mode at h_e1", source="§4.2.2")
     raise VtableError(f"interaction assessment needs an sdof or shear_building specimen, "
                       f"got kind {getattr(spec, 'kind', '?')!r}")
