@@ -7,8 +7,8 @@ loop (no RC filter) and the passive stabilizers; effects then edit the spec
 (`vtable.mjcf.edit`: free a joint, a reaction mass, pistons between actuators and platen,
 storey actuators), set the hydraulic element's options, add force-law controllers and
 output filters. `finalize` compiles and picks the controllers: the linear, fused
-`ServoController` while the horizontal loop is linear, the compiled `HydraulicServo` once
-an appendix C option is on.
+`ServoController` while every stage of the horizontal loop is linear, the compiled
+`HydraulicServo` (the stage set's element) once one is not.
 """
 
 from __future__ import annotations
@@ -27,8 +27,12 @@ from vtable.controllers import (
     quadratic_damper,
 )
 from vtable.effects import physics as phys
+from vtable.effects.stiffness import needed_stiffness
+from vtable.effects.table import TableView
+from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.errors import VtableError
 from vtable.hydraulics.law import group_law
+from vtable.hydraulics.stage import Stage, add_stage
 from vtable.mjcf import edit
 from vtable.mjcf.builder import BuiltModel, compile_table, table_spec
 from vtable.params.virtual import VirtualTable, virtual_table, with_rocking
@@ -56,10 +60,14 @@ class VirtualAssembly:
         self.ts = table_spec(self.vt, ph.specimen, timestep=timestep, with_meshes=False)
         edit.lock_joint(self.ts, "pitch")
         self.servo = base
+        self.stages: list[tuple[Stage, dict[str, float]]] = []
+        self.table = TableView.of(self.vt, piston_area=base.area)
         self.controllers: list = []
         self.filters: list[Callable] = []
         self.n_actuators = len(self.vt.group("horizontal"))
         self.max_step = MAX_STEP
+        if vt.valve_lag:  # a lab table's own servovalve lag
+            self.add_stage(SPOOL_LAG, tau=vt.valve_lag)
 
     def _stiff(self, mass: float, stiffness: float) -> None:
         """MuJoCo's semi-implicit Euler with an explicit controller force is stable to
@@ -68,17 +76,8 @@ class VirtualAssembly:
             self.max_step = min(self.max_step, 1.0 / math.sqrt(stiffness / mass))
 
     # -- the vocabulary ----------------------------------------------------------------
-    def set_servo(self, *, rc: float | None = None, supply_pressure: float | None = None,
-                  friction: float | None = None, max_velocity: float | None = None,
-                  spool_lag: float | None = None, air_ratio: float | None = None) -> None:
-        ch = {k: v for k, v in (("rc", rc), ("supply_pressure", supply_pressure),
-                                ("spool_lag", spool_lag), ("air_ratio", air_ratio))
-              if v is not None}
-        if friction is not None:
-            ch["friction"] = friction / self.n_actuators
-        if max_velocity is not None:
-            ch["max_flow"] = max_velocity * self.servo.area
-        self.servo = self.servo.replace(**ch)
+    def add_stage(self, stage: Stage, **params: float) -> None:
+        add_stage(self.stages, stage, params)
 
     def unlock(self, dof: str) -> None:
         if dof not in self.vt.dofs:
@@ -95,7 +94,9 @@ class VirtualAssembly:
 
     def insert_at_actuators(self, name: str, mass: float, law: Callable,
                             params: Sequence[float], states: int = 0,
-                            stiffness: float = 0.0) -> None:
+                            stiffness: float | None = None) -> None:
+        if stiffness is None:
+            stiffness = needed_stiffness(law, params, states)
         self._stiff(mass, stiffness)
         acts = edit.insert_at_actuators(self.ts, name, mass)
         # each actuator carries its share of the lumped connection's force
@@ -103,7 +104,9 @@ class VirtualAssembly:
                                                    scale=1.0 / len(acts)))
 
     def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0,
-                         stiffness: float = 0.0) -> None:
+                         stiffness: float | None = None) -> None:
+        if stiffness is None:
+            stiffness = needed_stiffness(law, params, states)
         for m in self.ts.structure_masses:
             self._stiff(m, stiffness)
         acts = edit.add_storey_actuators(self.ts)
@@ -120,13 +123,12 @@ class VirtualAssembly:
         """Compile the spec and return it with its controllers."""
         built = compile_table(self.ts)
         vt = self.vt
-        rc = ("x", "twist") if self.servo.rc else ()
-        if self.servo.nonlinear:
-            ctl = [HydraulicServo(vt, self.servo),
-                   ServoController(vt, rc_filter=(), groups=("vertical",))]
+        law = group_law(vt, "horizontal", self.servo, stages=self.stages)
+        if law.linear:
+            ctl = [ServoController(vt, rc_filter=(), laws={"horizontal": law})]
         else:
-            law = group_law(vt, "horizontal", self.servo, rc_dofs=rc)
-            ctl = [ServoController(vt, rc_filter=rc, laws={"horizontal": law})]
+            ctl = [HydraulicServo(vt, law=law),
+                   ServoController(vt, rc_filter=(), groups=("vertical",))]
         if vt.stabilizers.pairs:
             ctl.append(PassiveStabilizers(vt))
         built.vt = vt
