@@ -26,11 +26,14 @@ def needed_stiffness(law: Callable, params: Sequence[float], states: int = 0) ->
             h = max(1e-9, 1e-4 * abs(d0))
             f = [float(law(float(d0 + s * h), 0.0, np.zeros(states), p, np.zeros(states)))
                  for s in (-1.0, 1.0)]
-            slope = max(slope, abs(f[1] - f[0]) / (2 * h))
+            s = abs(f[1] - f[0]) / (2 * h)
+            if not math.isfinite(s):
+                raise VtableError(f"{name}: give stiffness= (N/m, its largest slope): the "
+                                  f"law's force at d = {d0:.3g} m is not finite")
+            slope = max(slope, s)
+    except VtableError:
+        raise
     except Exception as e:  # a user's law may raise anything
         raise VtableError(f"{name}: give stiffness= (N/m, its largest slope): probing the law "
                           f"failed ({type(e).__name__}: {e})") from None
-    if not math.isfinite(slope):
-        raise VtableError(f"{name}: give stiffness= (N/m, its largest slope): the law's slope "
-                          "is not finite")
     return slope

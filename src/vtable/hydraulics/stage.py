@@ -113,7 +113,9 @@ def _source(fn: Callable) -> str:
         text = inspect.getsource(fn)
     except (OSError, TypeError):
         text = fn.__code__.co_code.hex()
-    return f"{fn.__qualname__}\n{text}\n{_globals_source(fn)}"
+    # the module's name too: a compiled law refers to it (a user's file is named by its
+    # path, the same in every process)
+    return f"{fn.__module__}.{fn.__qualname__}\n{text}\n{_globals_source(fn)}"
 
 
 def _globals_source(fn: Callable) -> str:
