@@ -32,6 +32,9 @@ from vtable.hydraulics.stage import KINDS, Stage
 
 _LAWS: dict[str, list[Callable]] = {}  # key -> the stages' laws, for the generated module
 _MODULES: dict[str, Composition] = {}
+#: compositions by the identity of their stages and kernels (held, so ids stay theirs):
+#: hashing the laws' source is slower than building a reduced model
+_SEEN: dict[tuple[int, ...], tuple[tuple, Composition]] = {}
 
 
 def laws_of(key: str) -> list[Callable]:
@@ -78,9 +81,13 @@ def composition(stages: Sequence[Stage], extra: Sequence[Callable] = ()) -> Comp
     if len({s.name for s in stages}) < len(stages):
         raise VtableError(f"a stage appears twice: {', '.join(s.name for s in stages)}")
     templates = [element.servo_rates, element.servo_step, *extra]
+    seen = _SEEN.get(tuple(map(id, (*stages, *templates))))
+    if seen is not None and seen[0] == (*stages, *templates):  # a model built again
+        return seen[1]
     key = _key(stages, templates)
     hit = _MODULES.get(key)
     if hit is not None:
+        _SEEN[tuple(map(id, (*stages, *templates)))] = ((*stages, *templates), hit)
         return hit
     laws: list[Callable] = []
     for s in stages:
@@ -99,6 +106,7 @@ def composition(stages: Sequence[Stage], extra: Sequence[Callable] = ()) -> Comp
     comp = Composition(stages, module, 1 + sum(s.states for s in stages),
                        all(s.linear for s in stages))
     _MODULES[key] = comp
+    _SEEN[tuple(map(id, (*stages, *templates)))] = ((*stages, *templates), comp)
     return comp
 
 
