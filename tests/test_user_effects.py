@@ -284,7 +284,7 @@ def test_diagnose_ranks_the_valve_overlap_and_the_error_falls():
     from vtable.diagnose.engine import Diagnoser
 
     truth, runs = overlap_campaign()
-    d = Diagnoser(runs, max_rounds=1).diagnose()
+    d = Diagnoser(runs, max_rounds=1, catalog=[*BUILT_IN, "valve_overlap"]).diagnose()
     best = d.rounds[0].ranking[0]
     assert best.effect == "valve_overlap" and d.rounds[0].added == "valve_overlap"
     assert best.error_after < 0.5 * d.rounds[0].before, (d.rounds[0].before, best.error_after)
