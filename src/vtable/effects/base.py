@@ -97,9 +97,9 @@ class Param:
 
 class Assembly(Protocol):
     """The vocabulary both models speak, each verb realised by both (`ReducedAssembly`,
-    `VirtualAssembly`); an effect's `apply` may call these only, which `register` checks
-    (the reduced model's own coordinates verbs — `add_dof`, `add_spring`, `add_force`,
-    `set_actuator` — serve an effect's `reduced` hook).
+    `VirtualAssembly`); an effect's `apply` may call these only, which `register` checks.
+    Coordinates are named: "x" (the platen), "pitch" once freed, the specimen's storeys
+    ("x_s", "x_s1", ...; the virtual table's joints of the same names) and added DOFs.
 
     Lengths, forces, masses in SI.
     """
@@ -112,6 +112,22 @@ class Assembly(Protocol):
         """A stage of the horizontal actuators' hydraulic element
         (`vtable.hydraulics.stage.Stage`: valve, flow, pressure, feedback or force law)
         with its named parameters (SI, one actuator's)."""
+
+    def add_dof(self, name: str, mass: float) -> None:
+        """A new coordinate: a mass `name` (kg) sliding in x, held by nothing until a
+        spring, a force or the actuators tie it."""
+
+    def add_spring(self, a: str, b: str | None, stiffness: float, damping: float) -> None:
+        """A spring and dashpot (N/m, N s/m) between coordinates a and b (None: ground)."""
+
+    def set_actuator(self, moving: str | None = None, reaction: str | None = None) -> None:
+        """What the horizontal actuators push (`moving`) and react on (`reaction`)."""
+
+    def add_force(self, law: Callable, a: str, b: str | None = None,
+                  params: Sequence[float] = (), states: int = 0, mass: float = 0.0,
+                  stiffness: float | None = None) -> None:
+        """A force `law(d, v, z, p, dz)` on coordinate a and its reaction on b (d, v: the
+        relative motion a - b); `stiffness` and `mass` as for `insert_at_actuators`."""
 
     def unlock(self, dof: str) -> None:
         """Let the platen move in a DOF the base model holds fixed (e.g. "pitch")."""

@@ -92,6 +92,27 @@ class VirtualAssembly:
                           damping: float) -> None:
         edit.add_reaction_mass(self.ts, name, mass, stiffness, damping)
 
+    def add_dof(self, name: str, mass: float) -> None:
+        edit.add_slide_body(self.ts, name, mass)
+
+    def add_spring(self, a: str, b: str | None, stiffness: float, damping: float) -> None:
+        edit.add_spring(self.ts, a, b, stiffness, damping)
+
+    def set_actuator(self, moving: str | None = None, reaction: str | None = None) -> None:
+        edit.set_actuator(self.ts, moving, reaction)
+
+    def add_force(self, law: Callable, a: str, b: str | None = None,
+                  params: Sequence[float] = (), states: int = 0, mass: float = 0.0,
+                  stiffness: float | None = None) -> None:
+        """A force-law controller on a tendon of length q_a - q_b."""
+        if stiffness is None:
+            stiffness = needed_stiffness(law, params, states)
+        self._stiff(mass, stiffness)
+        t = edit.relative_tendon(self.ts, f"force_{a}_{b or 'ground'}_{len(self.controllers)}",
+                                 a, b)
+        self.ts.force_actuators.append(t)
+        self.controllers.append(ForceLawController((t,), law, params, states))
+
     def insert_at_actuators(self, name: str, mass: float, law: Callable,
                             params: Sequence[float], states: int = 0,
                             stiffness: float | None = None) -> None:
