@@ -15,28 +15,47 @@ from vtable.controllers.servo import ServoController, dof_matrix
 from vtable.controllers.stabilizers import PassiveStabilizers
 
 
+def _table_stages(vt) -> list:
+    """The table's own stages on H1-H3: its RC filter on the ΔP feedback (eq B.4) and its
+    servovalves' lag (a lab table's)."""
+    from vtable.effects.force_feedback_filter import RC_FILTER
+    from vtable.effects.valve_dynamics import SPOOL_LAG
+
+    out = [(RC_FILTER, {"rc": vt.horizontal_servo.rc})] if vt.horizontal_servo.rc else []
+    return out + ([(SPOOL_LAG, {"tau": vt.valve_lag})] if vt.valve_lag else [])
+
+
 def standard_controllers(vt, rc_filter=("x", "twist")) -> list:
     """The table's controllers for the virtual table `vt` (the EERC table's: every loop,
     and the passive stabilizers). A loop with a valve lag is stepped by the hydraulic
-    element (`HydraulicServo`)."""
+    element (`HydraulicServo`) with the table's stages."""
     if vt.valve_lag:
-        ctl = [HydraulicServo(vt), ServoController(vt, groups=("vertical",))]
+        ctl = [HydraulicServo(vt, stages=tuple(_table_stages(vt))),
+               ServoController(vt, groups=("vertical",))]
     else:
         ctl = [ServoController(vt, rc_filter=rc_filter)]
     return ctl + ([PassiveStabilizers(vt)] if vt.stabilizers.pairs else [])
 
 
-def nonlinear_controllers(vt, **valve) -> list:
-    """Appendix C valves on H1-H3 (`vtable.hydraulics.appendix_c`: orifice flow from the
-    supply pressure, rated-flow cap; `valve` passes air_ratio, friction, ...), linear
-    loops on V1-V4, passive stabilizers."""
-    from vtable.hydraulics import appendix_c, group_law
+def nonlinear_controllers(vt, air_ratio: float = 0.0, friction: float = 0.0) -> list:
+    """Appendix C valves on H1-H3 — the stages of the valve_flow_nonlinearity (orifice
+    flow from the table's supply pressure) and flow_saturation (the rated flow) effects,
+    optionally oil_column_air's (`air_ratio`) and actuator_friction's (`friction`, N per
+    actuator), with the table's RC filter — linear loops on V1-V4, passive stabilizers."""
+    from vtable.effects.actuator_friction import FRICTION, V_EPS
+    from vtable.effects.flow_saturation import FLOW_CAP
+    from vtable.effects.oil_column_air import AIR
+    from vtable.effects.valve_flow_nonlinearity import ORIFICE
 
-    base = group_law(vt, "horizontal").hydraulics
-    hyd = appendix_c(base, vt.table.geometry.supply_pressure, vt.table.rated_flow("H1"),
-                     **valve)
-    return [HydraulicServo(vt, hyd), ServoController(vt, groups=("vertical",))] + \
-        ([PassiveStabilizers(vt)] if vt.stabilizers.pairs else [])
+    ps = vt.table.geometry.supply_pressure
+    stages = [*_table_stages(vt), (ORIFICE, {"supply_pressure": ps}),
+              (FLOW_CAP, {"max_flow": vt.table.rated_flow("H1")})]
+    if air_ratio:
+        stages.append((AIR, {"air_ratio": air_ratio, "mean_pressure": ps}))
+    if friction:
+        stages.append((FRICTION, {"friction": friction, "v_eps": V_EPS}))
+    return [HydraulicServo(vt, stages=tuple(stages)), ServoController(vt, groups=("vertical",))] \
+        + ([PassiveStabilizers(vt)] if vt.stabilizers.pairs else [])
 
 
 __all__ = ["DOFS", "Controller", "ForceLawController", "HydraulicServo", "LinearController",

@@ -32,9 +32,12 @@ class ServoController(LinearController):
         self.laws = {k: (laws or {}).get(k) or group_law(vt, k, rc_dofs=self.rc_filter)
                      for k in ("horizontal", "vertical") if k in groups and vt.group(k)}
         self.actuators = tuple(a for law in self.laws.values() for a in law.actuators)
-        filt = [d for law in self.laws.values() for d, f in zip(law.dofs, law.filtered,
-                                                                  strict=True) if f]
-        self.state_names = tuple([f"P_{a}" for a in self.actuators] + [f"Pf_{d}" for d in filt])
+        # state order (see `bind`): every group's first states (one per actuator), then
+        # every group's others
+        names = [law.state_names() for law in self.laws.values()]
+        ks = [len(law.actuators) for law in self.laws.values()]
+        self.state_names = tuple([s for n, k in zip(names, ks, strict=True) for s in n[:k]] +
+                                 [s for n, k in zip(names, ks, strict=True) for s in n[k:]])
 
     def bind(self, actuator_names: tuple[str, ...]) -> None:
         n = len(actuator_names)

@@ -5,7 +5,6 @@ import math
 from vtable.effects import Effect, Param, register
 
 PISTONS = 680.0  # kg: pistons, rods and swivels of H1-H3 together (assumed)
-PLATEN = 45360.0  # kg: the 100-kip slab (§2.2)
 CONTACT_HZ = 50.0  # Hz: the platen on the closed swivels (assumed)
 
 
@@ -25,7 +24,7 @@ class SwivelBacklash(Effect):
     params = (Param("gap", "in", 0.01, 0.001, 0.2, log=True, source="assumed"),)
 
     def apply(self, m, p):
-        k = PLATEN * (2 * math.pi * CONTACT_HZ) ** 2
+        k = m.table.platen_mass * (2 * math.pi * CONTACT_HZ) ** 2  # the run's platen
         c = 0.4 * math.sqrt(k * PISTONS)  # contact damping, 20 % of the pistons' mode
         m.insert_at_actuators("piston", PISTONS, dead_band, [p["gap"], k, c], stiffness=k)
 

@@ -29,11 +29,12 @@ def test_catalog_has_the_spec_names():
             assert p.lower <= p.default <= p.upper and p.unit
 
 
-#: every registered effect at a visible dose: the catalog's and the README's user effect
-#: (examples/swivel_backlash.py, loaded as a user would)
+#: every registered effect at a visible dose: the catalog's and the README's user effects
+#: (examples/swivel_backlash.py and examples/valve_overlap.py, loaded as a user would)
 load_file(Path(__file__).resolve().parents[1] / "examples" / "swivel_backlash.py")
-DOSES = {**HIDDEN, "swivel_backlash": {"gap": 0.005}}
-REGISTERED = names()  # at collection: the catalog and the README's effect
+load_file(Path(__file__).resolve().parents[1] / "examples" / "valve_overlap.py")
+DOSES = {**HIDDEN, "swivel_backlash": {"gap": 0.005}, "valve_overlap": {"overlap": 0.5}}
+REGISTERED = names()  # at collection: the catalog and the README's effects
 
 
 def test_the_doses_cover_every_registered_effect():

@@ -7,6 +7,7 @@ examples/swivel_backlash.py, outside the package; these tests load it as a user 
 from __future__ import annotations
 
 import functools
+import math
 import re
 from pathlib import Path
 
@@ -15,14 +16,16 @@ import pytest
 from conftest import campaign_commands
 
 from vtable.cli import main
-from vtable.effects import BUILT_IN, get, load_file, names
+from vtable.effects import BUILT_IN, Effect, Param, get, load_file, names
 from vtable.effects.physics import Physics, nominal_open_loop
 from vtable.params import presets
 from vtable.sim import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "swivel_backlash.py"
+VALVE = ROOT / "examples" / "valve_overlap.py"
 GAP_IN = 0.005  # the hidden backlash: 5 mils of free play
+OVERLAP_PCT = 0.5  # the hidden spool overlap: 0.5 % of the stroke
 
 
 def test_the_readme_shows_the_example_file_whole_and_short():
@@ -148,6 +151,9 @@ def test_a_pure_python_law_gives_the_same_prediction():
         def __init__(self, m):
             self.m = m
 
+        def __getattr__(self, name):  # the rest of the assembly (m.table, ...) as it is
+            return getattr(self.m, name)
+
         def insert_at_actuators(self, name, mass, law, params, states=0, stiffness=0.0):
             def python_law(d, v, z, p, dz):
                 return {"f": law(d, v, z, p, dz)}["f"]
@@ -172,3 +178,158 @@ def test_a_pure_python_law_gives_the_same_prediction():
     for ch in ("avg_hdisp", "avg_hacc", "acc_n_ne"):
         np.testing.assert_allclose(slow[ch], quick[ch], rtol=1e-7,
                                    atol=1e-9 * np.max(np.abs(quick[ch])))
+
+
+def test_every_effect_calls_only_verbs_both_models_realise():
+    """The catalog's and the examples' effects pass the check `register` makes."""
+    from vtable.effects.verbs import called_verbs, check_verbs
+
+    load_file(VALVE)
+    load_file(EXAMPLE)
+    for name in names():
+        check_verbs(get(name), name)
+    assert called_verbs(type(get("valve_overlap")).apply) == {"add_stage"}
+    assert called_verbs(type(get("swivel_backlash")).apply) == {"insert_at_actuators"}
+
+
+@pytest.mark.parametrize("hook, verb, msg", [
+    ("apply", "matrices", "calls m.matrices() in apply(), which both models cannot"),
+    ("virtual", "add_link", "calls m.add_link() in virtual(), which the virtual table cannot"),
+    ("apply", "set_servo", "calls m.set_servo() in apply(), which both models cannot"),
+])
+def test_a_verb_one_model_lacks_is_refused_when_registered(capsys, tmp_path, hook, verb, msg):
+    other = "" if hook == "apply" else "    def reduced(self, m, p):\n        pass\n"
+    f = tmp_path / "springy.py"
+    f.write_text("from vtable.effects import Effect, Param, register\n"
+                 "class E(Effect):\n    name = 'springy'\n    physics = section = signature = 'x'\n"
+                 f"    def {hook}(self, m, p):\n        m.{verb}('x', None, 1.0, 0.0)\n"
+                 f"{other}register(E())\n")
+    code = main(["simulate", "--duration", "1", "--effects-from", str(f)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert str(f) in err and msg in err, err
+
+
+class FlexibleLink(Effect):
+    """The actuators push a 900 kg link tied to the platen by a spring (12 Hz with the
+    link), a dashpot and a quadratic damper: every coordinate verb, in both models."""
+
+    name = "flexible_link"
+    physics = section = signature = "a test of the coordinate verbs"
+    params = (Param("f_link", "Hz", 12.0, 1.0, 100.0),)
+
+    def apply(self, m, p):
+        mass = 900.0
+        k = mass * (2 * math.pi * p["f_link"]) ** 2
+        m.add_dof("link", mass)
+        m.set_actuator(moving="link")
+        m.add_spring("link", "x", k, 0.05 * 2 * math.sqrt(k * mass))
+        m.add_force(quadratic, "link", "x", [2e5], mass=mass, stiffness=0.0)
+
+
+def quadratic(d, v, z, p, dz):
+    return -p[0] * abs(v) * v
+
+
+def test_the_coordinate_verbs_agree_in_both_models():
+    """add_dof, set_actuator, add_spring and add_force realised on the virtual table
+    (MjSpec edits and a force-law controller) as in the reduced model: within 2 %."""
+    from vtable.effects import register
+    from vtable.effects.reduced import ReducedModel
+
+    register(FlexibleLink())
+    ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"), {"flexible_link": {}})
+    random, _, quake = campaign_commands()
+    for cmd in (random, quake):
+        run = virtual_run(ph, cmd)
+        pred = ReducedModel(ph).predict(run)
+        base = ReducedModel(Physics(nominal_open_loop(), presets.specimen("sdof_frame"))
+                            ).predict(run)
+        for ch in ("avg_hdisp", "avg_hacc", "h1_force", "acc_n_ne"):
+            y = run.channel(ch)
+            err = np.sqrt(np.mean((pred[ch] - y) ** 2) / np.mean(y**2))
+            off = np.sqrt(np.mean((base[ch] - y) ** 2) / np.mean(y**2))
+            assert err < 0.02 and off > 5 * err, (cmd.name, ch, err, off)
+
+
+@pytest.mark.parametrize("verb", ["insert_at_actuators", "add_storey_force"])
+def test_a_missing_stiffness_is_worked_out_from_the_law(verb):
+    """Without stiffness=, the step follows the law's largest slope (here k = 4e10 N/m on
+    the 680 kg pistons, or the SDOF mass), as with it; a law that cannot be probed is one
+    line."""
+    from vtable.effects.reduced import ReducedAssembly
+    from vtable.effects.stiffness import needed_stiffness
+    from vtable.errors import VtableError
+    from vtable.params.virtual import virtual_table
+
+    k = 4e10
+    assert needed_stiffness(get_law(), [0.001, k, 0.0]) == pytest.approx(k, rel=1e-3)
+    ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"))
+    steps = []
+    for stiffness in (k, None):
+        m = ReducedAssembly(ph, virtual_table())
+        if verb == "insert_at_actuators":
+            m.insert_at_actuators("piston", 680.0, get_law(), [0.001, k, 0.0],
+                                  stiffness=stiffness)
+        else:
+            m.add_storey_force(get_law(), [0.001, k, 0.0], stiffness=stiffness)
+        steps.append(m.max_step)
+    assert steps[1] == pytest.approx(steps[0], rel=1e-3) and steps[0] < 2.5e-3
+    with pytest.raises(VtableError, match=r"^raising_law: give stiffness=.*ValueError: no"):
+        m.add_storey_force(raising_law, [0.0])
+    with pytest.raises(VtableError, match=r"^rigid_law: give stiffness= .* not finite"):
+        m.add_storey_force(rigid_law, [0.0])
+
+
+def get_law():
+    load_file(EXAMPLE)
+    import sys
+
+    return next(m.dead_band for m in sys.modules.values()
+                if getattr(m, "dead_band", None) is not None and hasattr(m, "SwivelBacklash"))
+
+
+def raising_law(d, v, z, p, dz):
+    raise ValueError("no contact model")
+
+
+def rigid_law(d, v, z, p, dz):
+    return -math.inf if d > 0 else 0.0
+
+
+def test_the_readme_shows_the_valve_example_whole_and_short():
+    text = VALVE.read_text()
+    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+    assert text in blocks, "the README must show examples/valve_overlap.py verbatim"
+    assert len(text.splitlines()) <= 40
+
+
+def test_the_valve_example_simulates_from_the_cli(capsys, tmp_path):
+    out = tmp_path / "overlap"
+    code = main(["simulate", "--duration", "2", "--effects-from", str(VALVE),
+                 "--effect", f"valve_overlap:overlap={OVERLAP_PCT}", "--out", str(out)])
+    assert code == 0, capsys.readouterr().err
+    assert (tmp_path / "overlap.toml").is_file() and (tmp_path / "overlap.csv").is_file()
+
+
+@functools.cache
+def overlap_campaign():
+    load_file(VALVE)
+    truth = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
+                    {"valve_overlap": {"overlap": OVERLAP_PCT}})
+    runs = [virtual_run(truth, c, noise=0.01, seed=20 + i, name=f"run{i}")
+            for i, c in enumerate(campaign_commands())]
+    return truth, runs
+
+
+def test_diagnose_ranks_the_valve_overlap_and_the_error_falls():
+    from vtable.diagnose.engine import Diagnoser
+
+    truth, runs = overlap_campaign()
+    d = Diagnoser(runs, max_rounds=1, catalog=[*BUILT_IN, "valve_overlap"]).diagnose()
+    best = d.rounds[0].ranking[0]
+    assert best.effect == "valve_overlap" and d.rounds[0].added == "valve_overlap"
+    assert best.error_after < 0.5 * d.rounds[0].before, (d.rounds[0].before, best.error_after)
+    true_err = Diagnoser(runs, catalog=[]).score(truth).error
+    assert best.error_after <= 1.5 * true_err, (best.error_after, true_err)
+    assert best.params["overlap"] == pytest.approx(OVERLAP_PCT, rel=0.2)

@@ -16,6 +16,7 @@ A user's effect is the same: a subclass in a file of theirs, registered with
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Callable, Sequence
 from typing import Any, Protocol
@@ -26,21 +27,41 @@ from vtable.errors import VtableError
 
 class Param:
     """A parameter of an effect, in the unit its users think in (`unit`, a key of
-    `vtable.units.UNITS`). `default` may be a callable reading a preset (evaluated when
-    first needed); `source` says where the default comes from."""
+    `vtable.units.UNITS`). `default` may be a callable: of no argument (evaluated when
+    first needed), or of the run's table (`table.TableView` -> value), resolved on the
+    model's table when the effect is applied (`default` itself is the EERC table's);
+    `source` says where the default comes from."""
 
-    def __init__(self, name: str, unit: str, default: float | Callable[[], float],
+    def __init__(self, name: str, unit: str, default: float | Callable[..., float],
                  lower: float, upper: float, log: bool = False, source: str = "",
                  doc: str = "") -> None:
         self.name, self.unit, self.lower, self.upper = name, unit, lower, upper
         self.log, self.source, self.doc = log, source, doc
         self._default = default
+        self._of_table: Callable | None = None
+        if callable(default) and len(inspect.signature(default).parameters) == 1:
+            self._of_table = default
+
+    @property
+    def on_table(self) -> bool:
+        """Whether the default depends on the run's table."""
+        return self._of_table is not None
 
     @property
     def default(self) -> float:
         if callable(self._default):
-            self._default = float(self._default())
+            if self._of_table is not None:
+                from vtable.effects.table import eerc
+
+                self._default = float(self._of_table(eerc()))
+            else:
+                self._default = float(self._default())
         return self._default
+
+    def default_on(self, table) -> float:
+        """The default on `table` (a `table.TableView`)."""
+        d = self.default
+        return float(self._of_table(table)) if self._of_table is not None else d
 
     def check_declaration(self, where: str) -> None:
         """The declaration itself is sound (a user's effect is checked on loading)."""
@@ -75,18 +96,38 @@ class Param:
 
 
 class Assembly(Protocol):
-    """The vocabulary both models speak (see `ReducedAssembly`, `VirtualAssembly`).
+    """The vocabulary both models speak, each verb realised by both (`ReducedAssembly`,
+    `VirtualAssembly`); an effect's `apply` may call these only, which `register` checks.
+    Coordinates are named: "x" (the platen), "pitch" once freed, the specimen's storeys
+    ("x_s", "x_s1", ...; the virtual table's joints of the same names) and added DOFs.
 
-    Lengths, forces, masses in SI. Group quantities of the horizontal actuators (friction,
-    velocity cap) are totals over the group.
+    Lengths, forces, masses in SI.
     """
 
     vt: Any  # the table's parameters (`VirtualTable`)
+    table: Any  # what an effect reads of the run's table (`vtable.effects.table.TableView`)
     specimen: Any
 
-    def set_servo(self, **named: float) -> None:
-        """Horizontal servo-hydraulic options: rc, supply_pressure, friction (total),
-        max_velocity, spool_lag, air_ratio (see `vtable.hydraulics.HydraulicParams`)."""
+    def add_stage(self, stage: Any, **params: float) -> None:
+        """A stage of the horizontal actuators' hydraulic element
+        (`vtable.hydraulics.stage.Stage`: valve, flow, pressure, feedback or force law)
+        with its named parameters (SI, one actuator's)."""
+
+    def add_dof(self, name: str, mass: float) -> None:
+        """A new coordinate: a mass `name` (kg) sliding in x, held by nothing until a
+        spring, a force or the actuators tie it."""
+
+    def add_spring(self, a: str, b: str | None, stiffness: float, damping: float) -> None:
+        """A spring and dashpot (N/m, N s/m) between coordinates a and b (None: ground)."""
+
+    def set_actuator(self, moving: str | None = None, reaction: str | None = None) -> None:
+        """What the horizontal actuators push (`moving`) and react on (`reaction`)."""
+
+    def add_force(self, law: Callable, a: str, b: str | None = None,
+                  params: Sequence[float] = (), states: int = 0, mass: float = 0.0,
+                  stiffness: float | None = None) -> None:
+        """A force `law(d, v, z, p, dz)` on coordinate a and its reaction on b (d, v: the
+        relative motion a - b); `stiffness` and `mass` as for `insert_at_actuators`."""
 
     def unlock(self, dof: str) -> None:
         """Let the platen move in a DOF the base model holds fixed (e.g. "pitch")."""
@@ -100,15 +141,15 @@ class Assembly(Protocol):
         """The horizontal actuators react on a mass sprung to the ground."""
 
     def insert_at_actuators(self, name: str, mass: float, law: Callable, params: Sequence[float],
-                            states: int = 0, stiffness: float = 0.0) -> None:
+                            states: int = 0, stiffness: float | None = None) -> None:
         """A mass between the horizontal actuators and the platen, tied to the platen by
         `law(d, v, z, p, dz) -> force on the mass` (d, v: its travel relative to the
         platen, z its `states` state variables with rates written to dz). `stiffness` (N/m)
         is the law's largest slope: both models step finely enough for the stiff mode it
-        makes with `mass`."""
+        makes with `mass`; left out, it is worked out from the law (`stiffness.slope`)."""
 
     def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0,
-                         stiffness: float = 0.0) -> None:
+                         stiffness: float | None = None) -> None:
         """A force `law(d, v, z, p, dz)` on every storey of the specimen (d, v: drift)."""
 
     def add_storey_quadratic_damper(self, c2: float) -> None:

@@ -1,11 +1,20 @@
 """flow_saturation: the servovalves' rated flow (their maximum spool stroke) caps the
-actuators' velocity (§2.2: 25 in/s horizontal; app. C): |q| ≤ A·v_max."""
+actuators' velocity (§2.2: 25 in/s horizontal; app. C): |q| ≤ A·v_max — a flow stage of
+the hydraulic element."""
 
 from __future__ import annotations
 
 from vtable import units
 from vtable.effects.base import Effect, Param
-from vtable.params import presets
+from vtable.hydraulics.stage import Stage
+
+
+def flow_cap(q, P, p):
+    """The valve flow clipped at ±p.max_flow."""
+    return min(max(q, -p.max_flow), p.max_flow)
+
+
+FLOW_CAP = Stage("rated_flow", "flow", flow_cap, ("max_flow",), extensive=("max_flow",))
 
 
 class FlowSaturation(Effect):
@@ -14,12 +23,12 @@ class FlowSaturation(Effect):
     section = "§2.2, app. C"
     signature = ("clipping when the command velocity exceeds the cap; large spans and "
                  "earthquakes only")
-    params = (Param("v_max", "in/s",
-                    lambda: units.from_si(presets.eerc_table().rated_velocity(), "in/s"),
-                    1.0, 60.0, log=True, source="Table 2.2: 25 in/s horizontal"),)
+    params = (Param("v_max", "in/s", lambda t: units.from_si(t.velocity_limit, "in/s"),
+                    1.0, 60.0, log=True, source="the table's horizontal velocity "
+                    "limit (EERC: Table 2.2, 25 in/s)"),)
 
     def apply(self, m, p):
-        m.set_servo(max_velocity=p["v_max"])
+        m.add_stage(FLOW_CAP, max_flow=p["v_max"] * m.table.piston_area)
 
 
 EFFECT = FlowSaturation()

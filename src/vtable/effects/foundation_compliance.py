@@ -1,14 +1,13 @@
 """foundation_compliance: the reaction mass and its foundation are not rigid (§1.2, Rea):
 the horizontal actuators push against the reaction block (1580 kips, §2.2) on a
-horizontal spring and dashpot of natural frequency f_f and damping ratio ξ_f."""
+horizontal spring and dashpot of natural frequency f_f and damping ratio ξ_f (the
+reaction mass is the run's table's, `m.table.foundation_mass`)."""
 
 from __future__ import annotations
 
 import math
 
-from vtable import units
 from vtable.effects.base import Effect, Param
-from vtable.params import presets
 
 
 class FoundationCompliance(Effect):
@@ -22,7 +21,7 @@ class FoundationCompliance(Effect):
               Param("xi_f", "1", 0.1, 0.005, 0.9, log=True, source="assumed"))
 
     def apply(self, m, p):
-        mass = presets.eerc_table().geometry.foundation_weight / units.G
+        mass = m.table.foundation_mass
         w = 2 * math.pi * p["f_f"]
         m.add_reaction_mass("foundation", mass, mass * w * w, 2 * p["xi_f"] * w * mass)
 

@@ -28,10 +28,19 @@ class Physics:
     #: calibrated table values replacing the declared ones (SI): platen_mass (kg),
     #: com_height (m above the actuator line), pitch_inertia (kg m²)
     table: dict[str, float] = field(default_factory=dict)
+    #: (effect, parameter) -> the value a table-dependent default was filled with (the
+    #: EERC table's): still that value when applied, it is the run's table's default
+    defaulted: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         checked = {name: get(name).check(p, name) for name, p in self.effects.items()}
+        filled = dict(self.defaulted)
+        for name, p in self.effects.items():
+            for q in get(name).params:
+                if q.on_table and q.name not in p:
+                    filled[(name, q.name)] = checked[name][q.name]
         object.__setattr__(self, "effects", checked)
+        object.__setattr__(self, "defaulted", filled)
 
     def has(self, name: str) -> bool:
         return name in self.effects
@@ -59,11 +68,21 @@ class Physics:
         """An effect's parameters in SI."""
         return get(name).si(self.effects[name])
 
+    def values_on(self, name: str, table) -> dict[str, float]:
+        """An effect's parameters (its units), a table-dependent default left at the EERC
+        table's value taken on `table` (`vtable.effects.table.TableView`) instead."""
+        e, out = get(name), dict(self.effects[name])
+        for k, v in out.items():
+            if self.defaulted.get((name, k)) == v:
+                out[k] = e.param(k).default_on(table)
+        return out
+
     def apply(self, assembly, model: str) -> None:
         """Every effect enters `assembly` through its hook for `model` ("reduced" or
-        "virtual")."""
+        "virtual"), its table-dependent defaults on the assembly's table."""
         for name in self.effects:
-            getattr(get(name), model)(assembly, self.si(name))
+            e = get(name)
+            getattr(e, model)(assembly, e.si(self.values_on(name, assembly.table)))
 
     @property
     def label(self) -> str:
@@ -84,9 +103,8 @@ def nominal_open_loop(vt: VirtualTable | None = None) -> OpenLoop:
 
 def base_hydraulics(ph: Physics, vt: VirtualTable) -> HydraulicParams:
     """One horizontal actuator's constants for the base loop (eq 6.16 inverted from the
-    open loop; the table's valve lag; no RC filter, no appendix C option: those are
-    effects)."""
+    open loop; no RC filter, no stage: those are effects, and a lab table's valve lag is
+    added by the assemblies)."""
     c = servo_from_open_loop(ph.open_loop, per_actuator_template(vt))
     return HydraulicParams(area=c.area, volume=c.volume, beta=c.beta, k_t=c.k_t, k_ct=c.k_ct,
-                           k_p=c.k_p, k_v=c.k_v, spool_lag=vt.valve_lag,
-                           mean_pressure=vt.table.geometry.supply_pressure)
+                           k_p=c.k_p, k_v=c.k_v)

@@ -22,18 +22,23 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.signal
 
+from vtable._numba import njit
 from vtable.analytic.virtual_table import mechanics
 from vtable.effects import physics as phys
 from vtable.effects.reduced_kernel import (
+    KERNELS,
     hold_matrices,
     linear_system,
     simulate_linear,
-    simulate_reduced,
     simulate_reduced_elements,
     simulate_reduced_python,
 )
+from vtable.effects.stiffness import needed_stiffness
+from vtable.effects.table import TableView
+from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.errors import VtableError
 from vtable.hydraulics import group_law
+from vtable.hydraulics.stage import Stage, add_stage
 from vtable.params.virtual import VirtualTable, split_rocking, virtual_table
 from vtable.runs.model import Run
 
@@ -71,23 +76,17 @@ class ReducedAssembly:
         self.moving, self.reaction = "x", None
         self.max_step = SIM_DT
         self.servo = phys.base_hydraulics(ph, vt)
+        self.stages: list[tuple[Stage, dict[str, float]]] = []
+        self.table = TableView.of(vt, piston_area=self.servo.area)
         self.n_actuators = len(vt.group("horizontal"))
+        if vt.valve_lag:  # a lab table's own servovalve lag
+            self.add_stage(SPOOL_LAG, tau=vt.valve_lag)
         if vt.horizontal_servo.damping:  # the platen's viscous damping (a lab's table)
             self.add_spring("x", None, 0.0, vt.horizontal_servo.damping * self.n_actuators)
 
     # -- the vocabulary ----------------------------------------------------------------
-    def set_servo(self, *, rc: float | None = None, supply_pressure: float | None = None,
-                  friction: float | None = None, max_velocity: float | None = None,
-                  spool_lag: float | None = None, air_ratio: float | None = None) -> None:
-        ch = {k: v for k, v in (("rc", rc), ("supply_pressure", supply_pressure),
-                                ("spool_lag", spool_lag), ("air_ratio", air_ratio))
-              if v is not None}
-        n = self.n_actuators
-        if friction is not None:
-            ch["friction"] = friction / n
-        if max_velocity is not None:
-            ch["max_flow"] = max_velocity * self.servo.area
-        self.servo = self.servo.replace(**ch)
+    def add_stage(self, stage: Stage, **params: float) -> None:
+        add_stage(self.stages, stage, params)
 
     def unlock(self, dof: str) -> None:
         if dof not in self.vt.dofs:
@@ -127,22 +126,27 @@ class ReducedAssembly:
 
     def add_force(self, law: Callable, a: str, b: str | None = None,
                   params: Sequence[float] = (), states: int = 0, mass: float = 0.0,
-                  stiffness: float = 0.0) -> None:
-        """A force element; `stiffness` (N/m, the law's largest slope) on `mass` (kg) sets
-        the integration step below 2/ω (RK4 is stable to ωh ≈ 2.8)."""
+                  stiffness: float | None = None) -> None:
+        """A force element; `stiffness` (N/m, the law's largest slope; worked out from the
+        law when left out) on `mass` (kg) sets the integration step below 2/ω (RK4 is
+        stable to ωh ≈ 2.8)."""
+        if stiffness is None:
+            stiffness = needed_stiffness(law, params, states)
         self.elements.append(ForceElement(law, a, b, np.asarray(params, dtype=float), states))
         if stiffness > 0 and mass > 0:
             self.max_step = min(self.max_step, 2.0 / math.sqrt(stiffness / mass))
 
     def insert_at_actuators(self, name: str, mass: float, law: Callable,
                             params: Sequence[float], states: int = 0,
-                            stiffness: float = 0.0) -> None:
+                            stiffness: float | None = None) -> None:
         self.add_dof(name, mass)
         self.set_actuator(moving=name)
         self.add_force(law, name, "x", params, states, mass, stiffness)
 
     def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0,
-                         stiffness: float = 0.0) -> None:
+                         stiffness: float | None = None) -> None:
+        if stiffness is None:
+            stiffness = needed_stiffness(law, params, states)
         masses = _storey_masses(self.specimen)
         for s, m in zip(self.storeys, masses, strict=True):
             self.add_force(law, s, None, params, states, m, stiffness)
@@ -260,8 +264,6 @@ def _combined(elements: list[ForceElement], ix: dict[str, int], jit: bool):
     for k, e in enumerate(elements):
         law = e.law
         if jit:
-            from numba import njit
-
             law = njit(cache=False)(law)
         ns[f"law{k}"] = law
         i = ix[e.a]
@@ -278,8 +280,6 @@ def _combined(elements: list[ForceElement], ix: dict[str, int], jit: bool):
     exec("\n".join(lines), ns)
     fn = ns["combined"]
     if jit:
-        from numba import njit
-
         fn = njit(cache=False)(fn)
     _COMBINED[key] = (fn, s)
     return fn, s, params
@@ -311,20 +311,21 @@ class ReducedModel:
         self.M, self.K, self.C, self.c2, self.ax, self.bF = M, K, C, c2, ax, ax.copy()
         self.Aw, self.Wq, self.Wv, self.Fw = Aw, Wq, Wv, Fw
         self.Minv = np.linalg.inv(M)
-        law = group_law(self.vt, "horizontal", m.servo).lumped("x")
+        law = group_law(self.vt, "horizontal", m.servo, stages=m.stages).lumped("x")
         self.T, self.Tp, self.g, self.kp, self.kv = law.kernel()
         if self.T.shape != (1, 1):  # the kernel steps one lumped actuator on one DOF
             raise RuntimeError(f"the reduced model's actuator law is {self.T.shape}, not 1 x 1")
-        self.sp = law.hydraulics.vector()
+        self.element = law.composition(KERNELS)  # the stage set's compiled element
+        self.sp = law.vector(self.element)
         self.storeys, self.h_top = m.storeys, m.h_top
         self.max_step = m.max_step
         self._element(m.elements)
         #: a linear model is stepped exactly (`reduced_kernel.simulate_linear`)
-        self.linear = (self.elem is None and not np.any(c2) and law.hydraulics.linear
-                       and LINEAR_PATH)
+        self.linear = (self.elem is None and not np.any(c2) and law.linear and LINEAR_PATH)
         if self.linear:
-            self._linear = linear_system(n, self.Minv, K, C, c2, self.bF, ax, self.sp, self.T,
-                                         self.Tp, self.g, self.kp, self.kv, Aw, Wq, Wv, Fw)
+            self._linear = linear_system(self.element.module, n, self.Minv, K, C, c2, self.bF,
+                                         ax, self.sp, self.T, self.Tp, self.g, self.kp,
+                                         self.kv, Aw, Wq, Wv, Fw)
             self._holds: dict[float, tuple] = {}
 
     def _hold(self, h: float):
@@ -369,10 +370,10 @@ class ReducedModel:
             Phi, G0, G1 = self._hold(h)
             Q, Qd, Qdd, F = simulate_linear(xc, nq, *self._linear, Phi, G0, G1)
         elif self.elem is None:
-            Q, Qd, Qdd, F = simulate_reduced(*args)
+            Q, Qd, Qdd, F = self.element.module.simulate_reduced(*args)
         else:
             run = simulate_reduced_python if self.python else simulate_reduced_elements
-            Q, Qd, Qdd, F = run(*args, self.elem, self.ne, self.pe)
+            Q, Qd, Qdd, F = run(self.element.module, *args, self.elem, self.ne, self.pe)
         ix = self.ix
         n = len(xc)
         x = ix["x"]

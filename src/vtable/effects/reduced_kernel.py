@@ -26,7 +26,7 @@ import numpy as np
 import scipy.linalg
 
 from vtable._numba import njit
-from vtable.hydraulics.element import actuator_rates, dof_error, fed_back_pressure
+from vtable.hydraulics.element import NS, actuator_rates, dof_error, fed_back
 
 
 def work_size(nq: int) -> int:
@@ -37,7 +37,7 @@ def work_size(nq: int) -> int:
 @njit(cache=True)
 def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, fe, dy,
            ws):
-    """Rates of the main state y = [q, q̇, servo (3), w] with extra generalized forces fe;
+    """Rates of the main state y = [q, q̇, servo (NS), w] with extra generalized forces fe;
     returns the actuator force. The equivalent actuator is one lumped actuator on one DOF
     (T, Tp 1 x 1): its drive is `dof_error`, its rates `actuator_rates`. `ws`: scratch of
     `work_size(nq)` (no allocation, no array views: this runs four times per step)."""
@@ -49,15 +49,15 @@ def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, 
         xa += ax[i] * y[i]
         va += ax[i] * y[nq + i]
     t = Tp[0, 0]
-    p_fb = fed_back_pressure(y[s0], y[s0 + 1], sp)
+    p_fb = fed_back(y, s0, sp)
     drive = T[0, 0] * dof_error(xc, t * xa, t * p_fb, t * va, g[0], kp[0], kv[0])
-    dP, dPf, dqv, force = actuator_rates(y[s0], y[s0 + 1], y[s0 + 2], drive, va, sp)
+    force = actuator_rates(y, s0, drive, va, sp, dy)
     for i in range(nq):
         r = bF[i] * force + fe[i]
         for j in range(nq):
             r -= K[i, j] * y[j] + C[i, j] * y[nq + j]
         for j in range(na):
-            r += Fw[i, j] * y[s0 + 3 + j]
+            r += Fw[i, j] * y[s0 + NS + j]
         r -= c2[i] * abs(y[nq + i]) * y[nq + i]
         ws[i] = r
     for i in range(nq):
@@ -66,16 +66,13 @@ def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, 
         for j in range(nq):
             acc += Minv[i, j] * ws[j]
         dy[nq + i] = acc
-    dy[s0] = dP
-    dy[s0 + 1] = dPf
-    dy[s0 + 2] = dqv
     for a in range(na):
         r = 0.0
         for b in range(na):
-            r += Aw[a, b] * y[s0 + 3 + b]
+            r += Aw[a, b] * y[s0 + NS + b]
         for j in range(nq):
             r += Wq[a, j] * y[j] + Wv[a, j] * y[nq + j]
-        dy[s0 + 3 + a] = r
+        dy[s0 + NS + a] = r
     return force
 
 
@@ -84,7 +81,7 @@ def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, A
     """RK4 at step dt (the command linear between samples); returns q, q̇, q̈ (n_t x nq)
     and the actuator force (n_t). A state that blows up ends the run with NaN."""
     n = xc.shape[0]
-    ny = 2 * nq + 3 + Aw.shape[0]
+    ny = 2 * nq + NS + Aw.shape[0]
     fe = np.zeros(nq)
     ws = np.zeros(nq)  # work_size(nq)
     y = np.zeros(ny)
@@ -139,7 +136,7 @@ def _element_integrate(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv,
                        Fw, elem, ne, pe):
     """`simulate_reduced` with force elements (see `_element_rates`)."""
     n = xc.shape[0]
-    ny = 2 * nq + 3 + Aw.shape[0] + ne
+    ny = 2 * nq + NS + Aw.shape[0] + ne
     y = np.zeros(ny)
     Q, Qd, Qdd, F = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq)), np.empty(n)
     k1, k2, k3, k4 = np.empty(ny), np.empty(ny), np.empty(ny), np.empty(ny)
@@ -163,27 +160,42 @@ def _element_integrate(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv,
     return Q, Qd, Qdd, F
 
 
-def simulate_reduced_python(*args):
-    """`_element_integrate` as plain Python (the compiled `_rates` does the rest)."""
-    return _element_integrate(*args)
+#: the kernels a stage set's compiled element carries (`vtable.hydraulics.compose`)
+KERNELS = (_rates, simulate_reduced)
 
 
-_COMPILED: list = []
+def _bound(module, jit: bool):
+    """`_element_integrate` calling `module`'s `_rates` (a stage set's), compiled or not."""
+    glb = dict(_element_integrate.__globals__)
+    glb["_rates"], glb["NS"] = module._rates, module.NS
+    rates = types.FunctionType(_element_rates.__code__, glb)
+    glb["_element_rates"] = njit(rates) if jit else rates
+    fn = types.FunctionType(_element_integrate.__code__, glb)
+    return njit(nogil=True)(fn) if jit else fn
 
 
-def simulate_reduced_elements(*args):
-    """`_element_integrate` compiled (once per process, not cached on disk)."""
-    if not _COMPILED:
-        glb = dict(_element_integrate.__globals__)
-        glb["_element_rates"] = njit(_element_rates)
-        _COMPILED.append(njit(nogil=True)(types.FunctionType(_element_integrate.__code__, glb)))
-    return _COMPILED[0](*args)
+def simulate_reduced_python(module, *args):
+    """`_element_integrate` as plain Python (`module`'s compiled `_rates` does the rest)."""
+    return _bound(module, jit=False)(*args)
 
 
-def linear_system(nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw):
+_COMPILED: dict = {}
+
+
+def simulate_reduced_elements(module, *args):
+    """`_element_integrate` on `module`'s element, compiled (once per process and stage
+    set, not cached on disk)."""
+    if module.__name__ not in _COMPILED:
+        _COMPILED[module.__name__] = _bound(module, jit=True)
+    return _COMPILED[module.__name__](*args)
+
+
+def linear_system(module, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw):
     """(A, B, f_y, f_u) of a linear model: ẏ = A y + B x_c and the actuator force
-    f_y·y + f_u x_c, from `_rates` on unit states (exact: the rates are linear)."""
-    ny = 2 * nq + 3 + Aw.shape[0]
+    f_y·y + f_u x_c, from `module._rates` (a stage set's element) on unit states (exact:
+    the rates are linear)."""
+    _rates = module._rates
+    ny = 2 * nq + module.NS + Aw.shape[0]
     fe = np.zeros(nq)
     A, fy = np.empty((ny, ny)), np.empty(ny)
     dy, y = np.empty(ny), np.zeros(ny)

@@ -3,6 +3,7 @@ docs/effects.md) and the ones users register from their own files."""
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 import importlib.util
 import sys
@@ -65,13 +66,18 @@ def _add(e: Effect, where: str) -> None:
 
 def register(effect: Effect) -> Effect:
     """Add a user's effect to the registry (ranked with the catalog's, named in the JSON,
-    the report and the recording). A name the catalog has is refused; registering the
-    same user effect again replaces it."""
+    the report and the recording). A name the catalog has is refused, and so is a verb
+    one model cannot realise (`verbs.check_verbs`); registering the same user effect
+    again replaces it."""
+    from vtable.effects.verbs import check_verbs
+
     _load_built_in()
     where = getattr(effect, "__module__", "") or "register()"
     if getattr(effect, "name", None) in BUILT_IN:
         raise VtableError(f"{_SOURCE.get('file', where)}: effect name {effect.name!r} clashes "
                           "with a built-in effect; choose another name")
+    _check(effect, _SOURCE.get("file", where))
+    check_verbs(effect, _SOURCE.get("file", where))
     _add(effect, _SOURCE.get("file", where))
     _USER.add(effect.name)
     _FILES.pop(effect.name, None)  # load_file records it again when it is loading one
@@ -126,7 +132,9 @@ def load_file(path: str | Path) -> list[str]:
     if not p.is_file():
         raise VtableError(f"{p}: no such file (--effects-from)")
     _load_built_in()
-    modname = f"vtable_user_effects_{abs(hash(str(p.resolve())))}"
+    # named by its path, the same in every process (a compiled stage refers to its module)
+    modname = "vtable_user_effects_" + \
+        hashlib.sha256(str(p.resolve()).encode()).hexdigest()[:16]
     spec = importlib.util.spec_from_file_location(modname, p)
     if spec is None or spec.loader is None:
         raise VtableError(f"{p}: cannot be loaded as a Python file")

@@ -1,9 +1,20 @@
 """valve_dynamics: the servovalve does not respond instantly (§6.2, app. C): the valve
-flow follows the commanded flow through a first-order spool lag τ."""
+flow q_v follows the commanded flow q through a first-order spool lag τ,
+τ q̇_v = q - q_v — a valve stage of the hydraulic element (linear)."""
 
 from __future__ import annotations
 
 from vtable.effects.base import Effect, Param
+from vtable.hydraulics.stage import Stage
+
+
+def spool_lag(q, z, p, dz):
+    """The valve flow z[0] lagging the commanded flow q by τ = p.tau."""
+    dz[0] = (q - z[0]) / p.tau
+    return z[0]
+
+
+SPOOL_LAG = Stage("spool_lag", "valve", spool_lag, ("tau",), states=1, linear=True)
 
 
 class ValveDynamics(Effect):
@@ -14,7 +25,7 @@ class ValveDynamics(Effect):
     params = (Param("tau", "s", 0.002, 1e-4, 0.05, log=True, source="assumed"),)
 
     def apply(self, m, p):
-        m.set_servo(spool_lag=p["tau"])
+        m.add_stage(SPOOL_LAG, tau=p["tau"])
 
 
 EFFECT = ValveDynamics()

@@ -1,13 +1,25 @@
 """valve_flow_nonlinearity: turbulent orifice flow through the servovalve,
 q ∝ x_sp √(P_s - sign(x_sp) P_L) (app. C, eq C.14): the flow gain, and so the loop gain,
 falls with the load pressure, so the response depends on the amplitude. Normalised so
-that the no-load gain is the linear one (Table B.5's k_t)."""
+that the no-load gain is the linear one (Table B.5's k_t) — a flow stage of the hydraulic
+element, after the rated-flow cap."""
 
 from __future__ import annotations
 
+import math
+
 from vtable import units
 from vtable.effects.base import Effect, Param
-from vtable.params import presets
+from vtable.hydraulics.stage import Stage
+
+
+def orifice(q, P, p):
+    """q √(1 - sign(q) P/P_s) (eq C.14), no flow against more than the supply pressure."""
+    s = 1.0 - (P if q >= 0 else -P) / p.supply_pressure
+    return q * math.sqrt(s) if s > 0 else 0.0
+
+
+ORIFICE = Stage("orifice", "flow", orifice, ("supply_pressure",), order=1.0)
 
 
 class ValveFlowNonlinearity(Effect):
@@ -18,11 +30,11 @@ class ValveFlowNonlinearity(Effect):
     signature = ("amplitude dependence: larger spans see a lower, more lagging x_t/x_c, most "
                  "at high frequency where the load pressure is large")
     params = (Param("supply_pressure", "psi",
-                    lambda: units.from_si(presets.eerc_table().geometry.supply_pressure, "psi"),
-                    300.0, 6000.0, log=True, source="§2.2: 3000 psi supply"),)
+                    lambda t: units.from_si(t.supply_pressure, "psi"), 300.0, 6000.0,
+                    log=True, source="the table's supply pressure (EERC: §2.2, 3000 psi)"),)
 
     def apply(self, m, p):
-        m.set_servo(supply_pressure=p["supply_pressure"])
+        m.add_stage(ORIFICE, supply_pressure=p["supply_pressure"])
 
 
 EFFECT = ValveFlowNonlinearity()

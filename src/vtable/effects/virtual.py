@@ -7,8 +7,8 @@ loop (no RC filter) and the passive stabilizers; effects then edit the spec
 (`vtable.mjcf.edit`: free a joint, a reaction mass, pistons between actuators and platen,
 storey actuators), set the hydraulic element's options, add force-law controllers and
 output filters. `finalize` compiles and picks the controllers: the linear, fused
-`ServoController` while the horizontal loop is linear, the compiled `HydraulicServo` once
-an appendix C option is on.
+`ServoController` while every stage of the horizontal loop is linear, the compiled
+`HydraulicServo` (the stage set's element) once one is not.
 """
 
 from __future__ import annotations
@@ -25,8 +25,12 @@ from vtable.controllers import (
     quadratic_damper,
 )
 from vtable.effects import physics as phys
+from vtable.effects.stiffness import needed_stiffness
+from vtable.effects.table import TableView
+from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.errors import VtableError
 from vtable.hydraulics.law import group_law
+from vtable.hydraulics.stage import Stage, add_stage
 from vtable.mjcf import edit
 from vtable.mjcf.builder import BuiltModel, compile_table, table_spec
 from vtable.params.virtual import VirtualTable, with_rocking
@@ -49,10 +53,14 @@ class VirtualAssembly:
         self.ts = table_spec(self.vt, ph.specimen, timestep=timestep, with_meshes=False)
         edit.lock_joint(self.ts, "pitch")
         self.servo = base
+        self.stages: list[tuple[Stage, dict[str, float]]] = []
+        self.table = TableView.of(self.vt, piston_area=base.area)
         self.controllers: list = []
         self.filters: list[Callable] = []
         self.n_actuators = len(self.vt.group("horizontal"))
         self.max_step = MAX_STEP
+        if vt.valve_lag:  # a lab table's own servovalve lag
+            self.add_stage(SPOOL_LAG, tau=vt.valve_lag)
 
     def _stiff(self, mass: float, stiffness: float) -> None:
         """MuJoCo's semi-implicit Euler with an explicit controller force is stable to
@@ -61,17 +69,8 @@ class VirtualAssembly:
             self.max_step = min(self.max_step, 1.0 / math.sqrt(stiffness / mass))
 
     # -- the vocabulary ----------------------------------------------------------------
-    def set_servo(self, *, rc: float | None = None, supply_pressure: float | None = None,
-                  friction: float | None = None, max_velocity: float | None = None,
-                  spool_lag: float | None = None, air_ratio: float | None = None) -> None:
-        ch = {k: v for k, v in (("rc", rc), ("supply_pressure", supply_pressure),
-                                ("spool_lag", spool_lag), ("air_ratio", air_ratio))
-              if v is not None}
-        if friction is not None:
-            ch["friction"] = friction / self.n_actuators
-        if max_velocity is not None:
-            ch["max_flow"] = max_velocity * self.servo.area
-        self.servo = self.servo.replace(**ch)
+    def add_stage(self, stage: Stage, **params: float) -> None:
+        add_stage(self.stages, stage, params)
 
     def unlock(self, dof: str) -> None:
         if dof not in self.vt.dofs:
@@ -86,9 +85,32 @@ class VirtualAssembly:
                           damping: float) -> None:
         edit.add_reaction_mass(self.ts, name, mass, stiffness, damping)
 
+    def add_dof(self, name: str, mass: float) -> None:
+        edit.add_slide_body(self.ts, name, mass)
+
+    def add_spring(self, a: str, b: str | None, stiffness: float, damping: float) -> None:
+        edit.add_spring(self.ts, a, b, stiffness, damping)
+
+    def set_actuator(self, moving: str | None = None, reaction: str | None = None) -> None:
+        edit.set_actuator(self.ts, moving, reaction)
+
+    def add_force(self, law: Callable, a: str, b: str | None = None,
+                  params: Sequence[float] = (), states: int = 0, mass: float = 0.0,
+                  stiffness: float | None = None) -> None:
+        """A force-law controller on a tendon of length q_a - q_b."""
+        if stiffness is None:
+            stiffness = needed_stiffness(law, params, states)
+        self._stiff(mass, stiffness)
+        t = edit.relative_tendon(self.ts, f"force_{a}_{b or 'ground'}_{len(self.controllers)}",
+                                 a, b)
+        self.ts.force_actuators.append(t)
+        self.controllers.append(ForceLawController((t,), law, params, states))
+
     def insert_at_actuators(self, name: str, mass: float, law: Callable,
                             params: Sequence[float], states: int = 0,
-                            stiffness: float = 0.0) -> None:
+                            stiffness: float | None = None) -> None:
+        if stiffness is None:
+            stiffness = needed_stiffness(law, params, states)
         self._stiff(mass, stiffness)
         acts = edit.insert_at_actuators(self.ts, name, mass)
         # each actuator carries its share of the lumped connection's force
@@ -96,7 +118,9 @@ class VirtualAssembly:
                                                    scale=1.0 / len(acts)))
 
     def add_storey_force(self, law: Callable, params: Sequence[float], states: int = 0,
-                         stiffness: float = 0.0) -> None:
+                         stiffness: float | None = None) -> None:
+        if stiffness is None:
+            stiffness = needed_stiffness(law, params, states)
         for m in self.ts.structure_masses:
             self._stiff(m, stiffness)
         acts = edit.add_storey_actuators(self.ts)
@@ -113,13 +137,12 @@ class VirtualAssembly:
         """Compile the spec and return it with its controllers."""
         built = compile_table(self.ts)
         vt = self.vt
-        rc = ("x", "twist") if self.servo.rc else ()
-        if self.servo.nonlinear:
-            ctl = [HydraulicServo(vt, self.servo),
-                   ServoController(vt, rc_filter=(), groups=("vertical",))]
+        law = group_law(vt, "horizontal", self.servo, stages=self.stages)
+        if law.linear:
+            ctl = [ServoController(vt, rc_filter=(), laws={"horizontal": law})]
         else:
-            law = group_law(vt, "horizontal", self.servo, rc_dofs=rc)
-            ctl = [ServoController(vt, rc_filter=rc, laws={"horizontal": law})]
+            ctl = [HydraulicServo(vt, law=law),
+                   ServoController(vt, rc_filter=(), groups=("vertical",))]
         if vt.stabilizers.pairs:
             ctl.append(PassiveStabilizers(vt))
         built.vt = vt

@@ -8,7 +8,10 @@ displacement, P̄ = T⁺P the DOF pressure, and per DOF j the gains g_j (loop ga
     u_i = Σ_j T_ij g_j [ (q_c,j - q_j) - k_p,j P̄f_j - k_v,j q̇_j ]          (eqs 6.1, 6.4)
     (V_i/4β) Ṗ_i = k_t u_i - k_ct P_i - A ẋ_i,   F_i = A P_i               (eqs 6.2-6.3)
 
-`linear_blocks` gives the matrices of the linear loop (the linear controllers), `kernel`
+A law may carry stages (`stage.Stage`, each with its named parameters: an effect's
+physics in the element); `composition` compiles the element for them and `vector` lays
+out their parameters. `linear_blocks` gives the matrices of the linear loop (the linear
+controllers; with linear stages, the compiled element's rates on unit states), `kernel`
 the inputs of the compiled element (`element.servo_rates`), `lumped` one equivalent
 actuator for one DOF, and `dof_loop` the single-state loop of one DOF under symmetric
 pressures (the reduced model's pitch loop). For identical actuators and symmetric motion
@@ -17,11 +20,18 @@ each DOF loop reduces to eq 6.5a with the mass per actuator M_d/ΣT_ij².
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
 
+from vtable.errors import VtableError
+from vtable.hydraulics.compose import Composition, composition
 from vtable.hydraulics.element import HydraulicParams
+from vtable.hydraulics.stage import Stage
+
+#: a stage with its named parameters (SI)
+StageUse = tuple[Stage, dict[str, float]]
 
 GROUP_DOFS = {"horizontal": ("x", "twist"), "vertical": ("z", "pitch", "roll")}
 #: the knob direction (Table 3.2) of each DOF controller
@@ -52,6 +62,32 @@ class ServoLaw:
     k_v: np.ndarray
     filtered: tuple[bool, ...]
     hydraulics: HydraulicParams
+    stages: tuple[StageUse, ...] = ()
+
+    @property
+    def linear(self) -> bool:
+        """Whether every stage is linear (the loop is then a linear system)."""
+        return all(s.linear for s, _ in self.stages)
+
+    def composition(self, extra: Sequence[Callable] = ()) -> Composition:
+        """The compiled element of this law's stages (`compose.composition`)."""
+        return composition([s for s, _ in self.stages], extra)
+
+    def vector(self, comp: Composition) -> np.ndarray:
+        """The element's parameters for `comp` (this law's composition)."""
+        given = {s.name: p for s, p in self.stages}
+        return comp.vector(self.hydraulics, [given[s.name] for s in comp.stages])
+
+    def with_stages(self, stages: Sequence[StageUse]) -> ServoLaw:
+        return replace(self, stages=tuple(stages))
+
+    def state_names(self) -> tuple[str, ...]:
+        """The states of `linear_blocks`, in its order."""
+        if self.stages:
+            names = self.composition().state_names()
+            return tuple(f"{k}_{a}" for a in self.actuators for k in names)
+        return tuple([f"P_{a}" for a in self.actuators] +
+                     [f"Pf_{d}" for d, f in zip(self.dofs, self.filtered, strict=True) if f])
 
     @property
     def Tp(self) -> np.ndarray:
@@ -63,7 +99,9 @@ class ServoLaw:
                 self.k_p.copy(), self.k_v.copy())
 
     def linear_blocks(self) -> LinearBlocks:
-        """The linear loop's matrices (no appendix C option may be on)."""
+        """The linear loop's matrices (every stage linear)."""
+        if self.stages:
+            return self._staged_blocks()
         h = self.hydraulics
         n, d = self.T.shape
         filt = [j for j in range(d) if self.filtered[j]]
@@ -94,19 +132,51 @@ class ServoLaw:
         C[:, P] = h.area * np.eye(n)
         return LinearBlocks(A, Bx, Bv, Bc, C)
 
+    def _staged_blocks(self) -> LinearBlocks:
+        """The compiled element's rates on unit states and inputs (exact for linear
+        stages); states per actuator as `Composition.state_names`."""
+        if not self.linear:
+            raise VtableError("the loop has a nonlinear stage: "
+                              f"{', '.join(s.name for s, _ in self.stages if not s.linear)}")
+        comp = self.composition()
+        T, Tp, g, kp, kv = self.kernel()
+        sp = self.vector(comp)
+        n, d = T.shape
+        nz = n * comp.ns
+        cols = {"z": nz, "x": n, "v": n, "c": d}
+        out = {k: np.zeros((nz, m)) for k, m in cols.items()}
+        C = np.zeros((n, nz))
+        dz, f = np.zeros(nz), np.zeros(n)
+        for k, m in cols.items():
+            for j in range(m):
+                u = {q: np.zeros(cols[q]) for q in cols}
+                u[k][j] = 1.0
+                comp.module.servo_rates(u["z"], u["x"], u["v"], u["c"], T, Tp, g, kp, kv, sp,
+                                        dz, f)
+                out[k][:, j] = dz
+                if k == "z":
+                    C[:, j] = f
+                elif np.any(f):
+                    raise VtableError("a linear stage makes the force depend on the motion")
+        return LinearBlocks(out["z"], out["x"], out["v"], out["c"], C)
+
     def lumped(self, dof: str) -> ServoLaw:
         """The actuators acting on `dof` alone as one equivalent actuator (T = 1): the
         reduced model's horizontal actuator. Needs Σ_i T_ij² = n (unit levers)."""
         j = self.dofs.index(dof)
         n = len(self.actuators)
+        stages = tuple((s, {k: v * n if k in s.extensive else v for k, v in p.items()})
+                       for s, p in self.stages)
         return ServoLaw((f"{dof} (lumped)",), (dof,), np.ones((1, 1)), self.g[[j]],
                         self.k_p[[j]], self.k_v[[j]], (self.filtered[j],),
-                        self.hydraulics.lumped(n))
+                        self.hydraulics.lumped(n), stages)
 
     def dof_loop(self, dof: str) -> tuple[float, float, float, float]:
         """One DOF under symmetric pressures P_i = T_ij p (no RC filter, zero command):
         ṗ = a p + b_q q + b_v q̇, generalized force on q = f·p. Returns (a, b_q, b_v, f)."""
         j = self.dofs.index(dof)
+        if self.stages:
+            raise ValueError(f"the {dof} loop has stages: not a single-state loop")
         if self.filtered[j]:
             raise ValueError(f"the {dof} loop has an RC filter: not a single-state loop")
         h = self.hydraulics
@@ -137,16 +207,15 @@ def dof_matrix(vt, kind: str) -> tuple[tuple[str, ...], np.ndarray]:
 
 
 def group_law(vt, kind: str, hydraulics: HydraulicParams | None = None,
-              rc_dofs: tuple[str, ...] = ()) -> ServoLaw:
+              rc_dofs: tuple[str, ...] = (), stages: Sequence[StageUse] = ()) -> ServoLaw:
     """The law of the table's `kind` group ("horizontal" or "vertical") at its knob
     settings: g, k_p, k_v of each DOF = the knob scales (`VirtualTable.gain_scales`) times
-    the group's reference constants; `hydraulics` defaults to the table's."""
+    the group's reference constants; `hydraulics` defaults to the table's; `stages` (one
+    actuator's) enter its element."""
     if hydraulics is None:
         s = vt.horizontal_servo if kind == "horizontal" else vt.vertical_servo
         hydraulics = HydraulicParams(area=s.area, volume=s.volume, beta=s.beta, k_t=s.k_t,
-                                     k_ct=s.k_ct, k_p=s.k_p, k_v=s.k_v, rc=s.rc,
-                                     spool_lag=vt.valve_lag if kind == "horizontal" else 0.0,
-                                     mean_pressure=vt.table.geometry.supply_pressure)
+                                     k_ct=s.k_ct, k_p=s.k_p, k_v=s.k_v, rc=s.rc)
     names, T = dof_matrix(vt, kind)
     keep = [j for j, d in enumerate(GROUP_DOFS[kind]) if d in vt.dofs]
     dofs = tuple(GROUP_DOFS[kind][j] for j in keep)
@@ -154,4 +223,4 @@ def group_law(vt, kind: str, hydraulics: HydraulicParams | None = None,
     scales = np.array([vt.gain_scales(DIRECTION[d]) for d in dofs])
     return ServoLaw(names, dofs, T, scales[:, 0], hydraulics.k_p * scales[:, 1],
                     hydraulics.k_v * scales[:, 2], tuple(d in rc_dofs for d in dofs),
-                    hydraulics)
+                    hydraulics, tuple(stages))

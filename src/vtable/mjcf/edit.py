@@ -96,3 +96,53 @@ def add_storey_actuators(ts: TableSpec, prefix: str = "S") -> list[str]:
             t.wrap_joint(jn, 1.0)
             ts.force_actuators.append(tn)
     return names
+
+
+def add_slide_body(ts: TableSpec, name: str, mass: float) -> None:
+    """A body of `mass` sliding in x on a joint named `name` (a new coordinate), tied to
+    nothing until a spring, a force or the actuators are."""
+    body = ts.spec.worldbody.add_body(name=name)
+    body.explicitinertial = True
+    body.mass, body.inertia = mass, [mass, mass, mass]
+    body.add_joint(name=name, type=_J.mjJNT_SLIDE, axis=[1, 0, 0])
+
+
+def _joint(ts: TableSpec, name: str):
+    if not _has_joint(ts, name):
+        raise VtableError(f"the virtual table has no coordinate {name!r} (its joints: "
+                          f"{', '.join(j.name for j in ts.spec.joints)})")
+    return ts.spec.joint(name)
+
+
+def relative_tendon(ts: TableSpec, name: str, a: str, b: str | None) -> str:
+    """A tendon whose length is q_a - q_b (b None: q_a) of two joints."""
+    _joint(ts, a)
+    t = ts.spec.add_tendon(name=name)
+    t.wrap_joint(a, 1.0)
+    if b is not None:
+        _joint(ts, b)
+        t.wrap_joint(b, -1.0)
+    return t.name
+
+
+def add_spring(ts: TableSpec, a: str, b: str | None, stiffness: float,
+               damping: float) -> None:
+    """A spring and dashpot on joint a (to the ground) or between joints a and b (a
+    tendon's spring, its rest length that at rest)."""
+    if b is None:
+        j = _joint(ts, a)
+        j.stiffness[0] += stiffness
+        j.damping[0] += damping
+        return
+    t = ts.spec.tendon(relative_tendon(ts, f"spring_{a}_{b}_{len(ts.spec.tendons)}", a, b))
+    t.stiffness[0], t.damping[0] = stiffness, damping
+
+
+def set_actuator(ts: TableSpec, moving: str | None = None, reaction: str | None = None) -> None:
+    """The horizontal actuators end on the body of joint `moving` and/or start on the body
+    of joint `reaction` (instead of the platen and the ground)."""
+    for joint, end in ((moving, "slab"), (reaction, "base")):
+        if joint is not None:
+            body = _joint(ts, joint).parent
+            for act in ts.vt.group("horizontal"):
+                _move_site(ts, f"{act.name}_{end}", body)

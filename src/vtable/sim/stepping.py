@@ -18,7 +18,8 @@ import os
 
 import mujoco
 import numpy as np
-from numba import njit
+
+from vtable._numba import njit
 
 
 @functools.cache

@@ -1,0 +1,182 @@
+"""A stage set compiled into the hydraulic element, cached on disk like any module.
+
+`composition(stages, extra)` writes the element for that set of stages (`stage.Stage`) —
+`fed_back` and `actuator_rates` with each stage's law called in its place, then the text of
+the element's group kernels (`element.servo_rates`, `element.servo_step`) and of `extra`
+kernels (the reduced model's integrator) — to a real .py file named by a hash of the
+stages' laws and the kernels' text, imports it and returns it. Its kernels are
+``njit(cache=True)``: a process that meets the same stage set again (a diagnosis's
+workers) loads them compiled from numba's cache instead of compiling them.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import inspect
+import os
+import sys
+import tempfile
+import types
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from vtable.errors import VtableError
+from vtable.hydraulics import element
+from vtable.hydraulics.element import N_LINEAR, HydraulicParams
+from vtable.hydraulics.stage import KINDS, Stage
+
+_LAWS: dict[str, list[Callable]] = {}  # key -> the stages' laws, for the generated module
+_MODULES: dict[str, Composition] = {}
+#: compositions by the identity of their stages and kernels (held, so ids stay theirs):
+#: hashing the laws' source is slower than building a reduced model
+_SEEN: dict[tuple[int, ...], tuple[tuple, Composition]] = {}
+
+
+def laws_of(key: str) -> list[Callable]:
+    """The laws of composition `key` (called by its generated module when imported)."""
+    return _LAWS[key]
+
+
+@dataclass(frozen=True)
+class Composition:
+    """The element of one stage set: its generated `module` (`fed_back`, `actuator_rates`,
+    `servo_rates`, `servo_step`, the `extra` kernels), states per actuator `ns`, and
+    whether every stage is linear."""
+
+    stages: tuple[Stage, ...]
+    module: types.ModuleType
+    ns: int
+    linear: bool
+
+    def vector(self, h: HydraulicParams, values: Sequence[dict[str, float]]) -> np.ndarray:
+        """The kernel's parameters: `h`'s linear constants, then each stage's named
+        parameters (`values`, in the order of `stages`)."""
+        tail = [v for s, p in zip(self.stages, values, strict=True) for v in s.values(p)]
+        return np.concatenate([h.vector(), np.asarray(tail, dtype=float)])
+
+    def state_names(self) -> tuple[str, ...]:
+        """One actuator's states: P, then each stage's."""
+        return ("P", *(f"{s.name}{k}" for s in self.stages for k in range(s.states)))
+
+
+def ordered(stages: Sequence[Stage]) -> tuple[Stage, ...]:
+    """Stages in the element's order: by kind (valve, flow, pressure, feedback, force),
+    then `order`, then name."""
+    return tuple(sorted(stages, key=lambda s: (KINDS.index(s.kind), s.order, s.name)))
+
+
+def composition(stages: Sequence[Stage], extra: Sequence[Callable] = ()) -> Composition:
+    """The compiled element of `stages` (see the module docstring); `extra`: kernels
+    (njit-decorated functions of another module) written after the element's, calling its
+    `fed_back`, `actuator_rates`, `dof_error` and its states per actuator `NS`."""
+    stages = ordered(stages)
+    if sum(s.kind == "feedback" for s in stages) > 1:
+        raise VtableError("the element takes one feedback stage: "
+                          f"{', '.join(s.name for s in stages if s.kind == 'feedback')}")
+    if len({s.name for s in stages}) < len(stages):
+        raise VtableError(f"a stage appears twice: {', '.join(s.name for s in stages)}")
+    templates = [element.servo_rates, element.servo_step, *extra]
+    seen = _SEEN.get(tuple(map(id, (*stages, *templates))))
+    if seen is not None and seen[0] == (*stages, *templates):  # a model built again
+        return seen[1]
+    key = _key(stages, templates)
+    hit = _MODULES.get(key)
+    if hit is not None:
+        _SEEN[tuple(map(id, (*stages, *templates)))] = ((*stages, *templates), hit)
+        return hit
+    laws: list[Callable] = []
+    for s in stages:
+        laws += [s.law] + ([s.rate] if s.rate else [])
+    _LAWS[key] = laws
+    path = _directory() / f"vtable_stages_{key}.py"
+    if not path.exists():
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(_source(stages, templates, key))
+        os.replace(tmp, path)
+    name = f"vtable_stages_{key}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    comp = Composition(stages, module, 1 + sum(s.states for s in stages),
+                       all(s.linear for s in stages))
+    _MODULES[key] = comp
+    _SEEN[tuple(map(id, (*stages, *templates)))] = ((*stages, *templates), comp)
+    return comp
+
+
+def _key(stages: tuple[Stage, ...], templates: list[Callable]) -> str:
+    h = hashlib.sha256()
+    h.update(f"{numba.__version__} {sys.version}\n".encode())
+    h.update(inspect.getsource(element).encode())
+    for f in templates:
+        h.update(inspect.getsource(getattr(f, "py_func", f)).encode())
+    for s in stages:
+        h.update(f"{s.name} {s.kind} {s.params} {s.states} {s.order}\n".encode())
+        h.update(s.source().encode())
+    return h.hexdigest()[:20]
+
+
+def _directory() -> Path:
+    """Where generated modules live: numba's cache directory when one is set, else
+    `vtable/hydraulics/__pycache__/stages` (or a temporary directory if that is
+    read-only)."""
+    base = numba.config.CACHE_DIR
+    d = Path(base) / "vtable_stages" if base else Path(__file__).parent / "__pycache__" / "stages"
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+        if not os.access(d, os.W_OK):
+            raise OSError(d)
+    except OSError:
+        d = Path(tempfile.gettempdir()) / f"vtable_stages_{os.getuid()}"
+        d.mkdir(parents=True, exist_ok=True)
+    return d
+
+
+def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str) -> str:
+    names = ", ".join(f"{s.kind} {s.name}" for s in stages) or "none"
+    head = [f'"""Generated by vtable.hydraulics.compose (stages: {names}). Do not edit."""',
+            "", "from collections import namedtuple", "", "import numpy as np",
+            "from numba import njit", "",
+            "from vtable.hydraulics.compose import laws_of",
+            "from vtable.hydraulics.element import (bulk_modulus, commanded_flow, dof_error,",
+            "                                       oil_column, piston_force)", "",
+            f"NS = {1 + sum(s.states for s in stages)}", f'_L = laws_of("{key}")']
+    calls: dict[str, list[str]] = {k: [] for k in KINDS}
+    rate = ""
+    o, so, li = N_LINEAR, 1, 0  # parameter slot, state offset, law index
+    for k, s in enumerate(stages):
+        args = ", ".join(f"sp[{o + i}]" for i in range(len(s.params)))
+        head.append(f"_P{k} = namedtuple('{s.name}', {tuple(s.params)!r})")
+        head.append(f"_law{k} = njit(_L[{li}])")
+        p = f"_P{k}({args})"
+        z = f"z[o + {so}:o + {so + s.states}]"
+        dz = f"dz[o + {so}:o + {so + s.states}]"
+        if s.kind == "valve":
+            calls["valve"].append(f"    q = _law{k}(q, {z}, {p}, {dz})")
+        elif s.kind == "flow":
+            calls["flow"].append(f"    q = _law{k}(q, P, {p})")
+        elif s.kind == "pressure":
+            calls["pressure"].append(f"    beta = _law{k}(beta, P, {p})")
+        elif s.kind == "feedback":
+            head.append(f"_rate{k} = njit(_L[{li + 1}])")
+            calls["feedback"].append(f"    return _law{k}(z[o], {z}, {p})")
+            rate = f"    _rate{k}(P, dP, {z}, {p}, {dz})"
+        else:
+            calls["force"].append(f"    F = _law{k}(F, v, {p})")
+        o, so, li = o + len(s.params), so + s.states, li + 1 + (s.rate is not None)
+    body = ["", "", "@njit(cache=True)", "def fed_back(z, o, sp):",
+            *(calls["feedback"] or ["    return z[o]"]),
+            "", "", "@njit(cache=True)", "def actuator_rates(z, o, drive, v, sp, dz):",
+            "    P = z[o]", "    q = commanded_flow(drive, sp)", *calls["valve"],
+            *calls["flow"], "    beta = bulk_modulus(sp)", *calls["pressure"],
+            "    dP = oil_column(q, P, v, beta, sp)", "    dz[o] = dP",
+            *([rate] if rate else []), "    F = piston_force(P, sp)", *calls["force"],
+            "    return F", ""]
+    kernels = ["\n" + inspect.getsource(getattr(f, "py_func", f)) for f in templates]
+    return "\n".join(head + body) + "\n".join(kernels)
