@@ -241,7 +241,7 @@ def test_the_coordinate_verbs_agree_in_both_models():
     ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"), {"flexible_link": {}})
     random, _, quake = campaign_commands()
     for cmd in (random, quake):
-        run = virtual_run(ph, cmd)
+        run = simulate(ph, cmd)
         pred = ReducedModel(ph).predict(run)
         base = ReducedModel(Physics(nominal_open_loop(), presets.specimen("sdof_frame"))
                             ).predict(run)
@@ -317,7 +317,7 @@ def overlap_campaign():
     load_file(VALVE)
     truth = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                     {"valve_overlap": {"overlap": OVERLAP_PCT}})
-    runs = [virtual_run(truth, c, noise=0.01, seed=20 + i, name=f"run{i}")
+    runs = [simulate(truth, c, noise=0.01, seed=20 + i, name=f"run{i}")
             for i, c in enumerate(campaign_commands())]
     return truth, runs
 
