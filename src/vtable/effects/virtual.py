@@ -35,9 +35,7 @@ from vtable.mjcf import edit
 from vtable.mjcf.builder import BuiltModel, compile_table, table_spec
 from vtable.params.virtual import VirtualTable, with_rocking
 
-OUTPUT_FS = 200.0  # Hz: the rate of the runs the diagnosis tests are made of
 MAX_STEP = 1e-3  # s: the virtual table's largest MuJoCo/control step
-COMMANDS = ("h_span", "acc_cmd")  # channels the controller generates (never filtered)
 
 
 class VirtualAssembly:
