@@ -13,6 +13,7 @@ from vtable.controllers.force_law import ForceLawController, quadratic_damper
 from vtable.controllers.hydraulic import HydraulicServo
 from vtable.controllers.servo import ServoController, dof_matrix
 from vtable.controllers.stabilizers import PassiveStabilizers
+from vtable.hydraulics import appendix_c, group_law
 
 
 def standard_controllers(vt, rc_filter=("x", "twist")) -> list:
@@ -30,8 +31,6 @@ def nonlinear_controllers(vt, **valve) -> list:
     """Appendix C valves on H1-H3 (`vtable.hydraulics.appendix_c`: orifice flow from the
     supply pressure, rated-flow cap; `valve` passes air_ratio, friction, ...), linear
     loops on V1-V4, passive stabilizers."""
-    from vtable.hydraulics import appendix_c, group_law
-
     base = group_law(vt, "horizontal").hydraulics
     hyd = appendix_c(base, vt.table.geometry.supply_pressure, vt.table.rated_flow("H1"),
                      **valve)
