@@ -13,6 +13,7 @@ import io
 from pathlib import Path
 from typing import Any
 
+import matplotlib.pyplot as plt
 import numpy as np
 
 from vtable import units
@@ -20,24 +21,19 @@ from vtable.diagnose.groups import GROUP_UNITS, group_prediction, group_signal, 
 from vtable.fileio import write_text
 from vtable.ident.tf import transfer_function
 
+plt.switch_backend("Agg")  # figures are embedded as PNG: no window, whatever the default
+
 PRETTY = {"rad/s2": "rad/s²"}
 
 
 def _png(fig) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=100)
-    import matplotlib.pyplot as plt
-
     plt.close(fig)
     return base64.b64encode(buf.getvalue()).decode()
 
 
 def waterfall(d: Any):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     hist = d.history()
     fig, ax = plt.subplots(figsize=(6.5, 3.2))
     labels = [h[0] for h in hist]
@@ -59,11 +55,6 @@ def waterfall(d: Any):
 
 
 def tf_overlay(d: Any, group: str):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     run = max(d.runs, key=lambda r: len(r.time))
     x = run.channel("h_span")
     y = group_signal(run, group)

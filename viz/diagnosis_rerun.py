@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
+from rerun.chunk import RrdReader
 
 from vtable import units
 from vtable.diagnose.groups import (
@@ -129,7 +130,6 @@ def read_blueprint_views(path: str | Path) -> list[dict[str, Any]]:
     """The views of an .rrd's blueprint: class ("TimeSeries", "BarChart", ...), name,
     origin ("/runs/run0/pitch") and the timelines of its visible time ranges (for tests and
     checks)."""
-    from rerun.chunk import RrdReader
 
     reader = RrdReader(str(path))
     views: dict[str, dict[str, Any]] = {}

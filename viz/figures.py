@@ -5,13 +5,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
+
+from vtable.fileio import atomic_path
+
+plt.switch_backend("Agg")  # figures are written to files: no window, whatever the default
 
 
 def transfer_function_png(path: str | Path, f, H, coherence=None, title: str = "",
                           f_max: float | None = None) -> Path:
     """Amplitude, phase and coherence against frequency, as in the report's figures."""
-    plt = _plt()
     f, H = np.asarray(f), np.asarray(H)
     sel = f > 0 if f_max is None else (f > 0) & (f <= f_max)
     rows = 3 if coherence is not None else 2
@@ -32,33 +36,21 @@ def transfer_function_png(path: str | Path, f, H, coherence=None, title: str = "
     return _save(fig, path)
 
 
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def _save(fig, path: str | Path) -> Path:
     """Lay out, write as PNG (atomically, creating the folder) and close; a failed write is
     one line naming the path."""
-    from vtable.fileio import atomic_path
-
     p = Path(path)
     try:
         fig.tight_layout()
         with atomic_path(p) as tmp:
             fig.savefig(tmp, dpi=110, format="png")
     finally:
-        _plt().close(fig)
+        plt.close(fig)
     return p
 
 
 def psv_spectra_png(path: str | Path, periods, psv: dict, title: str = "") -> Path:
     """Pseudo-velocity spectra of one record through several models (Figs 9.13-9.32)."""
-    plt = _plt()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for name, v in psv.items():
         ax.loglog(periods, np.asarray(v) / 0.0254, lw=1.2, label=name)
@@ -75,7 +67,6 @@ def coupled_sweep_png(path: str | Path, x, x_label: str, curves: dict, reference
     """Coupled frequency ratio f_c/f_s and coupled damping ξ_c against a swept parameter
     (Figs 9.4-9.12). `curves`: label -> array (len(x), 2) of (f_c, ξ_c); `reference`: the
     fixed-base (f_s, ξ_s) at each x, for the ratio and the ξ_s line."""
-    plt = _plt()
     fig, ax = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
     x = np.asarray(x)
     ref = np.asarray(reference) if reference is not None else None

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
+from rerun.chunk import RrdReader
 from scipy.spatial.transform import Rotation
 
 from vtable.mjcf.meshes import braced_frame, slab_with_ribs
@@ -140,7 +141,6 @@ def blueprint(channel_names: list[str]) -> rrb.Blueprint:
 
 def read_rrd(path: str | Path) -> dict[str, list]:
     """Entity path -> list of (timeline values, component columns) record batches (tests)."""
-    from rerun.chunk import RrdReader
 
     out: dict[str, list] = {}
     for ch in RrdReader(str(path)).stream().to_chunks():

@@ -8,7 +8,7 @@ import sys
 
 def run() -> None:
     try:
-        from vtable.cli import main
+        from vtable.cli import main  # in the try: Ctrl-C while the libraries load
     except KeyboardInterrupt:
         print("vtable: interrupted", file=sys.stderr)
         sys.exit(130)

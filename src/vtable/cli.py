@@ -1,7 +1,8 @@
 """The ``vtable`` command line: parse the arguments (`vtable.cli_args`), call one library
 function (`vtable.verbs`), format the typed result it returns: its `report()` on stdout,
 or with ``--json`` its `to_json()` (on stdout, or written to FILE with the report printed;
-the same for every verb)."""
+the same for every verb). Asking `vtable.verbs` for a verb imports that verb's module
+only, so a command loads what it uses and ``--help`` loads none."""
 
 from __future__ import annotations
 
@@ -65,14 +66,12 @@ def cmd_compare(a: argparse.Namespace) -> Result:
 
 
 def cmd_diagnose(a: argparse.Namespace) -> Result:
-    from vtable.diagnose.result import DiagnosisInterrupted
-
+    diagnose, interrupted = verbs.diagnose, verbs.DiagnosisInterrupted  # loads the diagnosis
     verbs.load_effects(a.effects_from)
     try:
-        return verbs.diagnose(a.runs, verbs.effect_names(a.with_),
-                              verbs.effect_names(a.effects), a.max_rounds, _Progress(),
-                              a.rerun, a.report, a.calibrate)
-    except DiagnosisInterrupted as e:
+        return diagnose(a.runs, verbs.effect_names(a.with_), verbs.effect_names(a.effects),
+                        a.max_rounds, _Progress(), a.rerun, a.report, a.calibrate)
+    except interrupted as e:
         # Ctrl-C: the rounds finished are in the JSON; one line; exit code 130 (main)
         wrote = "nothing written (no --json)"
         if a.json not in (None, "-"):

@@ -131,6 +131,8 @@ class FrequencyResponse:
 
     def plot(self, png: str | Path) -> Path:
         """Amplitude and phase (and a run's meaningful coherence) to a PNG file."""
+        # on use, for start-up: matplotlib takes ~0.9 s, and every verb imports this
+        # module for its results' to_json() and report() (`vtable presets` too)
         from vtable.viz.figures import transfer_function_png
 
         transfer_function_png(png, self.f_hz, self.H,

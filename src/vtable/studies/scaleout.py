@@ -20,9 +20,18 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from dask.distributed import Client, LocalCluster, as_completed
 
+from vtable import units
 from vtable.errors import VtableError
 from vtable.jsonable import jsonable
+from vtable.signals import COMMAND_DT, Command
+from vtable.signals.processing import process_record
+from vtable.signals.records import load_record
+from vtable.sim.experiment import load_specimen
+from vtable.sim.run import simulate, standard_physics
+from vtable.studies.interaction import assess
+from vtable.studies.spectra import effective_motion, response_spectrum
 
 FORMAT = "vtable-study/1"
 
@@ -111,8 +120,6 @@ def run_study(study: Study, store: str | Path, *, scheduler: str | None = None,
     """Evaluate the study's unfinished points on Dask (a local cluster of `n_workers`
     single-threaded processes, or the scheduler at `scheduler`), storing each result as
     it completes; return every point's result."""
-    from dask.distributed import Client, LocalCluster, as_completed
-
     resolve(study.function)  # fail here, not on the workers
     st = Store(store)
     st.open(study)
@@ -146,9 +153,6 @@ def run_study(study: Study, store: str | Path, *, scheduler: str | None = None,
 
 # ---- the points -------------------------------------------------------------------------
 def _command(record: str, duration: float | None):
-    from vtable.signals.processing import process_record
-    from vtable.signals.records import load_record
-
     cmd = process_record(load_record(record))
     if duration is not None:
         n = min(len(cmd.displacement), round(duration / cmd.dt) + 1)
@@ -157,9 +161,6 @@ def _command(record: str, duration: float | None):
 
 
 def _specimen(specimen: str, height_in: float | None):
-    from vtable import units
-    from vtable.sim.experiment import load_specimen
-
     spec = load_specimen(specimen)
     return spec if height_in is None else replace(spec, height=units.to_si(height_in, "in"))
 
@@ -171,10 +172,6 @@ def virtual_table_point(record: str, height_in: float | None = None,
     """One virtual-table run: the specimen (its height changed to `height_in`) under the
     §9.2-processed `record` (first `duration` s): peaks of the table channels and the
     effective-motion spectrum (x_t + hθ, 5 %) over the command's."""
-    from vtable.signals import COMMAND_DT, Command
-    from vtable.sim.run import simulate, standard_physics
-    from vtable.studies.spectra import effective_motion, response_spectrum
-
     spec = _specimen(specimen, height_in)
     cmd = _command(record, duration)
     t = np.arange(0.0, cmd.time[-1] + 1e-12, COMMAND_DT)
@@ -194,8 +191,6 @@ def analytic_point(record: str, height_in: float | None = None, specimen: str = 
                    duration: float | None = None) -> dict[str, Any]:
     """One analytical assessment (§9.3-9.9): coupled modes and PSV at the specimen period
     through the five models."""
-    from vtable.studies.interaction import assess
-
     spec = _specimen(specimen, height_in)
     cmd = _command(record, duration)
     a = assess(spec, cmd.acceleration, cmd.dt, record, periods=[1 / spec.frequency])
@@ -213,8 +208,6 @@ def height_record_study(heights_in, records, model: str = "virtual",
     """The grid heights × records through `model` (virtual or analytic)."""
     if model not in FUNCTIONS:
         raise VtableError(f"study model must be virtual or analytic, got {model!r}")
-    from vtable.signals.records import load_record
-
     for r in records:  # a bad record fails here in one line, before any cluster starts
         load_record(str(r))
     points = {}

@@ -10,6 +10,7 @@ import scipy.linalg
 
 from vtable._numba import njit
 from vtable.errors import VtableError
+from vtable.runs.model import FORMAT_UNITS
 
 
 @dataclass(frozen=True)
@@ -99,8 +100,6 @@ def response_spectrum(acc: np.ndarray, dt: float, periods, damping: float = 0.05
 
 
 def _check_acceleration(run, name: str) -> np.ndarray:
-    from vtable.runs.model import FORMAT_UNITS
-
     unit = run.units.get(name, FORMAT_UNITS.get(name, ""))
     if unit not in ("g", "m/s2", "rad/s2"):
         raise VtableError(f"{run.name}: channel {name!r} is not an acceleration (unit "

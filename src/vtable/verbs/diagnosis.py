@@ -1,0 +1,40 @@
+"""The diagnosis's verbs: how a model with given effects fits measured runs (`compare`),
+and the search for the effects the model is missing (`diagnose`)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+from vtable.diagnose.calibration import Calibration
+from vtable.diagnose.engine import Diagnoser
+from vtable.diagnose.model import TableModel
+from vtable.diagnose.result import Diagnosis, DiagnosisInterrupted, ModelComparison
+from vtable.errors import VtableError
+from vtable.ident.drive import align
+from vtable.runs import campaign
+
+__all__ = ["DiagnosisInterrupted", "compare", "diagnose"]
+
+
+def compare(paths: Sequence[str], effects: Sequence[str] = (),
+            calibrate: str = "") -> ModelComparison:
+    """How the model with `effects` fits the runs (fitted on the training segments,
+    scored on the held-out ones; the base calibrated as `calibrate` says, see
+    `vtable.diagnose.calibration.Calibration.parse`)."""
+    return ModelComparison.of(TableModel(effects, calibration=Calibration.parse(calibrate))
+                              .fit([align(r) for r in campaign(paths)]))
+
+
+def diagnose(paths: Sequence[str], with_: Sequence[str] = (), catalog: Sequence[str] = (),
+             max_rounds: int = 4, progress: Callable | None = None, rerun: str | None = None,
+             report: str | None = None, calibrate: str = "") -> Diagnosis:
+    """The diagnosis loop on the runs; writes the Rerun recording (`rerun`) and the HTML
+    report (`report`) asked for (`Diagnosis.plot`, listed in its `files`). Ctrl-C raises
+    `DiagnosisInterrupted` carrying the rounds finished (`partial`, `interrupted` true)."""
+    if max_rounds < 1:
+        raise VtableError(f"--max-rounds must be at least 1, got {max_rounds}")
+    d = Diagnoser([align(r) for r in campaign(paths)], list(with_), catalog=list(catalog) or None,
+                  progress=progress, max_rounds=max_rounds,
+                  calibration=Calibration.parse(calibrate)).diagnose()
+    d.plot(report=report, rerun=rerun)
+    return d
