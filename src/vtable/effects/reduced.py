@@ -5,7 +5,7 @@ carrying the specimen's storeys, one equivalent horizontal actuator under the DO
 law (`vtable.hydraulics`), mechanics from the same assembly as the virtual table's linear
 model (`analytic.virtual_table.mechanics`: the platen cannot pitch until an effect frees
 it) — and offers effects the vocabulary of `vtable.effects.base.Assembly`: degrees of
-freedom, springs, linear control loops, the hydraulic element's named options, force
+freedom, springs, linear control loops, the hydraulic element's stages, force
 elements (a law of a relative motion, compiled with numba when it can be, else run as
 Python) and output filters. `ReducedModel` integrates what they made
 (`reduced_kernel.simulate_reduced`) and predicts a run's channels from its command.
