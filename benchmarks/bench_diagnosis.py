@@ -28,7 +28,7 @@ from pathlib import Path
 
 from vtable.diagnose import workers
 from vtable.diagnose.engine import Diagnoser
-from vtable.effects.physics import Physics, nominal_open_loop
+from vtable.models.physics import Physics, nominal_open_loop
 from vtable.params import presets
 from vtable.runs import read_run
 from vtable.signals import make_command

@@ -12,9 +12,9 @@ import time
 from pathlib import Path
 
 from vtable.effects import load_file, register
-from vtable.effects.physics import Physics, nominal_open_loop
-from vtable.effects.reduced import ReducedModel
 from vtable.effects.registry import get
+from vtable.models.physics import Physics, nominal_open_loop
+from vtable.models.reduced import ReducedModel
 from vtable.params import presets
 from vtable.signals import make_command
 from vtable.sim import simulate

@@ -13,14 +13,17 @@ from vtable.controllers.force_law import ForceLawController, quadratic_damper
 from vtable.controllers.hydraulic import HydraulicServo
 from vtable.controllers.servo import ServoController, dof_matrix
 from vtable.controllers.stabilizers import PassiveStabilizers
+from vtable.effects.actuator_friction import FRICTION, V_EPS
+from vtable.effects.flow_saturation import FLOW_CAP
+from vtable.effects.force_feedback_filter import RC_FILTER
+from vtable.effects.oil_column_air import AIR
+from vtable.effects.valve_dynamics import SPOOL_LAG
+from vtable.effects.valve_flow_nonlinearity import ORIFICE
 
 
 def _table_stages(vt) -> list:
     """The table's own stages on H1-H3: its RC filter on the ΔP feedback (eq B.4) and its
     servovalves' lag (a lab table's)."""
-    from vtable.effects.force_feedback_filter import RC_FILTER
-    from vtable.effects.valve_dynamics import SPOOL_LAG
-
     out = [(RC_FILTER, {"rc": vt.horizontal_servo.rc})] if vt.horizontal_servo.rc else []
     return out + ([(SPOOL_LAG, {"tau": vt.valve_lag})] if vt.valve_lag else [])
 
@@ -42,11 +45,6 @@ def nonlinear_controllers(vt, air_ratio: float = 0.0, friction: float = 0.0) -> 
     flow from the table's supply pressure) and flow_saturation (the rated flow) effects,
     optionally oil_column_air's (`air_ratio`) and actuator_friction's (`friction`, N per
     actuator), with the table's RC filter — linear loops on V1-V4, passive stabilizers."""
-    from vtable.effects.actuator_friction import FRICTION, V_EPS
-    from vtable.effects.flow_saturation import FLOW_CAP
-    from vtable.effects.oil_column_air import AIR
-    from vtable.effects.valve_flow_nonlinearity import ORIFICE
-
     ps = vt.table.geometry.supply_pressure
     stages = [*_table_stages(vt), (ORIFICE, {"supply_pressure": ps}),
               (FLOW_CAP, {"max_flow": vt.table.rated_flow("H1")})]

@@ -97,7 +97,7 @@ def campaign_commands():
 def effect_campaign(effects: tuple[str, ...]):
     """Three runs of the SDOF frame on the virtual table with `effects` present (doses of
     HIDDEN): random 0-25 Hz at two spans and §9.2 El Centro, 1 % RMS noise, 200 Hz."""
-    from vtable.effects.physics import Physics, nominal_open_loop
+    from vtable.models.physics import Physics, nominal_open_loop
     from vtable.params import presets
     from vtable.sim import simulate
 

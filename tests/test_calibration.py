@@ -123,7 +123,7 @@ def test_a_buildings_storey_masses_are_calibrated_each_with_its_frequencies_held
     frequencies (the stiffnesses follow) and the other storeys' masses."""
     from vtable.analytic.structure import specimen_frequencies
     from vtable.diagnose.calibration import base_params
-    from vtable.effects.physics import Physics, nominal_open_loop
+    from vtable.models.physics import Physics, nominal_open_loop
     from vtable.params.specimen import ShearBuilding
     from vtable.params.virtual import virtual_table
 
@@ -152,7 +152,7 @@ def test_unpacking_only_what_moved_equals_unpacking_everything():
 
     from vtable.diagnose.campaign import Campaign
     from vtable.diagnose.model import TableModel
-    from vtable.effects.physics import Physics, nominal_open_loop
+    from vtable.models.physics import Physics, nominal_open_loop
 
     c = Campaign.of([read_run(p) for p in _building_campaign()])
     ph = Physics(nominal_open_loop(c.table), c.specimen, {"pitch_flexibility": {}})
@@ -237,7 +237,7 @@ def test_a_buildings_damping_is_calibrated_per_mode_within_its_bounds():
 
     from vtable.analytic.structure import modal_damping
     from vtable.diagnose.calibration import base_params
-    from vtable.effects.physics import Physics, nominal_open_loop
+    from vtable.models.physics import Physics, nominal_open_loop
     from vtable.params.specimen import specimen_from_dict
     from vtable.params.virtual import virtual_table
 

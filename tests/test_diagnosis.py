@@ -164,7 +164,7 @@ FAST = ("force_feedback_filter", "valve_dynamics", "actuator_friction", "sensor_
 def rate_campaign(effects: tuple[str, ...], fs: float):
     """effect_campaign's three runs sampled at `fs` (the virtual table stepped at
     1/(k·fs))."""
-    from vtable.effects.physics import Physics, nominal_open_loop
+    from vtable.models.physics import Physics, nominal_open_loop
     from vtable.params import presets
     from vtable.sim import simulate
 

@@ -10,10 +10,10 @@ import pytest
 from conftest import HIDDEN, campaign_commands
 
 from vtable.effects import load_file
-from vtable.effects.physics import Physics, nominal_open_loop
-from vtable.effects.reduced import ReducedModel
 from vtable.effects.registry import get, names
 from vtable.errors import VtableError
+from vtable.models.physics import Physics, nominal_open_loop
+from vtable.models.reduced import ReducedModel
 from vtable.params import presets
 from vtable.sim import simulate
 

@@ -17,8 +17,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).parents[1]
 #: where each package's files are: (folder, dotted name of that folder)
 TREES = ((ROOT / "src" / "vtable", "vtable"), (ROOT / "controllers", "vtable.controllers"),
@@ -39,10 +37,6 @@ LATE_IMPORTS = {
         "start-up of every spawned diagnosis worker (vtable.diagnose imports the result)",
     ("vtable.diagnose.result", "vtable.viz.diagnosis_report"):
         "start-up of every spawned diagnosis worker (vtable.diagnose imports the result)",
-    # the "stages" helper's files (issue 17), being rewritten: to review after its merge
-    ("vtable.effects.pitch_flexibility", "vtable"): "stages helper's file",
-    ("vtable.effects.reduced", "vtable.params.specimen"): "stages helper's file",
-    ("vtable.effects.reduced", "numba"): "stages helper's file",
 }
 
 
@@ -216,14 +210,10 @@ def test_runs_and_ident_modules_are_short():
     assert not long_modules(DONE), long_modules(DONE)
 
 
-@pytest.mark.xfail(strict=False, reason="issue 17: circles outside runs/ and ident/ are "
-                   "other helpers' (removed when their branches are merged)")
 def test_no_import_circles():
     bad = circles(import_graph())
     assert not bad, "import circles: " + "; ".join(" <-> ".join(c) for c in bad)
 
 
-@pytest.mark.xfail(strict=False, reason="issue 17: long modules outside runs/ and ident/ are "
-                   "other helpers' (removed when their branches are merged)")
 def test_no_module_over_500_lines():
     assert not long_modules(), long_modules()

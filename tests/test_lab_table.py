@@ -119,7 +119,7 @@ def lnec_campaign():
     """The LNEC table with its valve (τ = 0.0246 s) on the virtual table, the runs
     declaring the table with the valve time constant withheld (0): random 0-40 Hz at two
     spans and a scaled earthquake, 200 Hz, 1 % noise."""
-    from vtable.effects.physics import Physics, nominal_open_loop
+    from vtable.models.physics import Physics, nominal_open_loop
     from vtable.params.specimen import NoSpecimen
     from vtable.signals import make_command
     from vtable.sim import simulate

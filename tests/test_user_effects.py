@@ -17,7 +17,7 @@ from conftest import campaign_commands
 
 from vtable.cli import main
 from vtable.effects import BUILT_IN, Effect, Param, get, load_file, names
-from vtable.effects.physics import Physics, nominal_open_loop
+from vtable.models.physics import Physics, nominal_open_loop
 from vtable.params import presets
 from vtable.sim import simulate
 
@@ -139,7 +139,7 @@ def test_with_the_file_it_ranks_first_and_closes_the_gap():
 def test_a_pure_python_law_gives_the_same_prediction():
     """numba is an option: a law numba cannot compile runs as Python, same numbers."""
     from vtable.effects import register
-    from vtable.effects.reduced import ReducedModel
+    from vtable.models.reduced import ReducedModel
 
     truth, runs = backlash_campaign()
     r = runs[0]
@@ -235,7 +235,7 @@ def test_the_coordinate_verbs_agree_in_both_models():
     """add_dof, set_actuator, add_spring and add_force realised on the virtual table
     (MjSpec edits and a force-law controller) as in the reduced model: within 2 %."""
     from vtable.effects import register
-    from vtable.effects.reduced import ReducedModel
+    from vtable.models.reduced import ReducedModel
 
     register(FlexibleLink())
     ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"), {"flexible_link": {}})
@@ -257,9 +257,9 @@ def test_a_missing_stiffness_is_worked_out_from_the_law(verb):
     """Without stiffness=, the step follows the law's largest slope (here k = 4e10 N/m on
     the 680 kg pistons, or the SDOF mass), as with it; a law that cannot be probed is one
     line."""
-    from vtable.effects.reduced import ReducedAssembly
-    from vtable.effects.stiffness import needed_stiffness
     from vtable.errors import VtableError
+    from vtable.models.reduced import ReducedAssembly
+    from vtable.models.stiffness import needed_stiffness
     from vtable.params.virtual import virtual_table
 
     k = 4e10

@@ -144,14 +144,6 @@ def pitch_loop_from_springs(k_v: float, c_v: float, f_hz: float, f_r: float,
 
 
 # ---- passive stabilizers (§8.3) and combined rocking (§8.6.1) ---------------------------
-def effective_bulk_modulus(beta: float, air_ratio: float, pressure: float) -> float:
-    """1/β_e = 1/β + r/(1.4 P) (eq 8.5; C.10), P absolute pressure: the air law of the
-    oil_column_air effect (`vtable.effects.oil_column_air.chamber_modulus`)."""
-    from vtable.effects.oil_column_air import chamber_modulus
-
-    return float(chamber_modulus(float(beta), float(air_ratio), float(pressure)))
-
-
 def stabilizer_compliance(*, area: float, cylinder_length: float, line_length: float,
                           line_area: float, beta_e: float, line_radius: float = 0.0,
                           line_wall: float = math.inf, line_modulus: float = math.inf,

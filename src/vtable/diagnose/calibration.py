@@ -33,8 +33,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from vtable.analytic.structure import modal_damping, specimen_frequencies
-from vtable.effects.physics import Physics, nominal_open_loop
 from vtable.errors import VtableError
+from vtable.models.physics import Physics, nominal_open_loop
 from vtable.params.bodies import slab_body
 from vtable.params.specimen import (
     NoSpecimen,

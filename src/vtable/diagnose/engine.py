@@ -67,11 +67,11 @@ from vtable.diagnose.result import (
 )
 from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE, failing
 from vtable.diagnose.statistics import Comparison, held_out_gain
-from vtable.effects.physics import Physics, nominal_open_loop
-from vtable.effects.reduced import ReducedModel
 from vtable.effects.registry import get as effect
 from vtable.effects.registry import names as registered
 from vtable.errors import VtableError
+from vtable.models.physics import Physics, nominal_open_loop
+from vtable.models.reduced import ReducedModel
 from vtable.runs.model import Run
 
 __all__ = ["BASE_PARAMS", "ERROR_DEFINITION", "MIN_SHARE", "NOISE_SHARE", "SELECTION",

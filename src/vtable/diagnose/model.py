@@ -28,10 +28,10 @@ from threadpoolctl import threadpool_limits
 from vtable.diagnose.calibration import LOOP, BaseParam, Calibration, base_params
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare, group_prediction, segments
-from vtable.effects.physics import Physics, nominal_open_loop
-from vtable.effects.reduced import ReducedAssembly, ReducedModel
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
+from vtable.models.physics import Physics, nominal_open_loop
+from vtable.models.reduced import ReducedAssembly, ReducedModel
 from vtable.runs.model import Run
 
 AT_BOUND = 0.01  # a fitted value within 1 % of its range (fitted scale) of a bound is flagged

@@ -26,8 +26,8 @@ from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.model import TableModel
 from vtable.diagnose.workers import CampaignFile, CandidatePool, fitted
-from vtable.effects.physics import Physics
 from vtable.effects.registry import is_user, source_file
+from vtable.models.physics import Physics
 
 #: the processes the candidates are fitted in by default (two on this project's machines)
 WORKERS = min(2, os.cpu_count() or 1)

@@ -24,9 +24,9 @@ from vtable.diagnose.noise import UNEXPLAINED_RULE
 from vtable.diagnose.prose import localisation_text, unexplained
 from vtable.diagnose.selection import SELECTION, failing
 from vtable.diagnose.statistics import Comparison, Gain
-from vtable.effects.physics import Physics
 from vtable.effects.registry import get as effect
 from vtable.jsonable import jsonable
+from vtable.models.physics import Physics
 from vtable.runs.model import Run
 
 ERROR_DEFINITION = ("mean over runs and channel groups of the normalised RMS error "

@@ -33,10 +33,10 @@ import numpy as np
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.model import TableModel
-from vtable.effects.physics import Physics, nominal_open_loop
-from vtable.effects.reduced import ReducedModel
 from vtable.effects.registry import load_file
 from vtable.errors import VtableError
+from vtable.models.physics import Physics, nominal_open_loop
+from vtable.models.reduced import ReducedModel
 from vtable.params.specimen import NoSpecimen
 
 _POOLS: dict[tuple[int, tuple[str, ...]], CandidatePool] = {}

@@ -5,8 +5,8 @@ An `Effect` says, in words, what it is (`physics`), where the report treats it
 (`section`) and how it shows in measured runs (`signature`); declares its parameters
 (`Param`: unit, bounds, default and where the default comes from, fitted on a log scale
 or not); and enters a model through `apply(m, p)`, where `m` is an assembly — the reduced
-model the diagnosis fits (`vtable.effects.reduced.ReducedAssembly`) or the multibody
-virtual table (`vtable.effects.virtual.VirtualAssembly`) — and `p` its parameters in SI.
+model the diagnosis fits (`vtable.models.reduced.ReducedAssembly`) or the multibody
+virtual table (`vtable.models.virtual.VirtualAssembly`) — and `p` its parameters in SI.
 Both assemblies speak the same small vocabulary (`Assembly`), so an effect is usually
 written once; one that needs to differ overrides `reduced(m, p)` or `virtual(v, p)`.
 
@@ -22,6 +22,7 @@ from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
 from vtable import units
+from vtable.effects.table import eerc
 from vtable.errors import VtableError
 
 
@@ -51,8 +52,6 @@ class Param:
     def default(self) -> float:
         if callable(self._default):
             if self._of_table is not None:
-                from vtable.effects.table import eerc
-
                 self._default = float(self._of_table(eerc()))
             else:
                 self._default = float(self._default())

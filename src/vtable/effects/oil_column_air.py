@@ -1,8 +1,8 @@
 """oil_column_air: entrained air lowers the oil's effective bulk modulus and makes it
 pressure dependent, 1/β_e = 1/β + r/(1.4 P) per chamber (eqs 8.5, C.10), the chambers at
 P_s/2 ± P_L/2: a softer oil column, a lower open-loop frequency f_o — a pressure stage of
-the hydraulic element. `chamber_modulus` is the single-chamber law every model calls
-(`vtable.analytic.closed_forms.effective_bulk_modulus`)."""
+the hydraulic element. `chamber_modulus` is the single-chamber law (eq 8.5) every model
+calls."""
 
 from __future__ import annotations
 

@@ -10,6 +10,7 @@ eqs 8.32-8.33, 8.4).
 
 from __future__ import annotations
 
+from vtable import units
 from vtable.effects.base import Effect, Param
 from vtable.params import presets
 
@@ -33,8 +34,6 @@ class PitchFlexibility(Effect):
 
 
 def _rocking(attr: str, unit: str) -> float:
-    from vtable import units
-
     return float(units.from_si(getattr(presets.hybrid_rocking(), attr), unit))
 
 

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from vtable.effects.base import Effect
+from vtable.effects.verbs import check_verbs
 from vtable.errors import VtableError
 
 #: the catalog, in the spec's order (modules of vtable.effects)
@@ -69,8 +70,6 @@ def register(effect: Effect) -> Effect:
     the report and the recording). A name the catalog has is refused, and so is a verb
     one model cannot realise (`verbs.check_verbs`); registering the same user effect
     again replaces it."""
-    from vtable.effects.verbs import check_verbs
-
     _load_built_in()
     where = getattr(effect, "__module__", "") or "register()"
     if getattr(effect, "name", None) in BUILT_IN:

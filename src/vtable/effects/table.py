@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from functools import cache
 
 from vtable import units
+from vtable.params.virtual import virtual_table
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,4 @@ class TableView:
 @cache
 def eerc() -> TableView:
     """The EERC table's view: where the catalog's table-dependent defaults are declared."""
-    from vtable.params.virtual import virtual_table
-
     return TableView.of(virtual_table())

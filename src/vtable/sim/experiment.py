@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from vtable import units
-from vtable.effects.physics import Physics
 from vtable.errors import VtableError
+from vtable.models.physics import Physics
 from vtable.params import presets
 from vtable.params.base import read_toml
 from vtable.params.lab import lab_table

@@ -1,7 +1,7 @@
 """The one way to simulate the virtual table: `simulate(physics, command, rate) -> Run`.
 
 A `Physics` (the base loop, the specimen, the effects) is realised on the multibody table
-by `vtable.effects.virtual.VirtualAssembly` (`setup`), stepped by `Simulator` at the largest
+by `vtable.models.virtual.VirtualAssembly` (`setup`), stepped by `Simulator` at the largest
 step the stiff elements allow that divides the output period, turned into the run format's
 channels (`channels.result_run`), passed once through the effects' output filters at the
 simulation rate, sampled at `rate` and, if asked, given sensor noise. The CLI's `simulate`
@@ -16,11 +16,11 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from vtable.effects import physics as phys
 from vtable.effects.registry import STANDARD
-from vtable.effects.virtual import MAX_STEP, VirtualAssembly
 from vtable.errors import VtableError
 from vtable.mjcf.builder import BuiltModel
+from vtable.models import physics as phys
+from vtable.models.virtual import MAX_STEP, VirtualAssembly
 from vtable.params.specimen import Specimen
 from vtable.params.virtual import VirtualTable, virtual_table
 from vtable.runs import specimen_table

@@ -24,8 +24,13 @@ import scipy.signal
 
 from vtable._numba import njit
 from vtable.analytic.virtual_table import mechanics
-from vtable.effects import physics as phys
-from vtable.effects.reduced_kernel import (
+from vtable.effects.table import TableView
+from vtable.effects.valve_dynamics import SPOOL_LAG
+from vtable.errors import VtableError
+from vtable.hydraulics import group_law
+from vtable.hydraulics.stage import Stage, add_stage
+from vtable.models import physics as phys
+from vtable.models.reduced_kernel import (
     KERNELS,
     hold_matrices,
     linear_system,
@@ -33,12 +38,8 @@ from vtable.effects.reduced_kernel import (
     simulate_reduced_elements,
     simulate_reduced_python,
 )
-from vtable.effects.stiffness import needed_stiffness
-from vtable.effects.table import TableView
-from vtable.effects.valve_dynamics import SPOOL_LAG
-from vtable.errors import VtableError
-from vtable.hydraulics import group_law
-from vtable.hydraulics.stage import Stage, add_stage
+from vtable.models.stiffness import needed_stiffness
+from vtable.params.specimen import SDOFSpecimen, ShearBuilding
 from vtable.params.virtual import VirtualTable, split_rocking, virtual_table
 from vtable.runs.model import Run
 
@@ -206,8 +207,6 @@ def _mechanics(ph: phys.Physics, vt: VirtualTable):
 
 
 def _storey_masses(spec) -> list[float]:
-    from vtable.params.specimen import SDOFSpecimen, ShearBuilding
-
     if isinstance(spec, SDOFSpecimen):
         return [spec.mass]
     if isinstance(spec, ShearBuilding):

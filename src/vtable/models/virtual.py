@@ -24,8 +24,6 @@ from vtable.controllers import (
     ServoController,
     quadratic_damper,
 )
-from vtable.effects import physics as phys
-from vtable.effects.stiffness import needed_stiffness
 from vtable.effects.table import TableView
 from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.errors import VtableError
@@ -33,6 +31,8 @@ from vtable.hydraulics.law import group_law
 from vtable.hydraulics.stage import Stage, add_stage
 from vtable.mjcf import edit
 from vtable.mjcf.builder import BuiltModel, compile_table, table_spec
+from vtable.models import physics as phys
+from vtable.models.stiffness import needed_stiffness
 from vtable.params.virtual import VirtualTable, with_rocking
 
 MAX_STEP = 1e-3  # s: the virtual table's largest MuJoCo/control step
