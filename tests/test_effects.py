@@ -130,3 +130,22 @@ def test_virtual_run_refuses_a_bad_rate():
     ph = Physics(nominal_open_loop(), presets.specimen("none"))
     with pytest.raises(VtableError, match=r"output rate -5 Hz: expected a positive rate"):
         simulate(ph, campaign_commands()[0], rate=-5.0)
+
+
+def test_both_models_implement_the_whole_assembly_vocabulary():
+    """`register` checks an effect's verbs against `Assembly` alone, so both models must
+    realise every verb of it, with the same arguments."""
+    import inspect
+
+    from vtable.effects.base import Assembly
+    from vtable.models.reduced import ReducedAssembly
+    from vtable.models.virtual import VirtualAssembly
+
+    verbs = {k for k in vars(Assembly) if not k.startswith("_") and callable(vars(Assembly)[k])}
+    assert {"add_stage", "add_dof", "add_spring", "add_force", "unlock", "set_rocking",
+            "insert_at_actuators", "add_storey_force", "add_output_filter"} <= verbs
+    for cls in (ReducedAssembly, VirtualAssembly):
+        for v in verbs:
+            assert callable(getattr(cls, v, None)), f"{cls.__name__} lacks {v}"
+            want = list(inspect.signature(getattr(Assembly, v)).parameters)
+            assert list(inspect.signature(getattr(cls, v)).parameters) == want, (cls, v)
