@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 
 from vtable.controllers.base import DOFS
-from vtable.hydraulics.element import HydraulicParams
 from vtable.hydraulics.law import ServoLaw, StageUse, group_law
+from vtable.params.table import ServoConstants
 from vtable.params.virtual import VirtualTable
 
 
@@ -18,7 +18,7 @@ class HydraulicServo:
     """H1-H3 with the horizontal and twist DOF controllers: `law` (default: the table's
     group law with `hydraulics`, one actuator's constants, and `stages`)."""
 
-    def __init__(self, vt: VirtualTable, hydraulics: HydraulicParams | None = None,
+    def __init__(self, vt: VirtualTable, hydraulics: ServoConstants | None = None,
                  stages: tuple[StageUse, ...] = (), law: ServoLaw | None = None) -> None:
         law = law or group_law(vt, "horizontal", hydraulics, stages=stages)
         self.law = law

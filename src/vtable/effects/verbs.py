@@ -37,7 +37,9 @@ def check_verbs(e: Effect, where: str) -> None:
     assembly vocabulary (`Assembly`), which both models implement completely (a test holds
     them to it), so an effect registered here runs in both."""
     known = _methods(Assembly)
-    for hook in ("apply", "reduced", "virtual"):
+    models = {"apply": "both models", "reduced": "the reduced model",
+              "virtual": "the virtual table"}
+    for hook, model in models.items():
         method = getattr(type(e), hook)
         if method is getattr(Effect, hook):
             continue
@@ -45,4 +47,4 @@ def check_verbs(e: Effect, where: str) -> None:
             if verb not in known:
                 raise VtableError(
                     f"{where}: effect {e.name!r} calls m.{verb}() in {hook}(), which "
-                    f"the models cannot realise (the verbs: {', '.join(sorted(known))})")
+                    f"{model} cannot realise (the verbs: {', '.join(sorted(known))})")

@@ -27,8 +27,9 @@ import numpy as np
 
 from vtable.errors import VtableError
 from vtable.hydraulics import element
-from vtable.hydraulics.element import N_LINEAR, HydraulicParams
+from vtable.hydraulics.element import N_LINEAR, constants_vector
 from vtable.hydraulics.stage import KINDS, Stage
+from vtable.params.table import ServoConstants
 
 _LAWS: dict[str, list[Callable]] = {}  # key -> the stages' laws, for the generated module
 _MODULES: dict[str, Composition] = {}
@@ -53,11 +54,11 @@ class Composition:
     ns: int
     linear: bool
 
-    def vector(self, h: HydraulicParams, values: Sequence[dict[str, float]]) -> np.ndarray:
+    def vector(self, h: ServoConstants, values: Sequence[dict[str, float]]) -> np.ndarray:
         """The kernel's parameters: `h`'s linear constants, then each stage's named
         parameters (`values`, in the order of `stages`)."""
         tail = [v for s, p in zip(self.stages, values, strict=True) for v in s.values(p)]
-        return np.concatenate([h.vector(), np.asarray(tail, dtype=float)])
+        return np.concatenate([constants_vector(h), np.asarray(tail, dtype=float)])
 
     def state_names(self) -> tuple[str, ...]:
         """One actuator's states: P, then each stage's."""

@@ -13,18 +13,17 @@ pressure, feedback and force stages). With no stage this module is the linear el
 (`servo_rates`, `servo_step` here); a stage set is compiled into its own module
 (`compose.composition`) from the same text.
 
-`HydraulicParams` names the linear constants; `vector()` lays them out for the kernel,
-and the slot numbers below are used nowhere else.
+The actuator's linear constants are the table's `ServoConstants` (one actuator type);
+`constants_vector` lays them out for the kernel, and the slot numbers below are used
+nowhere else.
 """
 
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass
-
 import numpy as np
 
 from vtable._numba import njit
+from vtable.params.table import ServoConstants
 
 # kernel slots (this module only); a composition's stage parameters follow them
 _A, _V, _BETA, _KT, _KCT = range(5)
@@ -32,39 +31,14 @@ N_LINEAR = 5
 NS = 1  # states per actuator without stages: P_L
 
 
-@dataclass(frozen=True)
-class HydraulicParams:
-    """One actuator's loop constants (SI; eqs 6.1-6.5, B.4-B.6, Table B.5).
-
-    `k_p`, `k_v` are the group's reference feedback gains (the DOF law scales them by the
-    knob factors); `rc` is the table's own RC filter on the ΔP feedback (eq B.4) used by
-    its linear controllers (`law.ServoLaw.linear_blocks`; an effect adds it as a stage).
-    """
-
-    area: float
-    volume: float
-    beta: float
-    k_t: float
-    k_ct: float
-    k_p: float
-    k_v: float = 0.0
-    rc: float = 0.0
-
-    def lumped(self, n: int) -> HydraulicParams:
-        """`n` identical actuators acting together as one: areas, volumes, flows and
-        leakage add; pressures and gains stay."""
-        return dataclasses.replace(self, area=n * self.area, volume=n * self.volume,
-                                   k_t=n * self.k_t, k_ct=n * self.k_ct)
-
-    def replace(self, **changes: float) -> HydraulicParams:
-        return dataclasses.replace(self, **changes)
-
-    def vector(self) -> np.ndarray:
-        """The kernel's parameter vector (the linear constants)."""
-        v = np.zeros(N_LINEAR)
-        v[_A], v[_V], v[_BETA] = self.area, self.volume, self.beta
-        v[_KT], v[_KCT] = self.k_t, self.k_ct
-        return v
+def constants_vector(c: ServoConstants) -> np.ndarray:
+    """The kernel's parameter vector of one actuator's linear constants (`ServoConstants`,
+    eqs 6.2-6.3: A, V, β, k_t, k_ct); the stages' named parameters follow it
+    (`compose.Composition.vector`)."""
+    v = np.zeros(N_LINEAR)
+    v[_A], v[_V], v[_BETA] = c.area, c.volume, c.beta
+    v[_KT], v[_KCT] = c.k_t, c.k_ct
+    return v
 
 
 @njit(cache=True)

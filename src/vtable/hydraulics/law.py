@@ -27,8 +27,8 @@ import numpy as np
 
 from vtable.errors import VtableError
 from vtable.hydraulics.compose import Composition, composition
-from vtable.hydraulics.element import HydraulicParams
 from vtable.hydraulics.stage import Stage
+from vtable.params.table import ServoConstants
 
 #: a stage with its named parameters (SI)
 StageUse = tuple[Stage, dict[str, float]]
@@ -61,7 +61,7 @@ class ServoLaw:
     k_p: np.ndarray
     k_v: np.ndarray
     filtered: tuple[bool, ...]
-    hydraulics: HydraulicParams
+    hydraulics: ServoConstants
     stages: tuple[StageUse, ...] = ()
 
     @property
@@ -186,7 +186,7 @@ class ServoLaw:
         return (float(a), float(-gain), float(-gain * self.k_v[j] - c0 * h.area),
                 float(h.area * np.sum(self.T[:, j] ** 2)))
 
-    def with_hydraulics(self, hydraulics: HydraulicParams) -> ServoLaw:
+    def with_hydraulics(self, hydraulics: ServoConstants) -> ServoLaw:
         return replace(self, hydraulics=hydraulics)
 
 
@@ -206,16 +206,14 @@ def dof_matrix(vt, kind: str) -> tuple[tuple[str, ...], np.ndarray]:
     return names, T
 
 
-def group_law(vt, kind: str, hydraulics: HydraulicParams | None = None,
+def group_law(vt, kind: str, hydraulics: ServoConstants | None = None,
               rc_dofs: tuple[str, ...] = (), stages: Sequence[StageUse] = ()) -> ServoLaw:
     """The law of the table's `kind` group ("horizontal" or "vertical") at its knob
     settings: g, k_p, k_v of each DOF = the knob scales (`VirtualTable.gain_scales`) times
     the group's reference constants; `hydraulics` defaults to the table's; `stages` (one
     actuator's) enter its element."""
     if hydraulics is None:
-        s = vt.horizontal_servo if kind == "horizontal" else vt.vertical_servo
-        hydraulics = HydraulicParams(area=s.area, volume=s.volume, beta=s.beta, k_t=s.k_t,
-                                     k_ct=s.k_ct, k_p=s.k_p, k_v=s.k_v, rc=s.rc)
+        hydraulics = vt.horizontal_servo if kind == "horizontal" else vt.vertical_servo
     names, T = dof_matrix(vt, kind)
     keep = [j for j, d in enumerate(GROUP_DOFS[kind]) if d in vt.dofs]
     dofs = tuple(GROUP_DOFS[kind][j] for j in keep)

@@ -10,7 +10,6 @@ from dataclasses import dataclass, field
 
 from vtable.analytic.servo import open_loop_from_servo, servo_from_open_loop
 from vtable.effects.registry import get
-from vtable.hydraulics import HydraulicParams
 from vtable.params.loops import OpenLoop
 from vtable.params.specimen import Specimen
 from vtable.params.table import ServoConstants
@@ -101,10 +100,9 @@ def nominal_open_loop(vt: VirtualTable | None = None) -> OpenLoop:
     return open_loop_from_servo(per_actuator_template(vt or virtual_table()))
 
 
-def base_hydraulics(ph: Physics, vt: VirtualTable) -> HydraulicParams:
+def base_hydraulics(ph: Physics, vt: VirtualTable) -> ServoConstants:
     """One horizontal actuator's constants for the base loop (eq 6.16 inverted from the
     open loop; no RC filter, no stage: those are effects, and a lab table's valve lag is
     added by the assemblies)."""
     c = servo_from_open_loop(ph.open_loop, per_actuator_template(vt))
-    return HydraulicParams(area=c.area, volume=c.volume, beta=c.beta, k_t=c.k_t, k_ct=c.k_ct,
-                           k_p=c.k_p, k_v=c.k_v)
+    return dataclasses.replace(c, rc=0.0)

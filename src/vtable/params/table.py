@@ -93,7 +93,8 @@ class ServoConstants(Params):
     k_p: float = quantity("in/psi", "k_p_in_per_psi", minimum=0, exclusive=False)
     k_t: float = quantity("in2/s", "k_t_in2_per_s", minimum=0)
     k_ct: float = quantity("in3/s/psi", "k_ct_in3_per_s_per_psi", minimum=0, exclusive=False)
-    rc: float = quantity("s", "rc_s", minimum=0)
+    rc: float = quantity("s", "rc_s", minimum=0, exclusive=False,
+                         doc="RC of the ΔP feedback filter (eq B.4); 0: no filter")
     mass: float = quantity("lb-s2/in", "mass_lb_s2_per_in", minimum=0)
     beta: float = quantity("psi", "beta_psi", minimum=0)
     area: float = quantity("in2", "area_in2", minimum=0)
@@ -114,6 +115,14 @@ class ServoConstants(Params):
     def k_c(self) -> float:
         """Flow-force coefficient k_c = k_ct/A (m³/s/N), eq C.19."""
         return self.k_ct / self.area
+
+    def lumped(self, n: int) -> ServoConstants:
+        """`n` identical actuators acting together as one: areas, volumes, flows, leakage,
+        mass and damping add; pressures and gains stay."""
+        return dataclasses.replace(
+            self, area=n * self.area, volume=n * self.volume, k_t=n * self.k_t,
+            k_ct=n * self.k_ct, mass=n * self.mass,
+            damping=None if self.damping is None else n * self.damping)
 
 
 @dataclass(frozen=True)
