@@ -33,7 +33,8 @@ def test_catalog_has_the_spec_names():
 #: (examples/swivel_backlash.py and examples/valve_overlap.py, loaded as a user would)
 load_file(Path(__file__).resolve().parents[1] / "examples" / "swivel_backlash.py")
 load_file(Path(__file__).resolve().parents[1] / "examples" / "valve_overlap.py")
-DOSES = {**HIDDEN, "swivel_backlash": {"gap": 0.005}, "valve_overlap": {"overlap": 0.5}}
+DOSES = {**HIDDEN, "platen_resonator": {"m_r": 20.0, "f_r": 12.0, "xi_r": 0.03},
+         "swivel_backlash": {"gap": 0.005}, "valve_overlap": {"overlap": 0.5}}
 REGISTERED = names()  # at collection: the catalog and the README's effects
 
 

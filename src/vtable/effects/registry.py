@@ -16,7 +16,8 @@ from vtable.errors import VtableError
 #: the catalog, in the spec's order (modules of vtable.effects)
 BUILT_IN = ("pitch_flexibility", "force_feedback_filter", "valve_flow_nonlinearity",
             "actuator_friction", "flow_saturation", "valve_dynamics", "oil_column_air",
-            "amplitude_dependent_damping", "foundation_compliance", "sensor_filter")
+            "amplitude_dependent_damping", "foundation_compliance", "sensor_filter",
+            "platen_resonator")
 
 #: what the standard virtual table has beyond the chapter-7 base: its pitch system (Table
 #: 8.1) and the RC filter on the horizontal ΔP feedback (Table B.5), at their defaults
