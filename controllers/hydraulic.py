@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from vtable.controllers.base import DOFS
+from vtable.hydraulics.element import PISTON_AREA
 from vtable.hydraulics.law import ServoLaw, StageUse, group_law
 from vtable.params.table import ServoConstants
 from vtable.params.virtual import VirtualTable
@@ -50,3 +51,8 @@ class HydraulicServo:
                                        self.g, self.kp, self.kv, self.sp, self.force)
         self.prev = (x, v, cd)
         return self.force.copy()
+
+    def pressure_force(self) -> np.ndarray:
+        """Each actuator's piston force A·P_L (eq 6.3) at the end of the last step: what a
+        ΔP transducer reads, before the force stages (friction) the applied force has."""
+        return self.sp[PISTON_AREA] * self.z[::self.element.ns]

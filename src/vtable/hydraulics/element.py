@@ -28,6 +28,7 @@ from vtable.params.table import ServoConstants
 # kernel slots (this module only); a composition's stage parameters follow them
 _A, _V, _BETA, _KT, _KCT = range(5)
 N_LINEAR = 5
+PISTON_AREA = _A  #: the piston area's slot, for A P_L outside the kernels (eq 6.3)
 NS = 1  # states per actuator without stages: P_L
 
 

@@ -28,6 +28,7 @@ from vtable.effects.table import TableView
 from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.errors import VtableError
 from vtable.hydraulics import group_law
+from vtable.hydraulics.element import PISTON_AREA
 from vtable.hydraulics.stage import Stage, add_stage
 from vtable.models import physics as phys
 from vtable.models.reduced_kernel import (
@@ -348,11 +349,21 @@ class ReducedModel:
                           RuntimeWarning, stacklevel=3)
         self.elem, self.ne, self.pe = fn, ne, pe
 
-    def simulate(self, t: np.ndarray, x_c: np.ndarray) -> dict[str, np.ndarray]:
-        """Channels (SI) on the uniform time grid `t` of a command x_c sampled on it. The
-        model integrates at the run step divided by the smallest integer that brings it to
-        `SIM_DT` (or a stiff element's step) or below (any sample rate); the command is
-        interpolated band-limited (`resample_poly`) in between."""
+    def _measured_force(self, F: np.ndarray, P: np.ndarray) -> np.ndarray:
+        """The lumped actuator's force as the run's force channels measure it
+        (`vt.force_measured`): "load_cell", the force F the rod transmits to the platen
+        (A P_L after the force stages, e.g. less friction); "delta_p", A P_L (eq 6.3)."""
+        if self.vt.force_measured == "delta_p":
+            return self.sp[PISTON_AREA] * P
+        return F
+
+    def histories(self, t: np.ndarray, x_c: np.ndarray) -> tuple:
+        """The integrator's histories on the model step h = dt/up of the command x_c on the
+        uniform grid `t`: (h, up, x_c upsampled, q, q̇, q̈, the lumped actuator's force F,
+        its load pressure P_L). The model integrates at the run step divided by the
+        smallest integer that brings it to `SIM_DT` (or a stiff element's step) or below
+        (any sample rate); the command is interpolated band-limited (`resample_poly`) in
+        between."""
         t = np.asarray(t, dtype=float)
         if len(t) < 2:
             raise VtableError("the model needs a command of at least two samples")
@@ -367,12 +378,18 @@ class ReducedModel:
                 self.T, self.Tp, self.g, self.kp, self.kv, self.Aw, self.Wq, self.Wv, self.Fw)
         if self.linear:
             Phi, G0, G1 = self._hold(h)
-            Q, Qd, Qdd, F = simulate_linear(xc, nq, *self._linear, Phi, G0, G1)
+            Q, Qd, Qdd, F, PL = simulate_linear(xc, nq, *self._linear, Phi, G0, G1)
         elif self.elem is None:
-            Q, Qd, Qdd, F = self.element.module.simulate_reduced(*args)
+            Q, Qd, Qdd, F, PL = self.element.module.simulate_reduced(*args)
         else:
             run = simulate_reduced_python if self.python else simulate_reduced_elements
-            Q, Qd, Qdd, F = run(self.element.module, *args, self.elem, self.ne, self.pe)
+            Q, Qd, Qdd, F, PL = run(self.element.module, *args, self.elem, self.ne, self.pe)
+        return h, up, xc, Q, Qd, Qdd, F, PL
+
+    def simulate(self, t: np.ndarray, x_c: np.ndarray) -> dict[str, np.ndarray]:
+        """Channels (SI) on the uniform time grid `t` of a command x_c sampled on it (the
+        integration: `histories`)."""
+        h, up, xc, Q, Qd, Qdd, F, PL = self.histories(t, x_c)
         ix = self.ix
         n = len(xc)
         x = ix["x"]
@@ -384,7 +401,7 @@ class ReducedModel:
         th_a = Qdd[:, ip] if ip is not None else np.zeros(n)
         na = self.assembly.n_actuators
         out = {"avg_hdisp": Q @ self.ax, "h_vel": Qd @ self.ax, "avg_hacc": Qdd[:, x],
-               "pitch_disp": th, "pitch_acc": th_a, "h1_force": F / na}
+               "pitch_disp": th, "pitch_acc": th_a, "h1_force": self._measured_force(F, PL) / na}
         if slides:
             out["acc_n_ne"] = Qdd[:, x] + self.h_top * th_a + drift_a
             out["pot_n_sw"] = Q[:, x] + self.h_top * th + drift

@@ -78,8 +78,9 @@ def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, 
 
 @njit(cache=True, nogil=True)
 def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw):
-    """RK4 at step dt (the command linear between samples); returns q, q̇, q̈ (n_t x nq)
-    and the actuator force (n_t). A state that blows up ends the run with NaN."""
+    """RK4 at step dt (the command linear between samples); returns q, q̇, q̈ (n_t x nq),
+    the actuator force (n_t) and its load pressure P_L (n_t). A state that blows up ends
+    the run with NaN."""
     n = xc.shape[0]
     ny = 2 * nq + NS + Aw.shape[0]
     fe = np.zeros(nq)
@@ -87,10 +88,12 @@ def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, A
     y = np.zeros(ny)
     yt = np.empty(ny)
     Q, Qd, Qdd, F = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq)), np.empty(n)
+    PL = np.empty(n)
     k1, k2, k3, k4 = np.empty(ny), np.empty(ny), np.empty(ny), np.empty(ny)
     for k in range(n):
         F[k] = _rates(y, xc[k], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
                       Fw, fe, k1, ws)
+        PL[k] = y[2 * nq]
         for i in range(nq):
             Q[k, i] = y[i]
             Qd[k, i] = y[nq + i]
@@ -114,8 +117,9 @@ def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, A
             y[i] += dt / 6.0 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i])
         if not np.isfinite(y[0]) or abs(y[0]) > 10.0:
             Q[k + 1:], Qd[k + 1:], Qdd[k + 1:], F[k + 1:] = np.nan, np.nan, np.nan, np.nan
+            PL[k + 1:] = np.nan
             break
-    return Q, Qd, Qdd, F
+    return Q, Qd, Qdd, F, PL
 
 
 def _element_rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
@@ -139,11 +143,12 @@ def _element_integrate(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv,
     ny = 2 * nq + NS + Aw.shape[0] + ne
     y = np.zeros(ny)
     Q, Qd, Qdd, F = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq)), np.empty(n)
+    PL = np.empty(n)
     k1, k2, k3, k4 = np.empty(ny), np.empty(ny), np.empty(ny), np.empty(ny)
     for k in range(n):
         F[k] = _element_rates(y, xc[k], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw,
                               Wq, Wv, Fw, elem, ne, pe, k1)
-        Q[k], Qd[k], Qdd[k] = y[:nq], y[nq:2 * nq], k1[nq:2 * nq]
+        Q[k], Qd[k], Qdd[k], PL[k] = y[:nq], y[nq:2 * nq], k1[nq:2 * nq], y[2 * nq]
         if k == n - 1:
             break
         xm = 0.5 * (xc[k] + xc[k + 1])
@@ -156,8 +161,9 @@ def _element_integrate(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv,
         y += dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
         if not np.isfinite(y[0]) or abs(y[0]) > 10.0:
             Q[k + 1:], Qd[k + 1:], Qdd[k + 1:], F[k + 1:] = np.nan, np.nan, np.nan, np.nan
+            PL[k + 1:] = np.nan
             break
-    return Q, Qd, Qdd, F
+    return Q, Qd, Qdd, F, PL
 
 
 #: the kernels a stage set's compiled element carries (`vtable.hydraulics.compose`)
@@ -235,12 +241,14 @@ def simulate_linear(xc, nq, A, B, fy, fu, Phi, G0, G1):
     y = np.zeros(ny)
     yn = np.empty(ny)
     Q, Qd, Qdd, F = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq)), np.empty(n)
+    PL = np.empty(n)
     for k in range(n):
         u = xc[k]
         f = fu * u
         for j in range(ny):
             f += fy[j] * y[j]
         F[k] = f
+        PL[k] = y[2 * nq]
         for i in range(nq):
             Q[k, i] = y[i]
             Qd[k, i] = y[nq + i]
@@ -259,5 +267,6 @@ def simulate_linear(xc, nq, A, B, fy, fu, Phi, G0, G1):
         y[:] = yn
         if not np.isfinite(y[0]) or abs(y[0]) > 10.0:
             Q[k + 1:], Qd[k + 1:], Qdd[k + 1:], F[k + 1:] = np.nan, np.nan, np.nan, np.nan
+            PL[k + 1:] = np.nan
             break
-    return Q, Qd, Qdd, F
+    return Q, Qd, Qdd, F, PL

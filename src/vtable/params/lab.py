@@ -46,6 +46,7 @@ class LabTable:
     acceleration: float | None = None  # m/s²
     payload: float | None = None    # kg
     band: tuple[float, float] | None = None  # Hz
+    force_measured: str = "load_cell"  # the force channels: "load_cell" or "delta_p" (A·ΔP)
 
     def unmodelled_control(self) -> tuple[str, ...]:
         """The controller's terms vtable's servo law (eqs 6.1-6.4: P on the error with
@@ -176,7 +177,9 @@ def _described(desc, base: LabTable | None) -> LabTable:
         acceleration=(lim.acceleration if lim and lim.acceleration else
                       base.acceleration if base else None),
         payload=(lim.payload if lim and lim.payload else base.payload if base else None),
-        band=(lim.band if lim and lim.band else base.band if base else None))
+        band=(lim.band if lim and lim.band else base.band if base else None),
+        force_measured=(h.force_measured if h is not None and h.force_measured else
+                        base.force_measured if base else "load_cell"))
 
 
 def run_table(run) -> LabTable:

@@ -108,6 +108,9 @@ class VirtualTable:
     valve_lag: float = 0.0  # s: the horizontal servovalves' time constant
     name: str = "eerc"
     com_height: float | None = None  # m: platen c.o.m. above the actuator line (None: shape's)
+    #: what the horizontal force channels measure: "load_cell", the net force the rod
+    #: transmits to the platen (after friction and any force stage); "delta_p", A·ΔP
+    force_measured: str = "load_cell"
 
     @property
     def limits_source(self) -> str:
@@ -282,7 +285,8 @@ def virtual_table_for(lab) -> VirtualTable:
             g = replace(vt.table.geometry, weight=lab.platen_mass * units.G)
             servo = replace(lab.servo, mass=vt.horizontal_servo.mass)
             vt = replace(vt, table=replace(vt.table, geometry=g), horizontal_servo=servo)
-        return replace(vt, valve_lag=lab.valve_time_constant)
+        return replace(vt, valve_lag=lab.valve_time_constant,
+                       force_measured=lab.force_measured)
     if not lab.uniaxial:
         raise VtableError(f"table {lab.name!r}: the virtual table models the EERC table or a "
                           f"uniaxial platen, not DOFs {', '.join(lab.dofs)}")
@@ -327,7 +331,7 @@ def uniaxial_table(lab) -> VirtualTable:
                         horizontal_servo=s, vertical_servo=None, pitch_loop=None,
                         stabilizers=Stabilizers((), 0.0, 0.0, 0.0, 0.0),
                         settings={}, dofs=("x",), knobs=False, valve_lag=lab.valve_time_constant,
-                        name=lab.name)
+                        name=lab.name, force_measured=lab.force_measured)
 
 
 def describe(vt: VirtualTable) -> dict[str, Any]:

@@ -30,6 +30,9 @@ from vtable.params.base import check_number
 #: degrees of freedom a platen may have (x along the shaking direction, z up)
 DOFS = ("x", "y", "z", "roll", "pitch", "twist")
 CONTROLLER_KINDS = ("three_variable", "pid")
+#: what the horizontal actuators' force channels measure: the net force the rod transmits
+#: to the platen (a load cell) or the piston's pressure force A·ΔP (eq 6.3)
+FORCE_MEASURED = ("load_cell", "delta_p")
 
 
 @dataclass(frozen=True)
@@ -149,6 +152,7 @@ class HorizontalActuators:
     valve_flow_gain: float | None = None      # m³/s/V
     valve_time_constant: float | None = None  # s
     damping: float | None = None              # N s/m
+    force_measured: str | None = None         # FORCE_MEASURED (None: "load_cell")
 
 
 @dataclass(frozen=True)
@@ -265,8 +269,15 @@ def _parse(d: dict[str, Any], where: str, notes: list[str]) -> dict[str, Any]:
     if "dofs" in d:
         out["dofs"] = _dofs(d["dofs"], where)
     if "horizontal" in d:
-        out["horizontal"] = _level(d["horizontal"], _HORIZONTAL, _sub(where, "horizontal"),
-                                   notes)
+        w = _sub(where, "horizontal")
+        out["horizontal"] = _level(d["horizontal"], _HORIZONTAL, w, notes,
+                                   plain=("force_measured",))
+        if "force_measured" in d["horizontal"]:
+            fm = d["horizontal"]["force_measured"]
+            if fm not in FORCE_MEASURED:
+                raise VtableError(f"{w}.force_measured: expected one of "
+                                  f"{', '.join(map(repr, FORCE_MEASURED))}, got {fm!r}")
+            out["horizontal"]["force_measured"] = fm
     if "controller" in d:
         c = d["controller"]
         w = _sub(where, "controller")

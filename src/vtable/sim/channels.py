@@ -19,6 +19,11 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
     names = b.force_actuators
     ext = {a: res.extension[:, i] for i, a in enumerate(names)}
     force = {a: res.forces[:, i] for i, a in enumerate(names)}
+    # the horizontal force channels as the table measures them (`vt.force_measured`): the
+    # force each rod transmits (a load cell), or A·ΔP (the pressure force, eq 6.3)
+    delta_p = b.vt.force_measured == "delta_p" and res.pressure_forces is not None
+    h_force = ({a: res.pressure_forces[:, i] for i, a in enumerate(names)} if delta_p
+               else force)
     hs = [a.name for a in b.vt.group("horizontal")]
     vs = [a.name for a in b.vt.group("vertical")]
     dofs = b.vt.dofs
@@ -46,7 +51,7 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
             si[f"{stabs[i].lower()}_stab"] = force[stabs[i]]
     for a in hs:
         si[f"{a.lower()}_disp"] = ext[a]
-        si[f"{a.lower()}_force"] = force[a]
+        si[f"{a.lower()}_force"] = h_force[a]
     if b.structure_joints:
         si["acc_n_ne"] = res.sensor("top_ne_acc")[:, 0]
         si["acc_n_nw"] = res.sensor("top_nw_acc")[:, 0]

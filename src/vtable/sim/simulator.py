@@ -55,7 +55,7 @@ class SimResult:
     qpos: np.ndarray
     qvel: np.ndarray
     qacc: np.ndarray
-    forces: np.ndarray  # (n_t, n_actuators), N
+    forces: np.ndarray  # (n_t, n_actuators), N: what each actuator applies to the platen
     extension: np.ndarray  # (n_t, n_actuators), m
     ext_velocity: np.ndarray
     sensors: np.ndarray  # full sensordata at the output rate
@@ -64,6 +64,9 @@ class SimResult:
     controller_states: np.ndarray
     controller_state_names: tuple[str, ...]
     exceedances: list[Exceedance] = field(default_factory=list)
+    #: (n_t, n_actuators), N: each actuator's piston force A·P_L (equal to `forces` but
+    #: where a controller's force stages, e.g. friction, make them differ)
+    pressure_forces: np.ndarray | None = None
 
     def joint(self, name: str, what: str = "qpos") -> np.ndarray:
         """A joint's history; a locked slab joint (left out of the model) is zero."""
@@ -233,6 +236,7 @@ class Simulator:
         names = self.built.force_actuators
         other_idx = [[names.index(a) for a in c.actuators] for c in other]
         rest = self.rest_length
+        pressure = np.full((n_out, n), np.nan)  # A·P_L where a controller reports it
         step1, step2, dot = mujoco.mj_step1, mujoco.mj_step2, np.dot
         U = slice(ns + nz, W)
         fns = None if other else mujoco_steps()
@@ -263,6 +267,8 @@ class Simulator:
                 s_k[:n] -= rest
                 for c, idx in zip(other, other_idx, strict=True):
                     ctrl[idx] = c.step(dt, s_k, cmd[k])
+                    if k % dec == 0 and hasattr(c, "pressure_force"):
+                        pressure[k // dec, idx] = c.pressure_force()
                 row[U] = ctrl[:n]
             if k % dec == 0:
                 i = k // dec
@@ -293,6 +299,7 @@ class Simulator:
                         command_acc=np.gradient(np.gradient(cmd[:, 0], dt), dt)[out_idx],
                         controller_states=full[out_idx, ns:ns + nz].copy(),
                         controller_state_names=self.state_names)
+        res.pressure_forces = np.where(np.isnan(pressure), res.forces, pressure)
         res.exceedances = exceedances(self.built, tk, ext_all, forces_all)
         return res
 
