@@ -86,7 +86,8 @@ def cmd_diagnose(a: argparse.Namespace) -> Result:
 
 def cmd_simulate(a: argparse.Namespace) -> Result:
     verbs.load_effects(a.effects_from)
-    return verbs.simulate(a.specimen, a.kind, duration=a.duration, band=tuple(a.band),
+    band = tuple(a.band) if a.band else None
+    return verbs.simulate(a.specimen, a.kind, duration=a.duration, band=band,
                           peak=a.peak, freq=a.freq, seed=a.seed, record=a.record,
                           valve=a.valve, effects=a.effect, out=a.out, rerun=a.rerun,
                           exaggerate=a.exaggerate, table=a.table)

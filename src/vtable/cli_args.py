@@ -70,9 +70,10 @@ def parser() -> argparse.ArgumentParser:
                    "[vtable-demo]")
     d.add_argument("--no-sim", action="store_true", help="analytical part only")
     sim = sub.add_parser("simulate", help="run a command on the multibody virtual table")
-    sim.add_argument("--specimen", default="sdof_frame",
+    sim.add_argument("--specimen", default=None,
                      help="none, concrete_blocks, sdof_frame, table5_1, table8_1 or a TOML "
-                          "file with a [specimen] table [sdof_frame]")
+                          "file with a [specimen] table [sdof_frame, or none when the "
+                          "table's payload cannot carry it]")
     sim.add_argument("--table", default="eerc",
                      help="the table: a preset (eerc, lnec-st1d) or a TOML file with a [table] "
                           "in the run format's keys [eerc]")
@@ -82,8 +83,11 @@ def parser() -> argparse.ArgumentParser:
                      "file, or fema:ID[a|b] [elcentro]")
     sim.add_argument("--duration", type=_number, default=None,
                      help="s [11; an earthquake: the whole processed record]")
-    sim.add_argument("--band", type=_number, nargs=2, default=[0.0, 25.0], help="Hz [0 25]")
-    sim.add_argument("--peak", type=_number, default=None, help="peak command, in")
+    sim.add_argument("--band", type=_number, nargs=2, default=None,
+                     help="Hz [0 25, cut to the table's band]")
+    sim.add_argument("--peak", type=_number, default=None,
+                     help="peak command, in [the command's default, scaled to 50 %% of the "
+                          "table's stroke and 80 %% of its velocity and acceleration]")
     sim.add_argument("--freq", type=_number, default=2.0, help="sine frequency, Hz [2]")
     sim.add_argument("--seed", type=_integer, default=0)
     sim.add_argument("--valve", choices=["linear", "nonlinear"], default="linear",

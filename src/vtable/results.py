@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+from vtable import display, units
 from vtable.jsonable import jsonable
 
 if TYPE_CHECKING:  # the CLI starts without scipy.signal
@@ -206,6 +207,17 @@ class CampaignIdentification:
 
 
 # ---- the virtual table -------------------------------------------------------------------
+def _displayed(peaks: dict[str, dict[str, Any]], fam: str) -> dict[str, dict[str, Any]]:
+    """Peaks (in their report units) in the units of the display family `fam`."""
+    if fam != "metric":
+        return peaks
+    out = {}
+    for k, v in peaks.items():
+        value, unit = display.shown(units.to_si(v["peak"], v["unit"]), v["unit"], fam)
+        out[k] = {"peak": float(value), "unit": unit}
+    return out
+
+
 def _peak_lines(peaks: dict[str, dict[str, Any]]) -> list[str]:
     return [f"  {'channel':<12} {'peak':>10}"] + [
         f"  {k:<12} {v['peak']:10.4g} {v['unit']}" for k, v in peaks.items()]
@@ -223,6 +235,8 @@ class SimulationSummary:
     command: str
     specimen: str
     duration_s: float
+    chosen: list[str] = field(default_factory=list)  # the defaults fitted to the table
+    display: str = "imperial"  # the units the report shows ("metric": mm, m/s², kN)
 
     def __post_init__(self) -> None:
         self.files = [Path(f) for f in self.files]
@@ -231,12 +245,13 @@ class SimulationSummary:
         return jsonable({"peaks": self.peaks, "exceedances": self.exceedances,
                          "files": _names(self.files), "notes": self.notes,
                          "command": self.command, "specimen": self.specimen,
-                         "duration_s": self.duration_s})
+                         "duration_s": self.duration_s, "chosen": self.chosen})
 
     def report(self) -> str:
         out = [f"{self.specimen}: {self.command}, {self.duration_s:.2f} s"]
+        out += [f"  {c}" for c in self.chosen]
         out += [f"  note: {n}" for n in self.notes]
-        out += _peak_lines(self.peaks)
+        out += _peak_lines(_displayed(self.peaks, self.display))
         out += [f"  limit: {e}" for e in self.exceedances]
         if self.files:
             out.append("  wrote " + ", ".join(_names(self.files)))

@@ -55,6 +55,7 @@ from vtable.diagnose.sampling import (
     segments,
 )
 from vtable.diagnose.statistics import Comparison, Gain, held_out_gain, nrms
+from vtable.display import run_family
 from vtable.ident.tf import transfer_function
 from vtable.runs.model import Run
 
@@ -118,6 +119,7 @@ def _localise(cmp: Comparison, pred, runs: list[Run]) -> None:
                 den = np.sum(w * np.abs(tm.H[sel]) ** 2) or 1.0
                 bands.setdefault(g, {}).setdefault(f"{lo:g}-{hi:g} Hz", []).append(
                     float(np.sqrt(num / den)))
+        cmp.display = run_family(r)
         cmp.amplitude.append((r.name, float(np.sqrt(np.mean(x**2))),
                               float(np.mean(list(cmp.per_run[r.name].values())))))
         res = []

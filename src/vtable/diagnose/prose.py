@@ -10,6 +10,7 @@ from vtable import units
 from vtable.diagnose.groups import short
 from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.statistics import Comparison
+from vtable.display import amplitude
 
 
 def mils(x_m: float) -> str:
@@ -30,7 +31,8 @@ def amplitude_trend(cmp: Comparison, group: str | None = None) -> str:
         return "one command amplitude only (no amplitude trend can be read)"
     pts.sort()
     (a0, e0), (a1, e1) = pts[0], pts[-1]
-    span = f"{e0:.1%} at {mils(a0)} mil rms, {e1:.1%} at {mils(a1)} mil rms"
+    span = (f"{e0:.1%} at {amplitude(a0, cmp.display)} rms, "
+            f"{e1:.1%} at {amplitude(a1, cmp.display)} rms")
     if e1 > 1.25 * e0:
         return f"largest at the largest spans ({span})"
     if e0 > 1.25 * e1:
@@ -77,7 +79,7 @@ def localisation_text(cmp: Comparison) -> str:
     if len(cmp.amplitude) > 1:
         amp = sorted(cmp.amplitude, key=lambda x: x[1])
         parts.append("by command amplitude: " + ", ".join(
-            f"{e:.1%} at {mils(a)} mil rms" for _, a, e in amp))
+            f"{e:.1%} at {amplitude(a, cmp.display)} rms" for _, a, e in amp))
     if cmp.windows:
         name, t0, t1, e = max(cmp.windows, key=lambda x: x[3])
         parts.append(f"worst 2 s window {t0:.1f}-{t1:.1f} s of {short(name)} ({e:.1%})")

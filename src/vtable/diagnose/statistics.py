@@ -29,6 +29,7 @@ class Comparison:
     bands: dict[str, dict[str, float]] = field(default_factory=dict)  # group -> band -> err
     windows: list[tuple[str, float, float, float]] = field(default_factory=list)
     amplitude: list[tuple[str, float, float]] = field(default_factory=list)
+    display: str = "imperial"  # the runs' unit family (`vtable.display.family`)
 
     def worst_groups(self, k: int = 2) -> list[tuple[str, float]]:
         agg: dict[str, list[float]] = {}

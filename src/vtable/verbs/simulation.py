@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from vtable import units
 from vtable.analytic import configs
 from vtable.effects.registry import parse_spec
 from vtable.mjcf.export import export_mjcf as export
@@ -34,32 +35,125 @@ def simulation_summary(exp) -> dict[str, Any]:
             "files": [str(f) for f in exp.files], "notes": list(exp.notes)}
 
 
-def simulate(specimen: str = "sdof_frame", kind: str = "random", *,
-             duration: float | None = None, band: tuple[float, float] = (0.0, 25.0),
+#: the specimen `simulate` carries when none is chosen and the table's payload allows it
+DEFAULT_SPECIMEN = "sdof_frame"
+#: the default peak command (in) of each kind, before it is fitted to the table's limits
+DEFAULT_PEAK_IN = {"earthquake": 4.0, "pulse": 1.0, "random": 0.25, "sine": 0.1}
+#: the default random band (Hz), cut to the table's band
+DEFAULT_BAND = (0.0, 25.0)
+#: the share of the table's velocity and acceleration limits a default command may use
+LIMIT_SHARE = 0.8
+#: the share of the table's stroke a default command may use
+STROKE_SHARE = 0.5
+
+
+def table_family(lab) -> str:
+    """The units a table's quantities are shown in: the report's for the EERC table,
+    metric for a table described in SI (the presets other than eerc)."""
+    return "imperial" if lab.name == "eerc" else "metric"
+
+
+def _weight_text(mass_kg: float, fam: str) -> str:
+    if fam == "metric":
+        return f"{mass_kg:.0f} kg"
+    return f"{units.from_si(mass_kg * units.G, 'kip'):.1f} kip"
+
+
+def default_specimen(lab, fam: str) -> tuple[str, str]:
+    """The specimen `simulate` carries when the user chose none: the SDOF frame when the
+    table's payload carries it, else the bare table; and the one line saying why."""
+    frame = load_specimen(DEFAULT_SPECIMEN)
+    if lab.payload is None or frame.mass <= lab.payload:
+        return DEFAULT_SPECIMEN, ""
+    return "none", (f"specimen: none, the bare table (the SDOF frame's "
+                    f"{_weight_text(frame.mass, fam)} exceeds {lab.name}'s payload of "
+                    f"{_weight_text(lab.payload, fam)}; --specimen chooses one)")
+
+
+def default_band(lab) -> tuple[tuple[float, float], str]:
+    """The default random band, cut to the table's band, and the line saying so."""
+    if lab.band is None or lab.band[1] >= DEFAULT_BAND[1]:
+        return DEFAULT_BAND, ""
+    band = (DEFAULT_BAND[0], float(lab.band[1]))
+    return band, f"band {band[0]:g}-{band[1]:g} Hz: {lab.name}'s band (--band sets it)"
+
+
+def command_peaks(cmd) -> tuple[float, float, float]:
+    """Peak displacement (m), velocity (m/s) and acceleration (m/s²) of a command,
+    differentiated from its samples (as the table's limits check them)."""
+    v = np.gradient(cmd.x, cmd.t)
+    a = np.gradient(v, cmd.t)
+    return (float(np.max(np.abs(cmd.x))), float(np.max(np.abs(v))),
+            float(np.max(np.abs(a))))
+
+
+def fit_peak(lab, kind: str, make, fam: str) -> tuple[Any, str]:
+    """The command of `kind` at its default peak, scaled down (if need be) so that its
+    peak displacement is within STROKE_SHARE of the table's stroke and its peak velocity
+    and acceleration, computed from the generated signal, within LIMIT_SHARE of the
+    table's limits; the command and the line naming the limit that set it."""
+    peak_in = DEFAULT_PEAK_IN[kind]
+    cmd = make(peak_in)
+    x, v, a = command_peaks(cmd)
+    shares = [(STROKE_SHARE * lab.stroke / x if lab.stroke and x else np.inf, "stroke"),
+              (LIMIT_SHARE * lab.velocity / v if lab.velocity and v else np.inf, "velocity"),
+              (LIMIT_SHARE * lab.acceleration / a if lab.acceleration and a else np.inf,
+               "acceleration")]
+    scale, limit = min(shares)
+    if scale >= 1.0:
+        return cmd, ""
+    peak_in *= scale
+    cmd = make(peak_in)
+    share = STROKE_SHARE if limit == "stroke" else LIMIT_SHARE
+    shown = f"{peak_in * 25.4:.3g} mm" if fam == "metric" else f"{peak_in:.3g} in"
+    return cmd, (f"peak {shown}: {share:.0%} of {lab.name}'s {limit} limit "
+                 f"(--peak sets it, in inches)")
+
+
+def simulate(specimen: str | None = None, kind: str = "random", *,
+             duration: float | None = None, band: tuple[float, float] | None = None,
              peak: float | None = None, freq: float = 2.0, seed: int = 0,
              record: str | None = None, valve: str = "linear",
              effects: Sequence[str] = (), out: str | None = None, rerun: str | None = None,
              exaggerate: float = 50.0, table: str = "eerc") -> SimulationSummary:
     """Run a command on the multibody virtual table of `table` (a preset name, or a TOML
     file with a [table] in the run format's keys; `effects`: 'name[:p=v,...]' added to the
-    standard table); the peak table, limits and files written."""
+    standard table); the peak table, limits and files written.
+
+    What the user leaves out fits the table: `specimen` None is the SDOF frame, or the
+    bare table when the table's payload cannot carry it (`default_specimen`); `band` None
+    is 0-25 Hz cut to the table's band; `peak` None is the kind's default peak scaled to
+    the table's stroke, velocity and acceleration (`fit_peak`). Each choice is one line of
+    the report. A value given explicitly is never changed: beyond a limit it is refused."""
     eff = dict(parse_spec(e) for e in effects)
     lab = load_table(table)
+    fam = table_family(lab)
     vt = virtual_table_for(lab)
+    chosen = []
+    if specimen is None:
+        specimen, why = default_specimen(lab, fam)
+        chosen.append(why)
     spec = load_specimen(specimen)
-    if peak is None and lab.stroke is not None:  # the defaults, within the table's stroke
-        default = {"earthquake": 4.0, "pulse": 1.0, "random": 0.25, "sine": 0.1}[kind] \
-            if kind in ("earthquake", "pulse", "random", "sine") else None
-        if default is not None and default * 0.0254 > 0.5 * lab.stroke:
-            peak = 0.5 * lab.stroke / 0.0254
-    cmd = make_command(kind, duration=duration, band=tuple(band), peak_in=peak,
-                       frequency=freq, seed=seed, record=record)
+    if band is None:
+        band, why = default_band(lab)
+        chosen.append(why)
+
+    def make(peak_in):
+        return make_command(kind, duration=duration, band=tuple(band), peak_in=peak_in,
+                            frequency=freq, seed=seed, record=record)
+
+    if peak is None and kind in DEFAULT_PEAK_IN:
+        cmd, why = fit_peak(lab, kind, make, fam)
+        chosen.append(why)
+    else:
+        cmd = make(peak)
     exp = run_experiment(spec, cmd, vt=vt, valve=valve, out=out, effects=eff)
     if rerun is not None:
         exp.files.append(log_run(exp.run, rerun, exaggeration=exaggerate))
     summary = simulation_summary(exp)
     summary.update({"command": cmd.name, "specimen": spec.title,
-                    "duration_s": float(exp.result.t[-1] - exp.result.t[0])})
+                    "duration_s": float(exp.result.t[-1] - exp.result.t[0]),
+                    "chosen": [c for c in chosen if c], "display": fam})
     return SimulationSummary(**summary)
 
 
