@@ -14,9 +14,12 @@ def _num(x: float) -> str:
     return f"{x:.4g}"
 
 
-def catalog() -> str:
+def catalog(users: bool = False) -> str:
+    """The catalog's effects (and the registered users' ones when `users`)."""
     out = []
     for name in effects.names():
+        if effects.is_user(name) and not users:
+            continue
         e = effects.get(name)
         out.append(f"### `{name}`\n")
         out.append(f"- physics: {e.physics}")
@@ -42,4 +45,4 @@ if __name__ == "__main__":
         if flag != "--effects-from":
             raise SystemExit(f"unknown argument {flag!r}")
         effects.load_file(path)
-    print(catalog())
+    print(catalog(users=True))
