@@ -19,6 +19,7 @@ from vtable.effects.force_feedback_filter import RC_FILTER
 from vtable.effects.oil_column_air import AIR
 from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.effects.valve_flow_nonlinearity import ORIFICE
+from vtable.hydraulics.law import group_law
 
 
 def _table_stages(vt) -> list:
@@ -28,15 +29,14 @@ def _table_stages(vt) -> list:
     return out + ([(SPOOL_LAG, {"tau": vt.valve_lag})] if vt.valve_lag else [])
 
 
-def standard_controllers(vt, rc_filter=("x", "twist")) -> list:
+def standard_controllers(vt, rc: bool = True) -> list:
     """The table's controllers for the virtual table `vt` (the EERC table's: every loop,
-    and the passive stabilizers). A loop with a valve lag is stepped by the hydraulic
-    element (`HydraulicServo`) with the table's stages."""
-    if vt.valve_lag:
-        ctl = [HydraulicServo(vt, stages=tuple(_table_stages(vt))),
-               ServoController(vt, groups=("vertical",))]
-    else:
-        ctl = [ServoController(vt, rc_filter=rc_filter)]
+    and the passive stabilizers): the horizontal loop with the table's own stages — its RC
+    filter on the ΔP feedback (eq B.4; left out when not `rc`) and a lab table's valve lag
+    — both linear, so every loop is one fused linear controller."""
+    stages = [st for st in _table_stages(vt) if rc or st[0] is not RC_FILTER]
+    law = group_law(vt, "horizontal", stages=tuple(stages)) if vt.group("horizontal") else None
+    ctl = [ServoController(vt, laws={"horizontal": law} if law is not None else None)]
     return ctl + ([PassiveStabilizers(vt)] if vt.stabilizers.pairs else [])
 
 

@@ -3,8 +3,8 @@
 Per actuator group (H1-H3 under the horizontal x and twist controllers, V1-V4 under the
 vertical z, pitch and roll controllers) the DOF servo law of `vtable.hydraulics.law`
 (written once there) with the Table B.5 / derived constants, as a linear controller the
-simulator fuses; the ΔP feedback of the DOFs in `rc_filter` passes the RC high-pass of
-eq B.4 (Table B.5: RC = 0.01 s), by default the horizontal ones, as on the EERC table.
+simulator fuses. A group's law may carry linear stages (the RC high-pass of eq B.4 on the
+ΔP feedback, a valve lag: `vtable.controllers.standard_controllers` gives the table's).
 """
 
 from __future__ import annotations
@@ -24,12 +24,10 @@ __all__ = ["DIRECTION_GROUP", "GROUPS", "ServoController", "dof_matrix"]
 class ServoController(LinearController):
     """Linear servovalve + oil column per actuator with the DOF controllers of `groups`."""
 
-    def __init__(self, vt: VirtualTable, rc_filter: tuple[str, ...] = ("x", "twist"),
-                 groups: tuple[str, ...] = ("horizontal", "vertical"),
+    def __init__(self, vt: VirtualTable, groups: tuple[str, ...] = ("horizontal", "vertical"),
                  laws: dict[str, ServoLaw] | None = None) -> None:
         self.vt = vt
-        self.rc_filter = tuple(d for d in rc_filter if DIRECTION_GROUP[d] in groups)
-        self.laws = {k: (laws or {}).get(k) or group_law(vt, k, rc_dofs=self.rc_filter)
+        self.laws = {k: (laws or {}).get(k) or group_law(vt, k)
                      for k in ("horizontal", "vertical") if k in groups and vt.group(k)}
         self.actuators = tuple(a for law in self.laws.values() for a in law.actuators)
         # state order (see `bind`): every group's first states (one per actuator), then

@@ -202,3 +202,21 @@ def test_one_valve_rating_for_the_appendix_c_valve_and_flow_saturation():
         q, rel=1e-12)
     with pytest.raises(Exception, match="no servovalve"):
         t.rated_flow("P1")
+
+
+def test_a_dofs_single_state_loop_is_the_projection_of_the_element():
+    """`ServoLaw.dof_loop` (the reduced model's pitch loop) projects the compiled element's
+    linear blocks on one DOF; against eq 6.5a written out for symmetric pressures
+    P_i = T_ij p: ṗ = -(c₀k_t g k_p + c₀k_ct) p - c₀k_t g q - (c₀k_t g k_v + c₀A) q̇,
+    f = A Σ T_ij², c₀ = 4β/V."""
+    import numpy as np
+
+    from vtable.hydraulics.law import group_law
+
+    law = group_law(virtual_table(), "vertical")
+    h, j = law.hydraulics, law.dofs.index("pitch")
+    c0 = 4 * h.beta / h.volume
+    gain = c0 * h.k_t * law.g[j]
+    by_hand = (-gain * law.k_p[j] - c0 * h.k_ct, -gain, -gain * law.k_v[j] - c0 * h.area,
+               h.area * np.sum(law.T[:, j] ** 2))
+    np.testing.assert_allclose(law.dof_loop("pitch"), by_hand, rtol=1e-12)

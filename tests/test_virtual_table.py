@@ -121,7 +121,7 @@ def test_analytic_model_reduces_to_eq_8_16(vt):
     """Without the extra physics (CoM offset, gravity, body inertia, RC filter) the
     virtual table's linear model is the report's two-directional model, eq 8.16."""
     spec = presets.specimen("sdof_frame")
-    ctl = [ServoController(vt, rc_filter=()), PassiveStabilizers(vt)]
+    ctl = [ServoController(vt), PassiveStabilizers(vt)]
     full = VirtualTableModel(vt, spec, ctl, gravity=False, com_offset=False, body_inertia=False)
     g = vt.table.geometry
     h_servo = dataclasses.replace(vt.horizontal_servo, mass=g.mass / 3)  # per actuator

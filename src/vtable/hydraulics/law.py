@@ -3,15 +3,16 @@
 A group of n actuators (extension x_i along its own line) under d DOF controllers:
 T (n x d) is the extension of each actuator per unit DOF motion, q = T⁺x the DOF
 displacement, P̄ = T⁺P the DOF pressure, and per DOF j the gains g_j (loop gain), k_p,j
-(ΔP feedback, through the RC high-pass of eq B.4 where `filtered`) and k_v,j (velocity):
+(ΔP feedback) and k_v,j (velocity):
 
     u_i = Σ_j T_ij g_j [ (q_c,j - q_j) - k_p,j P̄f_j - k_v,j q̇_j ]          (eqs 6.1, 6.4)
     (V_i/4β) Ṗ_i = k_t u_i - k_ct P_i - A ẋ_i,   F_i = A P_i               (eqs 6.2-6.3)
 
 A law may carry stages (`stage.Stage`, each with its named parameters: an effect's
-physics in the element); `composition` compiles the element for them and `vector` lays
-out their parameters. `linear_blocks` gives the matrices of the linear loop (the linear
-controllers; with linear stages, the compiled element's rates on unit states), `kernel`
+physics in the element — the RC filter of eq B.4 on the ΔP feedback is one); `composition`
+compiles the element for them and `vector` lays out their parameters. `linear_blocks`
+gives the matrices of the linear loop (the linear controllers): the compiled element's
+rates on unit states, so the law is written once, in the element; `kernel`
 the inputs of the compiled element (`element.servo_rates`), `lumped` one equivalent
 actuator for one DOF, and `dof_loop` the single-state loop of one DOF under symmetric
 pressures (the reduced model's pitch loop). For identical actuators and symmetric motion
@@ -41,7 +42,8 @@ DIRECTION = {"x": "horizontal", "twist": "twist", "z": "vertical", "pitch": "pit
 
 @dataclass(frozen=True)
 class LinearBlocks:
-    """ż = A z + Bx x + Bv ẋ + Bc q_c, F = C z; z = [P (n), P̄f of the filtered DOFs]."""
+    """ż = A z + Bx x + Bv ẋ + Bc q_c, F = C z; z = each actuator's states
+    (`ServoLaw.state_names`)."""
 
     A: np.ndarray
     Bx: np.ndarray
@@ -60,7 +62,6 @@ class ServoLaw:
     g: np.ndarray
     k_p: np.ndarray
     k_v: np.ndarray
-    filtered: tuple[bool, ...]
     hydraulics: ServoConstants
     stages: tuple[StageUse, ...] = ()
 
@@ -83,11 +84,8 @@ class ServoLaw:
 
     def state_names(self) -> tuple[str, ...]:
         """The states of `linear_blocks`, in its order."""
-        if self.stages:
-            names = self.composition().state_names()
-            return tuple(f"{k}_{a}" for a in self.actuators for k in names)
-        return tuple([f"P_{a}" for a in self.actuators] +
-                     [f"Pf_{d}" for d, f in zip(self.dofs, self.filtered, strict=True) if f])
+        names = self.composition().state_names()
+        return tuple(f"{k}_{a}" for a in self.actuators for k in names)
 
     @property
     def Tp(self) -> np.ndarray:
@@ -99,42 +97,9 @@ class ServoLaw:
                 self.k_p.copy(), self.k_v.copy())
 
     def linear_blocks(self) -> LinearBlocks:
-        """The linear loop's matrices (every stage linear)."""
-        if self.stages:
-            return self._staged_blocks()
-        h = self.hydraulics
-        n, d = self.T.shape
-        filt = [j for j in range(d) if self.filtered[j]]
-        nz = n + len(filt)
-        A, Bx, Bv = np.zeros((nz, nz)), np.zeros((nz, n)), np.zeros((nz, n))
-        Bc, C = np.zeros((nz, d)), np.zeros((n, nz))
-        Tp = self.Tp
-        c0 = 4 * h.beta / h.volume
-        P = slice(0, n)
-        for j in range(d):
-            tj, gain = self.T[:, j], c0 * h.k_t * self.g[j]
-            Bc[P, j] += gain * tj
-            Bx[P] += -gain * np.outer(tj, Tp[j])
-            Bv[P] += -gain * self.k_v[j] * np.outer(tj, Tp[j])
-            if self.filtered[j]:
-                A[P, n + filt.index(j)] += -gain * self.k_p[j] * tj
-            else:
-                A[P, P] += -gain * self.k_p[j] * np.outer(tj, Tp[j])
-        A[P, P] += -c0 * h.k_ct * np.eye(n)
-        Bv[P] += -c0 * h.area * np.eye(n)
-        for k, j in enumerate(filt):  # Ṗf = -Pf/RC + d/dt(T⁺_j P), eq B.4
-            r = n + k
-            A[r] += Tp[j] @ A[P]
-            Bx[r] += Tp[j] @ Bx[P]
-            Bv[r] += Tp[j] @ Bv[P]
-            Bc[r] += Tp[j] @ Bc[P]
-            A[r, r] += -1.0 / h.rc
-        C[:, P] = h.area * np.eye(n)
-        return LinearBlocks(A, Bx, Bv, Bc, C)
-
-    def _staged_blocks(self) -> LinearBlocks:
-        """The compiled element's rates on unit states and inputs (exact for linear
-        stages); states per actuator as `Composition.state_names`."""
+        """The linear loop's matrices (every stage linear): the compiled element's rates
+        (`element.servo_rates` with this law's stages) on unit states and inputs, exact
+        for a linear loop; states per actuator as `Composition.state_names`."""
         if not self.linear:
             raise VtableError("the loop has a nonlinear stage: "
                               f"{', '.join(s.name for s, _ in self.stages if not s.linear)}")
@@ -168,23 +133,19 @@ class ServoLaw:
         stages = tuple((s, {k: v * n if k in s.extensive else v for k, v in p.items()})
                        for s, p in self.stages)
         return ServoLaw((f"{dof} (lumped)",), (dof,), np.ones((1, 1)), self.g[[j]],
-                        self.k_p[[j]], self.k_v[[j]], (self.filtered[j],),
-                        self.hydraulics.lumped(n), stages)
+                        self.k_p[[j]], self.k_v[[j]], self.hydraulics.lumped(n), stages)
 
     def dof_loop(self, dof: str) -> tuple[float, float, float, float]:
-        """One DOF under symmetric pressures P_i = T_ij p (no RC filter, zero command):
-        ṗ = a p + b_q q + b_v q̇, generalized force on q = f·p. Returns (a, b_q, b_v, f)."""
+        """One DOF under symmetric pressures P_i = T_ij p (no stage, zero command):
+        ṗ = a p + b_q q + b_v q̇, generalized force on q = f·p. Returns (a, b_q, b_v, f),
+        the DOF's projection (T⁺_j, T_j) of `linear_blocks`."""
         j = self.dofs.index(dof)
         if self.stages:
             raise ValueError(f"the {dof} loop has stages: not a single-state loop")
-        if self.filtered[j]:
-            raise ValueError(f"the {dof} loop has an RC filter: not a single-state loop")
-        h = self.hydraulics
-        c0 = 4 * h.beta / h.volume
-        gain = c0 * h.k_t * self.g[j]
-        a = -gain * self.k_p[j] - c0 * h.k_ct
-        return (float(a), float(-gain), float(-gain * self.k_v[j] - c0 * h.area),
-                float(h.area * np.sum(self.T[:, j] ** 2)))
+        b = self.linear_blocks()
+        t, tp = self.T[:, j], self.Tp[j]
+        return (float(tp @ b.A @ t), float(tp @ b.Bx @ t), float(tp @ b.Bv @ t),
+                float(t @ b.C @ t))
 
     def with_hydraulics(self, hydraulics: ServoConstants) -> ServoLaw:
         return replace(self, hydraulics=hydraulics)
@@ -207,7 +168,7 @@ def dof_matrix(vt, kind: str) -> tuple[tuple[str, ...], np.ndarray]:
 
 
 def group_law(vt, kind: str, hydraulics: ServoConstants | None = None,
-              rc_dofs: tuple[str, ...] = (), stages: Sequence[StageUse] = ()) -> ServoLaw:
+              stages: Sequence[StageUse] = ()) -> ServoLaw:
     """The law of the table's `kind` group ("horizontal" or "vertical") at its knob
     settings: g, k_p, k_v of each DOF = the knob scales (`VirtualTable.gain_scales`) times
     the group's reference constants; `hydraulics` defaults to the table's; `stages` (one
@@ -220,5 +181,4 @@ def group_law(vt, kind: str, hydraulics: ServoConstants | None = None,
     T = T[:, keep]
     scales = np.array([vt.gain_scales(DIRECTION[d]) for d in dofs])
     return ServoLaw(names, dofs, T, scales[:, 0], hydraulics.k_p * scales[:, 1],
-                    hydraulics.k_v * scales[:, 2], tuple(d in rc_dofs for d in dofs),
-                    hydraulics, tuple(stages))
+                    hydraulics.k_v * scales[:, 2], hydraulics, tuple(stages))

@@ -137,10 +137,10 @@ class VirtualAssembly:
         vt = self.vt
         law = group_law(vt, "horizontal", self.servo, stages=self.stages)
         if law.linear:
-            ctl = [ServoController(vt, rc_filter=(), laws={"horizontal": law})]
+            ctl = [ServoController(vt, laws={"horizontal": law})]
         else:
             ctl = [HydraulicServo(vt, law=law),
-                   ServoController(vt, rc_filter=(), groups=("vertical",))]
+                   ServoController(vt, groups=("vertical",))]
         if vt.stabilizers.pairs:
             ctl.append(PassiveStabilizers(vt))
         built.vt = vt
