@@ -289,20 +289,41 @@ def base_at_bounds(base: dict[str, dict[str, Any]], calibration: Calibration,
     """The declared values the calibrated base ends at a bound of: within `AT_BOUND` of its
     range from the bound, on the fitted scale (the logarithm for a factor bound), and bounded
     by a `--calibrate` setting. `base` is the final model's (`TableModel.base_table`),
-    `start` the calibrated starting model's: a value at its bound there but not in the final
-    model is listed too (`model` "start": the effects added may stand in for a wrong
-    declaration). Each: {parameter, model, declared, fitted, bound, side, unit, calibrate},
+    `start` the calibrated starting model's: a value at its bound there, not at it in the
+    final model but still in the quarter of its range next to that bound there, is listed
+    too (`model` "start": the effects added may stand in for a wrong declaration; a value
+    the final model brings back towards its declaration was pushed by the missing effect,
+    not by the declaration). Each: {parameter, model, declared, fitted, bound, side, unit,
+    calibrate},
     `calibrate` the --calibrate text of the calibration with this bound widened
     (`Calibration.widened`; the settings already given kept)."""
     out = _at_bounds(base, "final")
     final = {b["parameter"] for b in out}
-    out += [b for b in _at_bounds(start or {}, "start") if b["parameter"] not in final]
+    out += [b for b in _at_bounds(start or {}, "start") if b["parameter"] not in final
+            and b["parameter"] in base
+            and _position(b["parameter"], base[b["parameter"]], b["side"]) <= LEANS]
     for b in out:
         name = bounding_setting(b["parameter"], b["side"])
         wider = getattr(calibration.widened([name]), name)
         b["calibrate"] = (None if wider == getattr(calibration, name) else  # at its widest
                           dataclasses.replace(calibration, **{name: wider}).text())
     return out
+
+
+#: a final value within this fraction of its range from a bound still leans on it
+LEANS = 0.25
+
+
+def _position(key: str, v: dict[str, Any], side: str) -> float:
+    """How far the fitted value of `key` is from its `side` bound, as a fraction of its
+    range on the fitted scale (the logarithm for a factor bound); 1 with no such bound."""
+    lo, hi = v["bounds"]
+    name = bounding_setting(key, side)
+    if name is None or not hi > lo:
+        return 1.0
+    f = math.log if WIDEN[name][0] == "factor" and lo > 0 else (lambda z: z)
+    pos = (f(v["fitted"]) - f(lo)) / (f(hi) - f(lo))
+    return pos if side == "lower" else 1.0 - pos
 
 
 def _at_bounds(base: dict[str, dict[str, Any]], model: str) -> list[dict[str, Any]]:
