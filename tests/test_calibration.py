@@ -233,7 +233,7 @@ def test_a_declaration_beyond_its_bound_is_named_with_the_setting_that_frees_it(
 
 
 def test_a_buildings_damping_is_calibrated_per_mode_within_its_bounds():
-    """Each mode's ratio is a base parameter (declared ×/÷ 3, a log prior of half that),
+    """Each mode's ratio is a base parameter (declared ×/÷ 3, a log prior of half that × √modes),
     for one ratio, one per mode, or Rayleigh damping; moving one mode's ratio holds the
     others (Rayleigh's become one ratio per mode at the modes' own)."""
     import numpy as np
@@ -257,7 +257,8 @@ def test_a_buildings_damping_is_calibrated_per_mode_within_its_bounds():
         for k, x in enumerate(xi, 1):
             p = ps[f"specimen.mode{k}.damping"]
             assert (p.lower, p.declared, p.upper) == pytest.approx((x / 3, x, 3 * x), rel=1e-9)
-            assert p.log and p.prior == pytest.approx(np.log(3) / 2)
+            # half the width per ratio, widened by √3: three modes pull as one ratio did
+            assert p.log and p.prior == pytest.approx(np.log(3) / 2 * np.sqrt(3))
         ph = ps["specimen.mode2.damping"].set(Physics(nominal_open_loop(vt), b), 0.06)
         assert list(modal_damping(ph.specimen)) == pytest.approx([xi[0], 0.06, xi[2]],
                                                                  rel=1e-9)

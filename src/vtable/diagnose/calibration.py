@@ -236,10 +236,13 @@ def _with_mode_damping(spec, i: int, xi: float):
 
 def _damping_params(spec, cal: Calibration) -> list[BaseParam]:
     """Each mode's damping ratio, declared ×/÷ `cal.damping` with a log prior of half that
-    width (a SDOF's one ratio is `specimen.damping`, a building's mode K's
-    `specimen.modeK.damping`); an undamped mode is held at zero."""
+    width times √(modes) — the priors of n modes together pull as one ratio's did — (a
+    SDOF's one ratio is `specimen.damping`, a building's mode K's `specimen.modeK.damping`);
+    an undamped mode is held at zero."""
     out = []
-    for i, xi in enumerate(_mode_damping(spec)):
+    ratios = _mode_damping(spec)
+    widen = math.sqrt(sum(1 for xi in ratios if xi > 0) or 1)
+    for i, xi in enumerate(ratios):
         if not xi > 0:
             continue
         key = ("specimen.damping" if isinstance(spec, SDOFSpecimen)
@@ -252,7 +255,8 @@ def _damping_params(spec, cal: Calibration) -> list[BaseParam]:
             return dataclasses.replace(ph, specimen=_with_mode_damping(ph.specimen, i, v))
 
         out.append(BaseParam(key, "1", xi, xi / cal.damping, min(xi * cal.damping, 0.99),
-                             True, math.log(cal.damping) / 2 or None, "specimen", get, put))
+                             True, widen * math.log(cal.damping) / 2 or None, "specimen", get,
+                             put))
     return out
 
 
