@@ -39,6 +39,9 @@ def main() -> None:
         def __init__(self, m):
             self.m = m
 
+        def __getattr__(self, name):  # everything else (m.table, ...) from the assembly
+            return getattr(self.m, name)
+
         def insert_at_actuators(self, name, mass, law, params, states=0, stiffness=0.0):
             def python_law(d, v, z, p, dz):  # a dict: numba cannot type it
                 return {"f": law(d, v, z, p, dz)}["f"]

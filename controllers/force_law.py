@@ -5,9 +5,36 @@ length is the element's relative displacement; the law returns the force on it."
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import functools
+from collections import namedtuple
+from collections.abc import Callable, Mapping
 
 import numpy as np
+
+from vtable.errors import VtableError
+
+
+def law_params(params) -> tuple[np.ndarray, tuple[str, ...] | None]:
+    """A force law's parameters as (values, names): a mapping {name: value} (SI) gives the
+    law a named tuple (`p.k`), a sequence gives it the array (`p[0]`), as before."""
+    if isinstance(params, Mapping):
+        names = tuple(params)
+        bad = [n for n in names if not (isinstance(n, str) and n.isidentifier())]
+        if bad:
+            raise VtableError(f"force-law parameter names must be identifiers, got {bad[0]!r}")
+        return np.array([float(params[n]) for n in names]), names
+    return np.asarray(params, dtype=float), None
+
+
+@functools.cache
+def named(names: tuple[str, ...]) -> type:
+    """The named tuple type a law with parameters `names` receives as `p`."""
+    return namedtuple("LawParams", names)
+
+
+def law_argument(values: np.ndarray, names: tuple[str, ...] | None):
+    """What the law receives as `p` (see `law_params`)."""
+    return values if names is None else named(names)(*(float(v) for v in values))
 
 
 class ForceLawController:
@@ -18,7 +45,7 @@ class ForceLawController:
     def __init__(self, actuators: tuple[str, ...], law: Callable, params,
                  states: int = 0, scale: float = 1.0) -> None:
         self.actuators = tuple(actuators)
-        self.law, self.p = law, np.asarray(params, dtype=float)
+        self.law, self.p = law, law_argument(*law_params(params))
         self.n_states, self.scale = states, scale
 
     def bind(self, actuator_names: tuple[str, ...]) -> None:

@@ -11,7 +11,7 @@ CONTACT_HZ = 50.0  # Hz: the platen on the closed swivels (assumed)
 def dead_band(d, v, z, p, dz):
     """Force on the pistons from the platen (d, v: travel relative to it): a spring taking
     up beyond the free play ±gap/2 (smoothly, as contact surfaces do), and contact damping."""
-    half, k, c = 0.5 * p[0], p[1], p[2]
+    half, k, c = 0.5 * p.gap, p.k, p.c
     engaged = math.tanh(d / half) ** 2
     return -k * (d - half * math.tanh(d / half)) - c * engaged * v
 
@@ -26,7 +26,8 @@ class SwivelBacklash(Effect):
     def apply(self, m, p):
         k = m.table.platen_mass * (2 * math.pi * CONTACT_HZ) ** 2  # the run's platen
         c = 0.4 * math.sqrt(k * PISTONS)  # contact damping, 20 % of the pistons' mode
-        m.insert_at_actuators("piston", PISTONS, dead_band, [p["gap"], k, c], stiffness=k)
+        m.insert_at_actuators("piston", PISTONS, dead_band, {"gap": p["gap"], "k": k, "c": c},
+                              stiffness=k)
 
 
 register(SwivelBacklash())

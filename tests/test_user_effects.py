@@ -263,16 +263,17 @@ def test_a_missing_stiffness_is_worked_out_from_the_law(verb):
     from vtable.params.virtual import virtual_table
 
     k = 4e10
-    assert needed_stiffness(get_law(), [0.001, k, 0.0]) == pytest.approx(k, rel=1e-3)
+    gap_k = {"gap": 0.001, "k": k, "c": 0.0}
+    assert needed_stiffness(get_law(), gap_k) == pytest.approx(k, rel=1e-3)
     ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"))
     steps = []
     for stiffness in (k, None):
         m = ReducedAssembly(ph, virtual_table())
         if verb == "insert_at_actuators":
-            m.insert_at_actuators("piston", 680.0, get_law(), [0.001, k, 0.0],
+            m.insert_at_actuators("piston", 680.0, get_law(), {"gap": 0.001, "k": k, "c": 0.0},
                                   stiffness=stiffness)
         else:
-            m.add_storey_force(get_law(), [0.001, k, 0.0], stiffness=stiffness)
+            m.add_storey_force(get_law(), {"gap": 0.001, "k": k, "c": 0.0}, stiffness=stiffness)
         steps.append(m.max_step)
     assert steps[1] == pytest.approx(steps[0], rel=1e-3) and steps[0] < 2.5e-3
     with pytest.raises(VtableError, match=r"^raising_law: give stiffness=.*ValueError: no"):
@@ -333,3 +334,50 @@ def test_diagnose_ranks_the_valve_overlap_and_the_error_falls():
     true_err = Diagnoser(runs, catalog=[]).score(truth).error
     assert best.error_after <= 1.5 * true_err, (best.error_after, true_err)
     assert best.params["overlap"] == pytest.approx(OVERLAP_PCT, rel=0.2)
+
+
+def test_a_force_law_reads_its_parameters_by_name_in_both_models():
+    """A force law given its parameters as a mapping reads them by name (`p.c2`) and gives
+    the same forces as the positional law (`p[0]`), in the reduced model and on the virtual
+    table's force-law controller."""
+    from vtable.controllers.force_law import ForceLawController
+    from vtable.models.reduced import ReducedModel
+    from vtable.signals import make_command
+
+    def by_name(d, v, z, p, dz):
+        return -p.c2 * abs(v) * v - p.k * d
+
+    def by_index(d, v, z, p, dz):
+        return -p[0] * abs(v) * v - p[1] * d
+
+    class Storey(Effect):
+        name = "storey_law"
+        physics = section = signature = "a test"
+        params = ()
+
+        def __init__(self, law, params):
+            self.law, self.p = law, params
+
+        def apply(self, m, p):
+            m.add_storey_force(self.law, self.p, stiffness=2.0e5)
+
+    cmd = make_command("random", duration=4.0, peak_in=0.1)
+    out = []
+    for e in (Storey(by_name, {"c2": 3.0e4, "k": 2.0e5}), Storey(by_index, [3.0e4, 2.0e5])):
+        m = ReducedModel(Physics(nominal_open_loop(), presets.specimen("sdof_frame")))
+        m.assembly.elements.clear()
+        e.apply(m.assembly, {})
+        m._element(m.assembly.elements)
+        m.linear = False
+        out.append(m.simulate(cmd.t, cmd.x)["acc_n_ne"])
+    np.testing.assert_allclose(out[0], out[1], rtol=1e-12, atol=1e-12)
+    base = ReducedModel(Physics(nominal_open_loop(), presets.specimen("sdof_frame")))
+    plain = base.simulate(cmd.t, cmd.x)["acc_n_ne"]
+    assert np.std(out[0] - plain) > 0.05 * np.std(plain)  # the law acts
+    named_ctl = ForceLawController(("S",), by_name, {"c2": 3.0e4, "k": 2.0e5})
+    index_ctl = ForceLawController(("S",), by_index, [3.0e4, 2.0e5])
+    for c in (named_ctl, index_ctl):
+        c.bind(("S",))
+    s = np.array([0.001, 0.02])
+    assert named_ctl.step(0.001, s, None) == pytest.approx(index_ctl.step(0.001, s, None))
+    assert named_ctl.p.k == 2.0e5

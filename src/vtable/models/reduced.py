@@ -24,6 +24,7 @@ import scipy.signal
 
 from vtable._numba import njit
 from vtable.analytic.virtual_table import mechanics
+from vtable.controllers.force_law import law_params, named
 from vtable.effects.table import TableView
 from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.errors import VtableError
@@ -54,6 +55,7 @@ class ForceElement:
     b: str | None
     params: np.ndarray
     states: int
+    names: tuple[str, ...] | None = None  # the law reads p.name (`law_params`)
 
 
 class ReducedAssembly:
@@ -134,7 +136,8 @@ class ReducedAssembly:
         stable to ωh ≈ 2.8)."""
         if stiffness is None:
             stiffness = needed_stiffness(law, params, states)
-        self.elements.append(ForceElement(law, a, b, np.asarray(params, dtype=float), states))
+        values, names = law_params(params)
+        self.elements.append(ForceElement(law, a, b, values, states, names))
         if stiffness > 0 and mass > 0:
             self.max_step = min(self.max_step, 2.0 / math.sqrt(stiffness / mass))
 
@@ -254,7 +257,7 @@ def _combined(elements: list[ForceElement], ix: dict[str, int], jit: bool):
     per structure (laws, coordinates, sizes), so the kernel compiles once for it."""
     params = np.concatenate([e.params for e in elements]) if elements else np.zeros(0)
     key = (jit, tuple((e.law, ix[e.a], None if e.b is None else ix[e.b], e.states,
-                       len(e.params)) for e in elements))
+                       len(e.params), e.names) for e in elements))
     if key in _COMBINED:
         fn, s = _COMBINED[key]
         return fn, s, params
@@ -271,7 +274,11 @@ def _combined(elements: list[ForceElement], ix: dict[str, int], jit: bool):
         d = f"q[{i}]" + (f" - q[{j}]" if j is not None else "")
         v = f"qd[{i}]" + (f" - qd[{j}]" if j is not None else "")
         m, ps = e.states, len(e.params)
-        lines.append(f"    r = law{k}({d}, {v}, z[{s}:{s + m}], p[{o}:{o + ps}], dz[{s}:{s + m}])")
+        arg = f"p[{o}:{o + ps}]"
+        if e.names is not None:  # the law reads its parameters by name
+            ns[f"P{k}"] = named(e.names)
+            arg = f"P{k}(" + ", ".join(f"p[{o + i}]" for i in range(ps)) + ")"
+        lines.append(f"    r = law{k}({d}, {v}, z[{s}:{s + m}], {arg}, dz[{s}:{s + m}])")
         lines.append(f"    f[{i}] += r")
         if j is not None:
             lines.append(f"    f[{j}] -= r")

@@ -10,6 +10,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from vtable.controllers.force_law import law_argument, law_params
 from vtable.errors import VtableError
 
 #: |d| probed (m): 1 µm to 0.5 m, 8 points a decade, either sign, and 0
@@ -18,7 +19,7 @@ PROBE = np.concatenate([[0.0], np.logspace(-6, math.log10(0.5), 46)])
 
 def needed_stiffness(law: Callable, params: Sequence[float], states: int = 0) -> float:
     """max |dF/dd| of `law(d, v, z, p, dz)` over `PROBE` (central differences), N/m."""
-    p = np.asarray(params, dtype=float)
+    p = law_argument(*law_params(params))
     name = getattr(law, "__name__", "the force law")
     slope = 0.0
     try:
