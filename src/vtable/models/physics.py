@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 from vtable.analytic.servo import open_loop_from_servo, servo_from_open_loop
 from vtable.effects.registry import get
+from vtable.errors import VtableError
 from vtable.params.loops import OpenLoop
 from vtable.params.specimen import Specimen
 from vtable.params.table import ServoConstants
@@ -106,3 +107,11 @@ def base_hydraulics(ph: Physics, vt: VirtualTable) -> ServoConstants:
     added by the assemblies)."""
     c = servo_from_open_loop(ph.open_loop, per_actuator_template(vt))
     return dataclasses.replace(c, rc=0.0)
+
+
+def check_dof(vt: VirtualTable, dof: str) -> None:
+    """A platen motion an effect unlocks must be one the run's table has (both models'
+    `unlock`)."""
+    if dof not in vt.dofs:
+        raise VtableError(f"the {vt.name} table's platen has no {dof} motion "
+                          f"(its DOFs: {', '.join(vt.dofs)})")

@@ -93,9 +93,7 @@ class ReducedAssembly:
         add_stage(self.stages, stage, params)
 
     def unlock(self, dof: str) -> None:
-        if dof not in self.vt.dofs:
-            raise VtableError(f"the {self.vt.name} table's platen has no {dof} motion "
-                              f"(its DOFs: {', '.join(self.vt.dofs)})")
+        phys.check_dof(self.vt, dof)
         if dof not in self.active:
             self.active.insert(1, dof)
 

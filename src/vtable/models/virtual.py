@@ -26,7 +26,6 @@ from vtable.controllers import (
 )
 from vtable.effects.table import TableView
 from vtable.effects.valve_dynamics import SPOOL_LAG
-from vtable.errors import VtableError
 from vtable.hydraulics.law import group_law
 from vtable.hydraulics.stage import Stage, add_stage
 from vtable.mjcf import edit
@@ -71,9 +70,7 @@ class VirtualAssembly:
         add_stage(self.stages, stage, params)
 
     def unlock(self, dof: str) -> None:
-        if dof not in self.vt.dofs:
-            raise VtableError(f"the {self.vt.name} table's platen has no {dof} motion "
-                              f"(its DOFs: {', '.join(self.vt.dofs)})")
+        phys.check_dof(self.vt, dof)
         edit.unlock_joint(self.ts, dof)
 
     def set_rocking(self, k_theta: float, c_theta: float) -> None:
