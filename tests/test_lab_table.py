@@ -101,8 +101,15 @@ def test_simulate_table_lnec_writes_a_run_of_that_table(capsys, tmp_path):
     ("FILE:preset = 'lnec-st1d'\n[table.controller]\nkind = 'pid'\nbogus = 1\n",
      "t.toml [table.controller]: unknown key 'bogus'; expected one of"),
     ("FILE:preset = 'lnec-st1d'\n[table.controller]\nkind = 'pid'\n"
-     "displacement_gain_v_per_m = 129.93\ni_per_s = 2.0\nfeedforward_velocity_s = 0.01",
-     "controller i, feedforward_velocity_s: the virtual table and the fitted models hold P"),
+     "displacement_gain_v_per_m = 129.93\ngain = 2.0",
+     "[table.controller]: 'gain' is not a term of a pid controller (it reads "
+     "displacement_gain_v_per_m, p,"),
+    ("FILE:preset = 'lnec-st1d'\n[table.controller]\nkind = 'pid'\n"
+     "displacement_gain_v_per_m = 129.93\n[[table.controller.notch]]\nfrequency_hz = 8.0",
+     "[table.controller].notch[0]: missing key 'width_hz'"),
+    ("FILE:preset = 'lnec-st1d'\n[table.controller]\nkind = 'tvc'\n"
+     "displacement_gain_v_per_m = 129.93\np = 0.0\nacceleration_gain_v_s2_per_m = 0.1",
+     "p: vtable's models need p > 0"),
 ])
 def test_bad_tables_are_one_line(capsys, tmp_path, table, msg):
     if table.startswith("FILE:"):

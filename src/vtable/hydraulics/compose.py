@@ -1,12 +1,13 @@
 """A stage set compiled into the hydraulic element, cached on disk like any module.
 
 `composition(stages, extra)` writes the element for that set of stages (`stage.Stage`) —
-`fed_back` and `actuator_rates` with each stage's law called in its place, then the text of
-the element's group kernels (`element.servo_rates`, `element.servo_step`) and of `extra`
-kernels (the reduced model's integrator) — to a real .py file named by a hash of the
-stages' laws and the kernels' text, imports it and returns it. Its kernels are
-``njit(cache=True)``: a process that meets the same stage set again (a diagnosis's
-workers) loads them compiled from numba's cache instead of compiling them.
+`dof_drive`, `fed_back` and `actuator_rates` with each stage's law called in its place,
+then the text of the element's group kernels (`element.servo_rates`,
+`element.servo_step`) and of `extra` kernels (the reduced model's integrator) — to a real
+.py file named by a hash of the stages' laws and the kernels' text, imports it and
+returns it. Its kernels are ``njit(cache=True)``: a process that meets the same stage set
+again (a diagnosis's workers) loads them compiled from numba's cache instead of
+compiling them.
 """
 
 from __future__ import annotations
@@ -74,11 +75,12 @@ def ordered(stages: Sequence[Stage]) -> tuple[Stage, ...]:
 def composition(stages: Sequence[Stage], extra: Sequence[Callable] = ()) -> Composition:
     """The compiled element of `stages` (see the module docstring); `extra`: kernels
     (njit-decorated functions of another module) written after the element's, calling its
-    `fed_back`, `actuator_rates`, `dof_error` and its states per actuator `NS`."""
+    `dof_drive`, `fed_back`, `actuator_rates` and its states per actuator `NS`."""
     stages = ordered(stages)
-    if sum(s.kind == "feedback" for s in stages) > 1:
-        raise VtableError("the element takes one feedback stage: "
-                          f"{', '.join(s.name for s in stages if s.kind == 'feedback')}")
+    for kind in ("control", "feedback"):
+        if sum(s.kind == kind for s in stages) > 1:
+            raise VtableError(f"the element takes one {kind} stage: "
+                              f"{', '.join(s.name for s in stages if s.kind == kind)}")
     if len({s.name for s in stages}) < len(stages):
         raise VtableError(f"a stage appears twice: {', '.join(s.name for s in stages)}")
     templates = [element.servo_rates, element.servo_step, *extra]
@@ -158,7 +160,9 @@ def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str) -> s
         p = f"_P{k}({args})"
         z = f"z[o + {so}:o + {so + s.states}]"
         dz = f"dz[o + {so}:o + {so + s.states}]"
-        if s.kind == "valve":
+        if s.kind == "control":
+            calls["control"].append(f"    u = _law{k}(u, qc, q, qd, {z}, {p}, {dz})")
+        elif s.kind == "valve":
             calls["valve"].append(f"    q = _law{k}(q, {z}, {p}, {dz})")
         elif s.kind == "flow":
             calls["flow"].append(f"    q = _law{k}(q, P, {p})")
@@ -171,7 +175,11 @@ def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str) -> s
         else:
             calls["force"].append(f"    F = _law{k}(F, v, {p})")
         o, so, li = o + len(s.params), so + s.states, li + 1 + (s.rate is not None)
-    body = ["", "", "@njit(cache=True)", "def fed_back(z, o, sp):",
+    drive = (["    u = dof_error(qc, q, p, qd, 1.0, kp, kv)", *calls["control"],
+              "    return g * u"] if calls["control"] else
+             ["    return dof_error(qc, q, p, qd, g, kp, kv)"])
+    body = ["", "", "@njit(cache=True)", "def dof_drive(qc, q, p, qd, g, kp, kv, z, o, sp, dz):",
+            *drive, "", "", "@njit(cache=True)", "def fed_back(z, o, sp):",
             *(calls["feedback"] or ["    return z[o]"]),
             "", "", "@njit(cache=True)", "def actuator_rates(z, o, drive, v, sp, dz):",
             "    P = z[o]", "    q = commanded_flow(drive, sp)", *calls["valve"],

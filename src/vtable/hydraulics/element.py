@@ -49,6 +49,13 @@ def dof_error(qc, q, p, qd, g, kp, kv):
 
 
 @njit(cache=True)
+def dof_drive(qc, q, p, qd, g, kp, kv, z, o, sp, dz):
+    """One DOF's drive through the controller (`dof_error`: no control stage; a control
+    stage's states start at z[o + 1], the actuator's whose drive it makes)."""
+    return dof_error(qc, q, p, qd, g, kp, kv)
+
+
+@njit(cache=True)
 def commanded_flow(drive, sp):
     """The servovalve's flow for a drive (eq 6.2): k_t·drive."""
     return sp[_KT] * drive
@@ -90,8 +97,9 @@ def actuator_rates(z, o, drive, v, sp, dz):
 @njit(cache=True)
 def servo_rates(z, x, v, qc, T, Tp, g, kp, kv, sp, dz, force):
     """Rates dz (n·NS: each actuator's states in turn) and forces (n) of a group of n
-    actuators: each actuator's drive T G e from the DOF errors (`dof_error`), then
-    `actuator_rates`."""
+    actuators: each actuator's drive T G e from the DOF errors (`dof_drive`), then
+    `actuator_rates`. A control stage runs one copy per actuator (its law holds one DOF:
+    `law.ServoLaw` refuses it on several)."""
     n, d = T.shape
     for i in range(n):
         drive = 0.0
@@ -103,7 +111,8 @@ def servo_rates(z, x, v, qc, T, Tp, g, kp, kv, sp, dz, force):
                 acc_x += Tp[j, a] * x[a]
                 acc_v += Tp[j, a] * v[a]
                 acc_p += Tp[j, a] * fed_back(z, a * NS, sp)
-            drive += T[i, j] * dof_error(qc[j], acc_x, acc_p, acc_v, g[j], kp[j], kv[j])
+            drive += T[i, j] * dof_drive(qc[j], acc_x, acc_p, acc_v, g[j], kp[j], kv[j], z,
+                                         i * NS, sp, dz)
         force[i] = actuator_rates(z, i * NS, drive, v[i], sp, dz)
 
 

@@ -65,6 +65,11 @@ class ServoLaw:
     hydraulics: ServoConstants
     stages: tuple[StageUse, ...] = ()
 
+    def __post_init__(self) -> None:
+        if len(self.dofs) > 1 and any(s.kind == "control" for s, _ in self.stages):
+            raise VtableError(f"a control stage drives one DOF, not {', '.join(self.dofs)}: "
+                              "its states run per actuator")
+
     @property
     def linear(self) -> bool:
         """Whether every stage is linear (the loop is then a linear system)."""
@@ -124,6 +129,11 @@ class ServoLaw:
                 elif np.any(f):
                     raise VtableError("a linear stage makes the force depend on the motion")
         return LinearBlocks(out["z"], out["x"], out["v"], out["c"], C)
+
+    def fastest_rate(self) -> float:
+        """The linear loop's fastest rate max |λ(A)| (1/s) of `linear_blocks` with the
+        motion held: what bounds an explicit integrator's step (RK4: |λ| h < 2.8)."""
+        return float(np.max(np.abs(np.linalg.eigvals(self.linear_blocks().A))))
 
     def lumped(self, dof: str) -> ServoLaw:
         """The actuators acting on `dof` alone as one equivalent actuator (T = 1): the

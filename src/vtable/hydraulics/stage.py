@@ -2,11 +2,16 @@
 signal path, with named parameters, that an effect adds (`Assembly.add_stage`).
 
 The element (`element`, eqs 6.1-6.4) carries the drive u of the DOF law to a force on
-the platen through five places a stage may sit, in this order:
+the platen through six places a stage may sit, in this order:
 
 ========  ==========================================  =====================================
 kind      law (scalars; ``p`` the named parameters)   where
 ========  ==========================================  =====================================
+control   ``law(u, xc, x, v, z, p, dz) -> u``         the controller's terms beyond eqs
+                                                      6.1-6.4 (integral, derivative,
+                                                      feedforward, notches, states z): u the
+                                                      P law's drive per unit gain, x_c the
+                                                      DOF command, x, v the feedback
 valve     ``law(q, z, p, dz) -> q``                   the commanded flow k_t·u to the valve
                                                       flow (spool dynamics, states z)
 flow      ``law(q, P, p) -> q``                       the valve flow at load pressure P
@@ -34,9 +39,10 @@ from dataclasses import dataclass
 
 from vtable.errors import VtableError
 
-KINDS = ("valve", "flow", "pressure", "feedback", "force")
+KINDS = ("control", "valve", "flow", "pressure", "feedback", "force")
 #: each kind's law signature (the names say what the element passes)
-SIGNATURES = {"valve": ("q", "z", "p", "dz"), "flow": ("q", "P", "p"),
+SIGNATURES = {"control": ("u", "xc", "x", "v", "z", "p", "dz"),
+              "valve": ("q", "z", "p", "dz"), "flow": ("q", "P", "p"),
               "pressure": ("beta", "P", "p"), "feedback": ("P", "z", "p"),
               "force": ("F", "v", "p")}
 
@@ -79,8 +85,8 @@ class Stage:
                               "p, dz)")
         if set(self.extensive) - set(self.params):
             raise VtableError(f"{where}: extensive names an unknown parameter")
-        if self.states and self.kind not in ("valve", "feedback"):
-            raise VtableError(f"{where}: only valve and feedback stages have states")
+        if self.states and self.kind not in ("control", "valve", "feedback"):
+            raise VtableError(f"{where}: only control, valve and feedback stages have states")
 
     def values(self, given: dict[str, float]) -> tuple[float, ...]:
         """The named parameters `given` (SI) in declaration order; a missing, unknown or

@@ -1,6 +1,6 @@
 """The reduced model's integrator (numba): generalized coordinates q with mass, stiffness
 and damping matrices, one equivalent horizontal actuator stepped by the hydraulic element
-(`vtable.hydraulics.element`: `dof_error` and `actuator_rates`, the law the actuator
+(`vtable.hydraulics.element`: `dof_drive` and `actuator_rates`, the law the actuator
 groups' `servo_rates` applies too), auxiliary linear states w (other control loops:
 ẇ = Aw w + Wq q + Wv q̇, generalized force Fw w), quadratic dampers c₂|q̇|q̇, and force
 elements with states z (`elem(q, q̇, z, p, f, ż)` adds generalized forces to f).
@@ -26,7 +26,7 @@ import numpy as np
 import scipy.linalg
 
 from vtable._numba import njit
-from vtable.hydraulics.element import NS, actuator_rates, dof_error, fed_back
+from vtable.hydraulics.element import NS, actuator_rates, dof_drive, fed_back
 
 
 def work_size(nq: int) -> int:
@@ -39,7 +39,7 @@ def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, 
            ws):
     """Rates of the main state y = [q, q̇, servo (NS), w] with extra generalized forces fe;
     returns the actuator force. The equivalent actuator is one lumped actuator on one DOF
-    (T, Tp 1 x 1): its drive is `dof_error`, its rates `actuator_rates`. `ws`: scratch of
+    (T, Tp 1 x 1): its drive is `dof_drive`, its rates `actuator_rates`. `ws`: scratch of
     `work_size(nq)` (no allocation, no array views: this runs four times per step)."""
     na = Aw.shape[0]
     s0 = 2 * nq
@@ -50,7 +50,8 @@ def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, 
         va += ax[i] * y[nq + i]
     t = Tp[0, 0]
     p_fb = fed_back(y, s0, sp)
-    drive = T[0, 0] * dof_error(xc, t * xa, t * p_fb, t * va, g[0], kp[0], kv[0])
+    drive = T[0, 0] * dof_drive(xc, t * xa, t * p_fb, t * va, g[0], kp[0], kv[0], y, s0, sp,
+                                dy)
     force = actuator_rates(y, s0, drive, va, sp, dy)
     for i in range(nq):
         r = bF[i] * force + fe[i]

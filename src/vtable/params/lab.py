@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from functools import cache
 
 from vtable.analytic.servo import open_loop_from_servo
+from vtable.controllers import kinds
 from vtable.errors import VtableError
 from vtable.params.loops import OpenLoop
 from vtable.params.table import ServoConstants
@@ -37,24 +38,15 @@ class LabTable:
     n_actuators: int                # horizontal actuators (lumped by the reduced model)
     servo: ServoConstants           # one actuator's loop (mass = platen mass per actuator)
     valve_time_constant: float      # s (0: an instantaneous valve)
-    controller: str                 # "three_variable" | "pid"
-    pid: tuple[float, float, float]  # P (1), I (1/s), D (s) on the displacement error
-    feedforward: float              # s: velocity feedforward (flow = ff·A·ẋ_c)
-    feedforward_acc: float = 0.0    # s²: acceleration feedforward
+    controller: str                 # its kind (`vtable.controllers.kinds`)
+    #: the kind's control stage and its parameters (None: the P law of eqs 6.1-6.4 only)
+    control: tuple | None = None
     stroke: float | None = None     # m (± amplitude)
     velocity: float | None = None   # m/s
     acceleration: float | None = None  # m/s²
     payload: float | None = None    # kg
     band: tuple[float, float] | None = None  # Hz
     force_measured: str = "load_cell"  # the force channels: "load_cell" or "delta_p" (A·ΔP)
-
-    def unmodelled_control(self) -> tuple[str, ...]:
-        """The controller's terms vtable's servo law (eqs 6.1-6.4: P on the error with
-        pressure and velocity feedback) does not hold: integral, derivative, feedforward."""
-        named = (("i", self.pid[1]), ("d", self.pid[2]),
-                 ("feedforward_velocity_s", self.feedforward),
-                 ("feedforward_acceleration_s2", self.feedforward_acc))
-        return tuple(k for k, v in named if v)
 
     @property
     def uniaxial(self) -> bool:
@@ -76,7 +68,7 @@ def _eerc(desc) -> LabTable:
     n = len(vt.group("horizontal"))
     servo = dataclasses.replace(vt.horizontal_servo, mass=g.mass / n)
     return LabTable("eerc", ("x", "z", "roll", "pitch", "twist"), g.mass, g.pitch_inertia,
-                    None, n, servo, 0.0, "three_variable", (1.0, 0.0, 0.0), 0.0,
+                    None, n, servo, 0.0, "three_variable", None,
                     stroke=sp.stroke_h, velocity=sp.velocity_h, acceleration=sp.acceleration_h,
                     payload=sp.weight_capacity / 9.80665, band=(0.0, sp.bandwidth))
 
@@ -137,13 +129,23 @@ def _described(desc, base: LabTable | None) -> LabTable:
         (base.valve_time_constant if base else 0.0)
     kind = (c.kind if c is not None and c.kind else None) or (base.controller if base
                                                               else "pid")
-    if kind == "pid":
+    kind_of = kinds.get(kind)
+    control = None
+    if c is not None:
+        try:
+            control = kind_of.stage_use(c)
+        except VtableError as e:
+            raise VtableError(f"{where}.controller: {e}") from None
+    if kind != "three_variable":
         flow_gain = pick("valve_flow_gain", None)
         dgain = c.displacement_gain if c is not None else None
         if not dgain:
-            raise VtableError(f"{where}.controller: a pid needs displacement_gain_v_per_m "
-                              "(the transducer's volts per metre)")
-        P, Ki, Kd = (c.p or 1.0), (c.i or 0.0), (c.d or 0.0)
+            raise VtableError(f"{where}.controller: a {kind} controller needs "
+                              "displacement_gain_v_per_m (the transducer's volts per metre)")
+        P = c.p if c.p is not None else 1.0
+        if not P > 0:
+            raise VtableError(f"{where}.controller.p: vtable's models need p > 0 (the loop's "
+                              "gain is read per unit of k_d p)")
         # u = P K_d (x_c - x) - K_pg P_L - K_vg ẋ volts, q = K_q u: the report's law
         # q = k_t [(x_c - x) - k_p P_L - k_v ẋ] with k_t = K_q K_d P
         k_t = flow_gain * dgain * P
@@ -153,16 +155,12 @@ def _described(desc, base: LabTable | None) -> LabTable:
                                rc=0.01, mass=mass / n, beta=beta, area=area, volume=volume,
                                k_v=k_v, damping=damping / n,
                                source=f"{where}: k_t = valve flow gain x displacement gain x P")
-        pid = (P, Ki / P, Kd / P)
-        ff = c.feedforward_velocity or 0.0
-        ffa = c.feedforward_acceleration or 0.0
     else:
         if s0 is None:
             raise VtableError(f"{where}.controller: the three_variable controller's constants "
                               "come from the EERC preset (Table B.5); describe a pid instead")
         servo = dataclasses.replace(s0, area=area, volume=volume, beta=beta, k_ct=leak,
                                     mass=mass / n, damping=damping / n or None)
-        pid, ff, ffa = (1.0, 0.0, 0.0), 0.0, 0.0
     lim = desc.limits
     return LabTable(
         name=desc.preset or "described", dofs=desc.dofs or (base.dofs if base else ("x",)),
@@ -170,8 +168,7 @@ def _described(desc, base: LabTable | None) -> LabTable:
                                                                  else None),
         com_height=desc.com_height if desc.com_height is not None else
         (base.com_height if base else None),
-        n_actuators=n, servo=servo, valve_time_constant=tau, controller=kind, pid=pid,
-        feedforward=ff, feedforward_acc=ffa,
+        n_actuators=n, servo=servo, valve_time_constant=tau, controller=kind, control=control,
         stroke=(lim.stroke if lim and lim.stroke else base.stroke if base else None),
         velocity=(lim.velocity if lim and lim.velocity else base.velocity if base else None),
         acceleration=(lim.acceleration if lim and lim.acceleration else

@@ -106,6 +106,9 @@ class VirtualTable:
     dofs: tuple[str, ...] = ("x", "z", "roll", "pitch", "twist")  # the platen's DOFs
     knobs: bool = True  # the Table 3.2 knobs scale the gains (False: physical gains, a PID)
     valve_lag: float = 0.0  # s: the horizontal servovalves' time constant
+    #: the horizontal controller's control stage and its parameters (a digital
+    #: controller's terms beyond eqs 6.1-6.4: `vtable.controllers.kinds`); None: none
+    control: tuple | None = None
     name: str = "eerc"
     com_height: float | None = None  # m: platen c.o.m. above the actuator line (None: shape's)
     #: what the horizontal force channels measure: "load_cell", the net force the rod
@@ -270,14 +273,12 @@ def virtual_table(table: EERCTable | None = None,
 def virtual_table_for(lab) -> VirtualTable:
     """The multibody table of a `vtable.params.lab.LabTable`: the EERC table itself, or a
     uniaxial platen (`uniaxial_table`); what the lab description changes of the EERC
-    table (its mass, its loop constants) is applied to the EERC model. A controller with
-    terms the servo law does not hold (integral, derivative, feedforward) is refused, not
-    run as P control."""
-    if extra := lab.unmodelled_control():
-        raise VtableError(f"table {lab.name!r}: controller {', '.join(extra)}: the virtual "
-                          "table and the fitted models hold P control with pressure and "
-                          "velocity feedback (eqs 6.1-6.4) only; tf and identify still work "
-                          "on these runs")
+    table (its mass, its loop constants) is applied to the EERC model; the controller's
+    own terms (a control stage) go with it."""
+    if lab.control is not None and not lab.uniaxial:
+        raise VtableError(f"table {lab.name!r}: a {lab.controller} controller's terms are "
+                          "modelled on a uniaxial table (one horizontal DOF), not on DOFs "
+                          f"{', '.join(lab.dofs)}")
     if lab.name == "eerc" and lab.uniaxial is False:
         vt = virtual_table()
         if lab.servo != replace(vt.horizontal_servo, mass=lab.servo.mass) or \
@@ -286,7 +287,7 @@ def virtual_table_for(lab) -> VirtualTable:
             servo = replace(lab.servo, mass=vt.horizontal_servo.mass)
             vt = replace(vt, table=replace(vt.table, geometry=g), horizontal_servo=servo)
         return replace(vt, valve_lag=lab.valve_time_constant,
-                       force_measured=lab.force_measured)
+                       force_measured=lab.force_measured, control=lab.control)
     if not lab.uniaxial:
         raise VtableError(f"table {lab.name!r}: the virtual table models the EERC table or a "
                           f"uniaxial platen, not DOFs {', '.join(lab.dofs)}")
@@ -331,7 +332,7 @@ def uniaxial_table(lab) -> VirtualTable:
                         horizontal_servo=s, vertical_servo=None, pitch_loop=None,
                         stabilizers=Stabilizers((), 0.0, 0.0, 0.0, 0.0),
                         settings={}, dofs=("x",), knobs=False, valve_lag=lab.valve_time_constant,
-                        name=lab.name, force_measured=lab.force_measured)
+                        control=lab.control, name=lab.name, force_measured=lab.force_measured)
 
 
 def describe(vt: VirtualTable) -> dict[str, Any]:

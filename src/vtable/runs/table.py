@@ -23,13 +23,21 @@ from dataclasses import dataclass
 from typing import Any
 
 from vtable import units
+from vtable.controllers import kinds
 from vtable.errors import VtableError
 from vtable.params import presets
 from vtable.params.base import check_number
 
 #: degrees of freedom a platen may have (x along the shaking direction, z up)
 DOFS = ("x", "y", "z", "roll", "pitch", "twist")
-CONTROLLER_KINDS = ("three_variable", "pid")
+#: the catalog's controller kinds (`vtable.controllers.kinds`; a lab's own are registered
+#: from its file)
+CONTROLLER_KINDS = kinds.BUILT_IN
+#: the keys of one [[table.controller.notch]] entry (a second-order notch)
+NOTCH_KEYS = ("frequency_hz", "width_hz", "depth_db", "on")
+NOTCH_PLACES = ("error", "drive")
+#: the [table.controller] fields every kind reads: the shared loop of eqs 6.1-6.4
+SHARED_CONTROL = ("kind", "displacement_gain", "p", "velocity_gain", "pressure_gain")
 #: what the horizontal actuators' force channels measure: the net force the rod transmits
 #: to the platen (a load cell) or the piston's pressure force A·ΔP (eq 6.3)
 FORCE_MEASURED = ("load_cell", "delta_p")
@@ -131,6 +139,10 @@ _CONTROLLER = (
     _Key("d", {"d_s": "s"}, inclusive=True),
     _Key("feedforward_velocity", {"feedforward_velocity_s": "s"}, inclusive=True),
     _Key("feedforward_acceleration", {"feedforward_acceleration_s2": "s2"}, inclusive=True),
+    _Key("derivative_filter", {"derivative_filter_s": "s"}, inclusive=True),
+    # tvc: the reference generator (second order)
+    _Key("reference_frequency", {"reference_frequency_hz": "Hz"}),
+    _Key("reference_damping", {"reference_damping": "1"}),
 )
 _LIMITS = (
     _Key("stroke", {"stroke_m": "m", "stroke_mm": "mm", "stroke_in": "in"}),
@@ -173,6 +185,23 @@ class ControllerDescription:
     d: float | None = None                    # s
     feedforward_velocity: float | None = None       # s
     feedforward_acceleration: float | None = None   # s²
+    derivative_filter: float | None = None          # s: τ_f of D(s) = s/(τ_f s + 1)
+    reference_frequency: float | None = None        # Hz: the reference generator's f_g
+    reference_damping: float | None = None          # 1: its ζ_g
+    notches: tuple[Notch, ...] | None = None
+    #: a lab's own kind's keys (`ControllerKind.user_keys`), SI
+    extra: dict[str, float] | None = None
+
+
+@dataclass(frozen=True)
+class Notch:
+    """A notch filter of the controller: centre `frequency` (Hz), -3 dB `width` (Hz),
+    `depth_db` at the centre, on the displacement "error" or on the "drive"."""
+
+    frequency: float
+    width: float
+    depth_db: float = 40.0
+    on: str = "error"
 
 
 @dataclass(frozen=True)
@@ -281,12 +310,21 @@ def _parse(d: dict[str, Any], where: str, notes: list[str]) -> dict[str, Any]:
     if "controller" in d:
         c = d["controller"]
         w = _sub(where, "controller")
-        ctl = _level(c, _CONTROLLER, w, notes, plain=("kind",))
+        kind = kinds.get(c["kind"]) if isinstance(c, dict) and "kind" in c and \
+            c["kind"] in kinds.names() else None
+        own = tuple(kind.user_keys) if kind is not None else ()
+        ctl = _level({k: v for k, v in c.items() if k not in own} if isinstance(c, dict)
+                     else c, _CONTROLLER, w, notes, plain=("kind", "notch"))
         if "kind" in c:
-            if c["kind"] not in CONTROLLER_KINDS:
-                raise VtableError(f"{w}.kind: expected one of {', '.join(CONTROLLER_KINDS)}, "
+            if c["kind"] not in kinds.names():
+                raise VtableError(f"{w}.kind: expected one of {', '.join(kinds.names())}, "
                                   f"got {c['kind']!r}")
             ctl["kind"] = c["kind"]
+        if "notch" in c:
+            ctl["notches"] = _notches(c["notch"], f"{w}.notch")
+        if own:
+            ctl["extra"] = {k: check_number(c[k], f"{w}.{k}", kind.user_keys[k])
+                            for k in own if k in c}
         out["controller"] = ctl
     if "limits" in d:
         w = _sub(where, "limits")
@@ -295,6 +333,36 @@ def _parse(d: dict[str, Any], where: str, notes: list[str]) -> dict[str, Any]:
             lim["band"] = _band(d["limits"]["band_hz"], f"{w}.band_hz")
         out["limits"] = lim
     return out
+
+
+def _notches(v: Any, where: str) -> tuple[Notch, ...]:
+    """[[table.controller.notch]] entries (at most two)."""
+    if not isinstance(v, list) or not all(isinstance(x, dict) for x in v):
+        raise VtableError(f"{where}: expected a list of tables, each with "
+                          f"{', '.join(NOTCH_KEYS)}")
+    if len(v) > 2:
+        raise VtableError(f"{where}: at most two notches, got {len(v)}")
+    out = []
+    for k, n in enumerate(v):
+        w = f"{where}[{k}]"
+        unknown = set(n) - set(NOTCH_KEYS)
+        if unknown:
+            raise VtableError(f"{w}: unknown key {sorted(unknown)[0]!r}; expected one of "
+                              f"{', '.join(NOTCH_KEYS)}")
+        for key in ("frequency_hz", "width_hz"):
+            if key not in n:
+                raise VtableError(f"{w}: missing key {key!r}")
+        f = check_number(n["frequency_hz"], f"{w}.frequency_hz", "Hz")
+        b = check_number(n["width_hz"], f"{w}.width_hz", "Hz")
+        depth = check_number(n.get("depth_db", 40.0), f"{w}.depth_db", "1")
+        on = n.get("on", "error")
+        if not (f > 0 and b > 0 and depth >= 0):
+            raise VtableError(f"{w}: frequency_hz and width_hz must be > 0, depth_db >= 0")
+        if on not in NOTCH_PLACES:
+            raise VtableError(f"{w}.on: expected one of {', '.join(map(repr, NOTCH_PLACES))}, "
+                              f"got {on!r}")
+        out.append(Notch(f, b, depth, on))
+    return tuple(out)
 
 
 def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
@@ -343,11 +411,15 @@ def table_from_dict(d: Any, where: str = "[table]") -> TableDescription:
         if "kind" not in ctl:
             raise VtableError(f"{_sub(where, 'controller')}: missing key 'kind' (expected one of "
                               f"{', '.join(CONTROLLER_KINDS)})")
+        kind = kinds.get(ctl["kind"])
+        foreign = [k for k in ctl if k not in SHARED_CONTROL + kind.keys + ("extra",)]
+        if foreign:
+            names = {q.attr: next(iter(q.keys)) for q in _CONTROLLER} | {"notches": "notch"}
+            reads = [names.get(k, k) for k in SHARED_CONTROL[1:] + kind.keys]
+            raise VtableError(f"{_sub(where, 'controller')}: {names.get(foreign[0])!r} is not "
+                              f"a term of a {ctl['kind']} controller (it reads "
+                              f"{', '.join(reads + list(kind.user_keys))})")
         if ctl["kind"] == "pid":
-            knobs = [k for k in ("gain", "delta_p", "rate") if k in ctl]
-            if knobs:
-                raise VtableError(f"{_sub(where, 'controller')}: {knobs[0]!r} is a knob of the "
-                                  "three_variable controller, not of a pid")
             if not any(ctl.get(k) for k in ("p", "i", "d")):
                 raise VtableError(f"{_sub(where, 'controller')}: a pid controller needs "
                                   "gains: give p, i_per_s or d_s (at least one > 0)")

@@ -1,0 +1,80 @@
+"""Controller kinds (`ControllerKind`): the catalog's — ``three_variable`` (the report's),
+``pid`` and ``tvc`` (one file each) — and a lab's own, registered from its file
+(`load_file`: plain Python calling `register`)."""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import importlib.util
+import sys
+from pathlib import Path
+
+from vtable.controllers.kinds.base import ControllerKind
+from vtable.errors import VtableError
+
+BUILT_IN = ("three_variable", "pid", "tvc")
+_REGISTRY: dict[str, ControllerKind] = {}
+
+
+def _load_built_in() -> None:
+    if not _REGISTRY:
+        for name in BUILT_IN:
+            _REGISTRY[name] = importlib.import_module(f"vtable.controllers.kinds.{name}").KIND
+
+
+def register(kind: ControllerKind) -> ControllerKind:
+    """Add a lab's controller kind; a name the catalog has is refused."""
+    _load_built_in()
+    if not isinstance(kind, ControllerKind):
+        raise VtableError(f"register() takes a ControllerKind, got {type(kind).__name__}")
+    if kind.name in BUILT_IN:
+        raise VtableError(f"controller kind {kind.name!r} is the catalog's; name yours "
+                          "another way")
+    _REGISTRY[kind.name] = kind
+    return kind
+
+
+def names() -> list[str]:
+    _load_built_in()
+    return list(_REGISTRY)
+
+
+def get(name: str) -> ControllerKind:
+    _load_built_in()
+    if name not in _REGISTRY:
+        raise VtableError(f"controller kind {name!r} is not known; expected one of "
+                          f"{', '.join(_REGISTRY)} (a lab's own: --controller-from FILE)")
+    return _REGISTRY[name]
+
+
+def load_file(path: str | Path) -> list[str]:
+    """Run a lab's controller file (it calls `register`); returns the kinds it added. Any
+    problem is one line naming the file."""
+    p = Path(path)
+    if not p.is_file():
+        raise VtableError(f"{p}: no such file (--controller-from)")
+    before = set(names())
+    modname = "vtable_user_controller_" + \
+        hashlib.sha256(str(p.resolve()).encode()).hexdigest()[:16]
+    spec = importlib.util.spec_from_file_location(modname, p)
+    if spec is None or spec.loader is None:
+        raise VtableError(f"{p}: cannot be loaded as a Python file")
+    module = importlib.util.module_from_spec(spec)
+    try:
+        sys.modules[modname] = module
+        spec.loader.exec_module(module)
+    except VtableError as e:
+        raise VtableError(str(e) if str(p) in str(e) else f"{p}: {e}") from None
+    except SyntaxError as e:
+        raise VtableError(f"{p}: line {e.lineno}: syntax error: {e.msg}") from None
+    except Exception as e:
+        raise VtableError(f"{p}: {type(e).__name__} while loading: {e}") from None
+    added = [n for n in names() if n not in before]
+    if not added:
+        raise VtableError(f"{p}: registers no controller kind (call "
+                          "vtable.controllers.kinds.register(...))")
+    return added
+
+
+__all__ = ["BUILT_IN", "ControllerKind", "get", "load_file", "names", "register"]
