@@ -91,3 +91,51 @@ def test_reduced_model_closed_loop_is_the_hand_derivation(case):
     err = np.abs(v / h - 1)
     phase = np.degrees(np.abs(np.angle(v / h)))
     assert err.max() < 0.01 and phase.max() < 1.5, (err.round(4), phase.round(2))
+
+
+# ---------------------------------------------------------------------------------------
+# identify on the truth simulator's runs: the declared controller's structure fitted
+
+FS = 200.0
+
+
+def _truth_run(folder, controller, seed: int):
+    import truth
+    from truth import controllers as tc
+    kw = {k: v for k, v in controller.items() if k != "kind"}
+    law = getattr(tc, controller["kind"])(KD, **kw)
+    table = truth.lnec_table(controller=law)
+    cmd = truth.random_command(40.0, (0.0, 40.0), rms_in=0.08, seed=seed, pink=True)
+    res = truth.simulate(table, truth.none(), cmd, fs=FS)
+    return truth.write_run(folder / controller["kind"], res, declared=truth.none(),
+                           noise=0.01, seed=seed)[0]
+
+
+@pytest.mark.parametrize("controller", [
+    {"kind": "pid", "p": 1.0, "i": 1.5, "feedforward_velocity": 0.02,
+     "feedforward_acceleration": 1e-4},
+    {"kind": "tvc", "p": 1.0, "velocity_gain": 2.0, "acceleration_gain": 0.005,
+     "feedforward_velocity": 0.015, "reference": (35.0, 0.7)},
+])
+def test_identify_fits_the_declared_controllers_loop(tmp_path, capsys, controller):
+    """identify on a PID+feedforward and a TVC table (the truth simulator, 1 % noise): the
+    declared controller's structure is the best, and its loop is the table's design
+    (eq 6.16 of the LNEC constants with the declared velocity gain) within 3 %."""
+    import json
+
+    from vtable.cli import main
+    from vtable.params.lab import run_table
+    from vtable.runs import read_run
+    path = _truth_run(tmp_path, controller, seed=5)
+    code = main(["identify", str(path), "--json", str(tmp_path / "id.json")])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    d = json.loads((tmp_path / "id.json").read_text())["runs"][0]
+    ls = d["loop_structure"]
+    assert ls["fits_eq_6_15"] and ls["best"] == "declared", ls["why"]
+    ref = run_table(read_run(path)).open_loop()  # eq 6.16 of the declared table
+    p = d["open_loop"]["params"]
+    assert p["f_o"] == pytest.approx(ref.f_o, rel=0.03)
+    assert p["xi_o"] == pytest.approx(ref.xi_o, rel=0.03)
+    assert p["k_o"] == pytest.approx(ref.k_o, rel=0.03)
+    assert p["tau"] == pytest.approx(0.0246, rel=0.05)

@@ -27,12 +27,11 @@ from vtable.errors import VtableError
 from vtable.ident import channels
 from vtable.ident.frames import MIN_AVERAGES, frame_for_averages
 from vtable.ident.loop import (
-    STRUCTURES,
     LoopData,
     LoopStructure,
-    Prior,
     compare_structures,
     fit_delay_held,
+    prior_of,
     resolved,
 )
 from vtable.ident.tf import transfer_function
@@ -92,7 +91,7 @@ def estimate_offset(run: Run, drive: DriveFile, band: tuple[float, float] | None
     hi = 0.45 * run.fs if band is None else min(band[1], 0.45 * run.fs)
     lo = max(0.2, 3 * run.fs / n)
     table = run_table(run)
-    prior = Prior(table.open_loop(), table.valve_time_constant, table.name)
+    prior = prior_of(table)
     try:
         data = LoopData.from_tf(tf, (lo, hi), min_coherence=0.8)
         st = compare_structures(data, prior, delay_dt=run.dt)
@@ -100,7 +99,7 @@ def estimate_offset(run: Run, drive: DriveFile, band: tuple[float, float] | None
         raise VtableError(f"{where}.drive_offset_s: \"auto\": cannot fit the lag ({e}); give "
                           "the offset in seconds") from None
     fit = st.fits[st.best]
-    how = f"{STRUCTURES[st.best].name} x e^(-jωδ), fitted jointly"
+    how = f"{st.candidates[st.best].name} x e^(-jωδ), fitted jointly"
     if not resolved(st):
         fit = fit_delay_held(data, prior, run.dt)
         how = (f"the loop of the table's description ({table.name}: eq 6.16, valve lag "

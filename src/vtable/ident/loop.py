@@ -5,6 +5,10 @@ Candidates, each fitted to the complex H1 of x_t over x_c (real and imaginary pa
 - ``eq_6_15``: eq 6.15b, (f_o, ξ_o, k_o): the valve-integrator loop of ch. 6, type 1;
 - ``eq_6_15_lag``: eq 6.15b with a first-order servovalve lag τ in the loop
   (`vtable.ident.fits.h_open_loop_lag`), (f_o, ξ_o, k_o, τ), type 1;
+- ``declared``: the run's declared digital controller (`vtable.controllers.kinds`) closed
+  around the platen (`vtable.analytic.controlled`, eq 6.15 generalised), (f_o, ξ_o, k_o, τ)
+  with the controller's own terms as declared, type 1 — a candidate when the table
+  declares such a controller (`Prior.declared`);
 - ``type_0``: a type-0 second-order loop K ω_n²/(s² + 2ζω_n s + ω_n²), (K, f_n, ζ): a
   plant without an integrator (an electrodynamic shaker under proportional control).
 
@@ -39,6 +43,7 @@ from typing import Any
 
 import numpy as np
 
+from vtable.analytic.controlled import declared_loop
 from vtable.errors import VtableError
 from vtable.ident.fits import (
     Fit,
@@ -51,6 +56,7 @@ from vtable.ident.fits import (
 )
 from vtable.ident.tf import TransferFunction
 from vtable.params.loops import OpenLoop
+from vtable.params.virtual import virtual_table_for
 
 TWO_PI = 2 * np.pi
 #: the smallest relative random error a line is credited with (model error, bias of a
@@ -110,6 +116,25 @@ class Prior:
     open_loop: OpenLoop
     tau: float
     source: str
+    #: the table's declared controller as a structure (`declared_structure`), if any
+    declared: Structure | None = None
+
+
+def declared_structure(vt) -> Structure:
+    """The structure of a table's declared controller (`vtable.analytic.controlled`):
+    x_t/x_c with (f_o, ξ_o, k_o, τ) free and the controller's terms as declared."""
+    return Structure("declared", "the declared controller's loop (eq 6.15 generalised)",
+                     ("f_o", "xi_o", "k_o", "tau"), declared_loop(vt),
+                     (0.1, 1e-3, 0.1, 0.0), (1000.0, 10.0, 1e4, 1.0), True,
+                     (("f_o", "xi_o"),))
+
+
+def prior_of(table) -> Prior:
+    """What a run's table (`vtable.params.lab.LabTable`) predicts of its loop: eq 6.16,
+    its valve time constant and its declared controller's structure."""
+    declared = declared_structure(virtual_table_for(table)) if table.control is not None \
+        else None
+    return Prior(table.open_loop(), table.valve_time_constant, table.name, declared)
 
 
 @dataclass(frozen=True)
@@ -189,18 +214,18 @@ def _starts(st: Structure, data: LoopData, prior: Prior | None) -> list[list[flo
         if prior is not None:
             ol = prior.open_loop
             x = [ol.f_o, max(ol.xi_o, 0.02), ol.k_o]
-            out.append([*x, max(prior.tau, 0.001)] if st.key == "eq_6_15_lag" else x)
+            out.append([*x, max(prior.tau, 0.001)] if len(st.params) == 4 else x)
         try:
             f0 = phase_crossover(data.f, data.H)
             h0 = float(np.interp(f0, data.f, np.abs(data.H)))
             k0 = max(2 * 0.5 * TWO_PI * f0 * h0 / (1 + h0), 1.0)
             x = [f0, 0.5, k0]
-            out.append([*x, 0.001] if st.key == "eq_6_15_lag" else x)
+            out.append([*x, 0.001] if len(st.params) == 4 else x)
         except VtableError:
             pass
         if not out:
             x = [float(data.f[-1]), 0.5, TWO_PI * float(data.f[-1]) / 4]
-            out.append([*x, 0.001] if st.key == "eq_6_15_lag" else x)
+            out.append([*x, 0.001] if len(st.params) == 4 else x)
     else:
         k0 = float(np.mean(np.abs(data.H[:3])))
         ph = np.unwrap(np.angle(data.H))
@@ -214,6 +239,14 @@ def _starts(st: Structure, data: LoopData, prior: Prior | None) -> list[list[flo
     return [list(np.clip(x, lo * (1 + 1e-6) + 1e-12, hi * (1 - 1e-6))) for x in out]
 
 
+def structures(prior: Prior | None) -> dict[str, Structure]:
+    """The candidate structures: `STRUCTURES`, and the declared controller's when the
+    prior has one."""
+    if prior is not None and prior.declared is not None:
+        return {**STRUCTURES, "declared": prior.declared}
+    return STRUCTURES
+
+
 def fit_structure(key: str, data: LoopData, prior: Prior | None = None,
                   delay_dt: float | None = None, gain: bool = False,
                   start: Fit | None = None) -> Fit:
@@ -221,7 +254,7 @@ def fit_structure(key: str, data: LoopData, prior: Prior | None = None,
     starting point (`_starts`, or `start`'s parameters), the best kept. `delay_dt` (the
     sampling step, s) adds a free delay "delay" started from a scan; `gain` a free DC
     gain "gain" (the lag structure only)."""
-    st = STRUCTURES[key]
+    st = structures(prior)[key]
     names = list(st.params)
     lo, hi = list(st.lower), list(st.upper)
     if gain:
@@ -277,6 +310,8 @@ class LoopStructure:
     why: str
     delay: bool = False
     notes: tuple[str, ...] = field(default=())
+    #: the structures compared (`structures`: the declared controller's too, if any)
+    candidates: dict[str, Structure] = field(default_factory=lambda: dict(STRUCTURES))
 
     @property
     def dc(self) -> tuple[float, float]:
@@ -284,14 +319,16 @@ class LoopStructure:
         return self.dc_gain.params["gain"], self.dc_gain.stderr["gain"]
 
     def best_type1(self) -> str:
-        return min((k for k in self.fits if STRUCTURES[k].type1), key=self.aic.__getitem__)
+        return min((k for k in self.fits if self.candidates[k].type1),
+                   key=self.aic.__getitem__)
 
     def to_json(self) -> dict[str, Any]:
         g, sg = self.dc
         return {"fits_eq_6_15": self.fits_eq_6_15, "best": self.best,
-                "best_name": STRUCTURES[self.best].name, "why": self.why,
+                "best_name": self.candidates[self.best].name, "why": self.why,
                 "dc_gain": g, "dc_gain_stderr": sg, "dc_gain_how": self.dc_gain.method,
-                "candidates": {k: {"name": STRUCTURES[k].name, "aic": self.aic[k],
+                "candidates": {k: {"name": self.candidates[k].name,
+                                   "type1": self.candidates[k].type1, "aic": self.aic[k],
                                    "delta_aic": self.aic[k] - self.aic[self.best],
                                    **f.to_json()} for k, f in self.fits.items()},
                 "criterion": f"AIC = n ln(χ²/n) + 2p on the complex H1 weighted by its random "
@@ -361,10 +398,12 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
                        delay_dt: float | None = None) -> LoopStructure:
     """Fit the three structures (and the DC gain) to the data and say whether the loop
     is a valve-integrator loop of eq 6.15 (module docstring)."""
-    fits = {k: fit_structure(k, data, prior, delay_dt) for k in STRUCTURES}
+    cands = structures(prior)
+    fits = {k: fit_structure(k, data, prior, delay_dt) for k in cands}
     crit = {k: aic(f) for k, f in fits.items()}
     best = min(crit, key=crit.__getitem__)
-    type1 = min(crit["eq_6_15"], crit["eq_6_15_lag"])
+    ones = [k for k in cands if cands[k].type1]
+    type1 = min(crit[k] for k in ones)
     reasons, notes = [], []
     dc = dc_gain(data)
     g, sg = dc.params["gain"], dc.stderr["gain"]
@@ -381,10 +420,10 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
                        f"{type1 - crit['type_0']:.0f}): its phase tends to -180°, not to the "
                        "-270° of a valve-integrator loop")
     ok = not reasons
-    t1 = min(("eq_6_15", "eq_6_15_lag"), key=crit.__getitem__)
+    t1 = min(ones, key=crit.__getitem__)
     spread = misfit(fits[t1])
     if ok and spread > MISFIT_NOTE:
-        notes.append(f"{STRUCTURES[t1].name} leaves residuals {spread:.0f}x the lines' random "
+        notes.append(f"{cands[t1].name} leaves residuals {spread:.0f}x the lines' random "
                      f"errors (R² {fits[t1].r2:.4f}): x_t/x_c holds dynamics it does not "
                      "model (a specimen, another controller), and its parameters describe "
                      "the loop only roughly")
@@ -392,14 +431,15 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
         margin = min((a - crit[best] for k, a in crit.items() if k != best), default=0.0)
         dc_text = f"DC gain {g:.3f} ± {sg:.2g}" if measured else "DC gain not measured"
         why = (f"a valve-integrator loop: {dc_text}; best structure "
-               f"{STRUCTURES[best].name}" +
+               f"{cands[best].name}" +
                ("" if margin > AIC_MARGIN else
                 f" (the record hardly tells the structures apart: AIC within {margin:.0f})"))
     else:
-        fit_note = (f"; {STRUCTURES[best].name} fits (R² {fits[best].r2:.4f})"
-                    if not STRUCTURES[best].type1 else "; no candidate structure fits")
+        fit_note = (f"; {cands[best].name} fits (R² {fits[best].r2:.4f})"
+                    if not cands[best].type1 else "; no candidate structure fits")
         why = "x_t/x_c does not fit eq 6.15: " + "; ".join(reasons) + fit_note
-    return LoopStructure(fits, crit, best, dc, ok, why, delay_dt is not None, tuple(notes))
+    return LoopStructure(fits, crit, best, dc, ok, why, delay_dt is not None, tuple(notes),
+                         dict(cands))
 
 
 def fit_delay_held(data: LoopData, prior: Prior, delay_dt: float) -> Fit:
@@ -408,9 +448,9 @@ def fit_delay_held(data: LoopData, prior: Prior, delay_dt: float) -> Fit:
     structures apart (their AICs within `AIC_MARGIN`), where a delay fitted jointly
     would trade against the loop's own lag."""
     ol = prior.open_loop
-    h = h_open_loop_lag(data.f, ol.f_o, ol.xi_o, ol.k_o, prior.tau)
+    st = prior.declared or STRUCTURES["eq_6_15_lag"]
+    h = st.h(data.f, ol.f_o, ol.xi_o, ol.k_o, prior.tau)
     s = 1j * TWO_PI * data.f
-    st = STRUCTURES["eq_6_15_lag"]
     x0 = _scan_delay(st, data, [ol.f_o, ol.xi_o, ol.k_o, prior.tau], delay_dt)
 
     def fun(x):

@@ -31,7 +31,7 @@ from vtable.errors import VtableError
 from vtable.ident import channels
 from vtable.ident.fits import Fit, fit_open_loop, fit_table_sdof
 from vtable.ident.frames import MIN_AVERAGES, frame_for_averages, frame_for_mode
-from vtable.ident.loop import STRUCTURES, LoopData, Prior, compare_structures
+from vtable.ident.loop import STRUCTURES, LoopData, compare_structures, prior_of
 from vtable.ident.result import Identification
 from vtable.ident.structure import (
     ModalEstimate,
@@ -180,12 +180,14 @@ def _servo_loop(run: Run, spec, m_t: float, table: LabTable, out: Identification
             raise VtableError(f"{run.name}: {run.duration:.1f} s is too short for a transfer "
                               "function with 2 averages")
         tf = transfer_function(x_c, x_t, run.fs, n)
-        prior = Prior(table.open_loop(), tau, table.name)
-        ls = compare_structures(LoopData.from_tf(tf, band), prior)
+        ls = compare_structures(LoopData.from_tf(tf, band), prior_of(table))
         out.loop_structure = ls.to_json()
         if not ls.fits_eq_6_15:
             raise VtableError(ls.why + "; its eq 6.15 parameters would not be physical")
-        if tau > 0:  # the table's valve lag: eq 6.15 x 1/(1 + τs), τ fitted
+        if "declared" in ls.fits:  # the declared controller's terms held, the loop fitted
+            fit = ls.fits["declared"]
+            what = f"the declared {table.controller} controller's loop fit"
+        elif tau > 0:  # the table's valve lag: eq 6.15 x 1/(1 + τs), τ fitted
             fit = ls.fits["eq_6_15_lag"]
             what = f"{STRUCTURES['eq_6_15_lag'].name} fit"
         else:

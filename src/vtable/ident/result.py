@@ -108,7 +108,8 @@ def _structure(out: list[str], ls: dict[str, Any]) -> None:
     for key, c in ls["candidates"].items():
         if ls["fits_eq_6_15"] and key != ls["best"]:
             continue
-        if not ls["fits_eq_6_15"] and STRUCTURES[key].type1:
+        if not ls["fits_eq_6_15"] and c.get("type1", STRUCTURES.get(key) and
+                                            STRUCTURES[key].type1):
             out.append(f"      {c['name']}: ΔAIC {c['delta_aic']:+.0f} (R² {c['r2']:.4f}), "
                        "parameters not quoted")
             continue
