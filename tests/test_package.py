@@ -48,6 +48,18 @@ def test_wheel_contains_the_layout(wheel):
     assert not any(n.startswith(("controllers/", "viz/", "tests/")) for n in names)
 
 
+def test_wheel_holds_every_package(wheel):
+    """Every folder with an __init__.py under src/, controllers/ and viz/ is in the wheel
+    (a subpackage missing from pyproject's list broke `pip install .` once)."""
+    names = set(zipfile.ZipFile(wheel).namelist())
+    roots = {ROOT / "src" / "vtable": "vtable", ROOT / "controllers": "vtable/controllers",
+             ROOT / "viz": "vtable/viz"}
+    for root, inside in roots.items():
+        for init in root.rglob("__init__.py"):
+            rel = init.relative_to(root).as_posix()
+            assert f"{inside}/{rel}" in names, f"{inside}/{rel}"
+
+
 def test_normal_install_runs(wheel, tmp_path):
     target = tmp_path / "site"
     r = subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target",
