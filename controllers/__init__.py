@@ -26,7 +26,7 @@ def _table_stages(vt) -> list:
     """The table's own stages on H1-H3: its RC filter on the ΔP feedback (eq B.4), its
     servovalves' lag and its digital controller's terms (a lab table's)."""
     out = [(RC_FILTER, {"rc": vt.horizontal_servo.rc})] if vt.horizontal_servo.rc else []
-    out += [vt.control] if vt.control is not None else []
+    out += [vt.control.use] if vt.control is not None else []
     return out + ([(SPOOL_LAG, {"tau": vt.valve_lag})] if vt.valve_lag else [])
 
 

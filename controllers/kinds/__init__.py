@@ -10,7 +10,7 @@ import importlib.util
 import sys
 from pathlib import Path
 
-from vtable.controllers.kinds.base import ControllerKind
+from vtable.controllers.kinds.base import ControllerKind, ControlUse
 from vtable.errors import VtableError
 
 BUILT_IN = ("three_variable", "pid", "tvc")
@@ -77,4 +77,4 @@ def load_file(path: str | Path) -> list[str]:
     return added
 
 
-__all__ = ["BUILT_IN", "ControllerKind", "get", "load_file", "names", "register"]
+__all__ = ["BUILT_IN", "ControlUse", "ControllerKind", "get", "load_file", "names", "register"]

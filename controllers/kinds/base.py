@@ -17,9 +17,25 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from vtable.errors import VtableError
 from vtable.hydraulics.stage import Stage
+
+
+class ControlUse(NamedTuple):
+    """A declared controller's control stage in a table (`VirtualTable.control`): the
+    stage, its parameters, and the ones a diagnosis may refit (name -> (lower, upper)
+    factor of the declared value)."""
+
+    stage: Stage
+    params: dict[str, float]
+    calibrated: dict[str, tuple[float, float]]
+
+    @property
+    def use(self) -> tuple[Stage, dict[str, float]]:
+        """(stage, parameters), as an assembly's stage list holds it."""
+        return (self.stage, self.params)
 
 
 @dataclass(frozen=True)
@@ -68,9 +84,10 @@ class ControllerKind:
         if set(self.calibrated) - set(self.stage.params if self.stage else ()):
             raise VtableError(f"{where}: calibrated names an unknown stage parameter")
 
-    def stage_use(self, description) -> tuple[Stage, dict[str, float]] | None:
-        """(stage, its parameters) for a declared controller, None when it adds none."""
+    def stage_use(self, description) -> ControlUse | None:
+        """The stage with its parameters for a declared controller, None when it adds
+        none."""
         if self.stage is None:
             return None
         p = self.params(description)
-        return None if p is None else (self.stage, dict(p))
+        return None if p is None else ControlUse(self.stage, dict(p), dict(self.calibrated))

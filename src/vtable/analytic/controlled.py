@@ -53,7 +53,7 @@ def declared_loop(vt: VirtualTable):
         servo = dataclasses.replace(servo_from_open_loop(OpenLoop(f_o, xi_o, k_o), template),
                                     rc=0.0)
         stages = ([(SPOOL_LAG, {"tau": tau})] if tau > 0 else []) + \
-            ([vt.control] if vt.control is not None else [])
+            ([vt.control.use] if vt.control is not None else [])
         b = group_law(vt, "horizontal", servo, stages=stages).lumped("x").linear_blocks()
         s = 1j * TWO_PI * np.asarray(f_hz, dtype=float)
         eye = np.eye(b.A.shape[0])

@@ -12,6 +12,11 @@ The base parameters of a campaign (`base_params`):
   its mass (± `Calibration.mass`; a building's storeys
   each on their own; the frequencies are held, so the stiffnesses follow);
 - the platen's mass (± `Calibration.mass`);
+- a declared digital controller's terms its kind lets a diagnosis refit
+  (`vtable.controllers.kinds.ControllerKind.calibrated`: the feedforward gains, the
+  acceleration feedback), each within its factor bounds of the declared value (×/÷ 2)
+  with a log prior of half the wider side — a lab's drive may be scaled or its
+  feedforward tuned off the value it wrote down;
 - when the model lets the platen pitch: the platen's centre-of-mass height above the
   horizontal actuator line (anywhere from the line itself to `Calibration.com_height` ×
   the declared height; the report's models put it on the line, eqs 7.7, 8.16) and its
@@ -330,6 +335,22 @@ def _table_param(name: str, key: str, unit: str, declared: float, lo: float, hi:
     return BaseParam(key, unit, declared, lo, hi, log, prior, group, get, put)
 
 
+def _control_param(name: str, declared: float, lo: float, hi: float) -> BaseParam:
+    """A declared controller's stage parameter, declared ×(lo..hi) with a log prior of
+    half the wider side."""
+    key = f"control.{name}"
+
+    def get(ph: Physics) -> float:
+        return float(ph.table.get(key, declared))
+
+    def put(ph: Physics, v: float) -> Physics:
+        return dataclasses.replace(ph, table={**ph.table, key: v})
+
+    prior = max(math.log(hi), -math.log(lo)) / 2
+    return BaseParam(f"controller.{name}", "SI", declared, declared * lo, declared * hi, True,
+                     prior, "loop", get, put)
+
+
 def base_params(spec, vt: VirtualTable, cal: Calibration, *, pitch: bool,
                 loop_declared=None) -> list[BaseParam]:
     """The calibrated base of a campaign whose runs declare `spec` on table `vt`; `pitch`:
@@ -343,6 +364,11 @@ def base_params(spec, vt: VirtualTable, cal: Calibration, *, pitch: bool,
     out.append(_table_param("platen_mass", "table.platen_mass_kg", "kg", m0,
                             m0 * (1 - cal.mass), m0 * (1 + cal.mass), False,
                             m0 * cal.mass / 2 or None, "table", vt))
+    if vt.control is not None:  # the declared controller's terms a lab may have off
+        for name, (lo, hi) in vt.control.calibrated.items():
+            v0 = vt.control.params[name]
+            if v0 > 0:
+                out.append(_control_param(name, v0, lo, hi))
     if pitch:
         h0 = _table_value("com_height", vt)
         if h0 > 0:

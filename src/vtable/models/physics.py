@@ -26,7 +26,8 @@ class Physics:
     specimen: Specimen
     effects: dict[str, dict[str, float]] = field(default_factory=dict)
     #: calibrated table values replacing the declared ones (SI): platen_mass (kg),
-    #: com_height (m above the actuator line), pitch_inertia (kg m²)
+    #: com_height (m above the actuator line), pitch_inertia (kg m²), and the declared
+    #: controller's stage parameters as "control.NAME" (`ControlUse.calibrated`)
     table: dict[str, float] = field(default_factory=dict)
     #: (effect, parameter) -> the value a table-dependent default was filled with (the
     #: EERC table's): still that value when applied, it is the run's table's default
@@ -58,6 +59,10 @@ class Physics:
         if not self.table:
             return vt
         t = self.table
+        ctl = {k.removeprefix("control."): v for k, v in t.items() if k.startswith("control.")}
+        if ctl and vt.control is not None:
+            vt = dataclasses.replace(vt, control=vt.control._replace(
+                params={**vt.control.params, **ctl}))
         g = vt.table.geometry
         g = dataclasses.replace(g, weight=t.get("platen_mass", g.mass) * G,
                                 pitch_inertia=t.get("pitch_inertia", g.pitch_inertia))

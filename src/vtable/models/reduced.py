@@ -86,8 +86,9 @@ class ReducedAssembly:
         if vt.valve_lag:  # a lab table's own servovalve lag
             self.add_stage(SPOOL_LAG, tau=vt.valve_lag)
         if vt.control is not None:  # a digital controller's own terms (RK4: |λ| h < 2.8)
-            self.add_stage(vt.control[0], **vt.control[1])
-            rate = group_law(vt, "horizontal", stages=[vt.control]).lumped("x").fastest_rate()
+            self.add_stage(vt.control.stage, **vt.control.params)
+            rate = group_law(vt, "horizontal", stages=[vt.control.use]).lumped("x") \
+                .fastest_rate()
             self.max_step = min(self.max_step, 2.0 / rate)
         if vt.horizontal_servo.damping:  # the platen's viscous damping (a lab's table)
             self.add_spring("x", None, 0.0, vt.horizontal_servo.damping * self.n_actuators)

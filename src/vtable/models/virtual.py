@@ -59,8 +59,8 @@ class VirtualAssembly:
         if vt.valve_lag:  # a lab table's own servovalve lag
             self.add_stage(SPOOL_LAG, tau=vt.valve_lag)
         if vt.control is not None:  # a digital controller's own terms (ω·dt ≤ 1)
-            self.add_stage(vt.control[0], **vt.control[1])
-            rate = group_law(vt, "horizontal", stages=[vt.control]).fastest_rate()
+            self.add_stage(vt.control.stage, **vt.control.params)
+            rate = group_law(vt, "horizontal", stages=[vt.control.use]).fastest_rate()
             self.max_step = min(self.max_step, 1.0 / rate)
 
     def _stiff(self, mass: float, stiffness: float) -> None:
