@@ -29,7 +29,8 @@ METRIC_FILE = {"in": "mm", "in/s": "mm/s", "kip": "kN", "g": "g"}
 #: display-only units (not accepted in files): SI factor of each
 _SHOWN_ONLY = {"mil": units.to_si(1e-3, "in"), "kN/mm": 1e6, "kN/m": 1e3, "kN-s/m": 1e3,
                "kN-m/rad": 1e3, "kN-m-s/rad": 1e3, "1/mm": 1e3}
-_IMPERIAL = {"in", "ft", "lb", "kip", "psi", "in/s", "in/s2", "g", "kip-in", "kip-ft"}
+#: g is neither: the report's accelerations and a metric lab's (LNEC's) are both in g
+_IMPERIAL = {"in", "ft", "lb", "kip", "psi", "in/s", "in/s2", "kip-in", "kip-ft"}
 _METRIC = {"m", "mm", "cm", "N", "kN", "kg", "Pa", "kPa", "MPa", "m/s", "mm/s", "cm/s",
            "m/s2", "mm/s2", "cm/s2", "N-m"}
 
