@@ -223,3 +223,29 @@ def test_lnecs_measured_run_is_shown_in_its_units(tmp_path, capsys):
     hs = json.loads((tmp_path / "i.json").read_text())["runs"][0]["horizontal_spring"]
     ks = ", ".join(f"{k * KN_PER_KIP / MM_PER_IN:.3g}" for k in hs["k_h_kip_per_in"])
     assert f"k_h {ks} kN/mm" in out and not re.search(r"\bkip\b", out)
+
+
+def test_the_diagnosis_reports_axes_follow_the_runs_units(tmp_path, capsys):
+    """The HTML report's x_t/x_c overlays: a metric run written by `simulate` (mm, g, kN)
+    per mm in its own units; the amplitude scale is the SI ratio in those units."""
+    from types import SimpleNamespace
+
+    from vtable.ident.tf import transfer_function
+    from vtable.viz.diagnosis_report import tf_overlay
+
+    _cli(capsys, "simulate", "--table", "lnec-st1d", "--duration", "4", "--out", tmp_path / "m")
+    run = read_run(tmp_path / "m.toml")
+    stage = SimpleNamespace(predictions={run.name: run.channels})  # the model = the data
+    d = SimpleNamespace(runs=[run], stages=[stage, stage])
+    for group, label, scale in (("table acceleration", "g/mm", 1 / 9.80665 / 1000),
+                                ("actuator force", "kN/mm", 1e-3 / 1000),
+                                ("table displacement", "mm/mm", 1.0)):
+        fig = tf_overlay(d, group)
+        assert fig.axes[0].get_ylabel() == f"amplitude ({label})"
+        y = {"table acceleration": "avg_hacc", "actuator force": "h1_force",
+             "table displacement": "avg_hdisp"}[group]
+        line = fig.axes[0].get_lines()[0]
+        n = min(1024, 2 ** int(np.log2(len(run.time) / 2)))
+        tm = transfer_function(run.channel("h_span"), run.channel(y), run.fs, n)
+        sel = (tm.f > 0.2) & (tm.f <= 30)
+        np.testing.assert_allclose(line.get_ydata(), scale * np.abs(tm.H[sel]), rtol=1e-12)
