@@ -16,7 +16,7 @@ from typing import Any
 import matplotlib.pyplot as plt
 import numpy as np
 
-from vtable import units
+from vtable import display
 from vtable.diagnose.groups import GROUP_UNITS, group_prediction, group_signal, short
 from vtable.fileio import write_text
 from vtable.ident.tf import transfer_function
@@ -61,8 +61,9 @@ def tf_overlay(d: Any, group: str):
     if y is None:
         return None
     n = min(1024, 2 ** int(np.log2(len(x) / 2)))
-    unit = GROUP_UNITS[group]
-    scale = units.from_si(1.0, unit) / units.from_si(1.0, "in")  # SI ratio -> unit per inch
+    unit, per = (display.unit_for(u, display.run_family(run), run.units.values())
+                 for u in (GROUP_UNITS[group], "in"))  # the run's own units
+    scale = display.from_si(1.0, unit) / display.from_si(1.0, per)  # SI ratio -> unit/per
     fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(6.5, 4.5))
     tm = transfer_function(x, y, run.fs, n)
     sel = (tm.f > 0.2) & (tm.f <= 30)
@@ -74,7 +75,7 @@ def tf_overlay(d: Any, group: str):
         tp = transfer_function(x, yhat, run.fs, n)
         a1.plot(tp.f[sel], scale * np.abs(tp.H[sel]), color=style, ls="--", label=label)
         a2.plot(tp.f[sel], np.degrees(np.angle(tp.H[sel])), color=style, ls="--")
-    a1.set_ylabel(f"amplitude ({PRETTY.get(unit, unit)}/in)")
+    a1.set_ylabel(f"amplitude ({PRETTY.get(unit, unit)}/{per})")
     a2.set_ylabel("phase (deg)")
     a2.set_xlabel("frequency (Hz)")
     a1.set_title(f"{group} / command h_span, {short(run.name)}")

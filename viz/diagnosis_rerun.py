@@ -23,7 +23,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 from rerun.chunk import RrdReader
 
-from vtable import units
+from vtable import display, units
 from vtable.diagnose.groups import (
     GROUP_UNITS,
     group_prediction,
@@ -77,7 +77,8 @@ def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis")
                 y = group_signal(run, g)
                 if y is None:
                     continue
-                unit = GROUP_UNITS[g]
+                unit = display.unit_for(GROUP_UNITS[g], display.run_family(run),
+                                        run.units.values())  # the run's own units
                 shown = PRETTY.get(unit, unit)
                 base = f"runs/{name}/{group_key(g)}"
                 _series(rec, f"{base}/measured", times, units.from_si(y, unit),

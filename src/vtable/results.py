@@ -207,13 +207,17 @@ class CampaignIdentification:
 
 
 # ---- the virtual table -------------------------------------------------------------------
-def _displayed(peaks: dict[str, dict[str, Any]], fam: str) -> dict[str, dict[str, Any]]:
-    """Peaks (in their report units) in the units of the display family `fam`."""
+def _displayed(peaks: dict[str, dict[str, Any]], fam: str,
+               declared: dict[str, str] | None = None) -> dict[str, dict[str, Any]]:
+    """Peaks (in their report units) in the units of the display family `fam`, each
+    channel in its run file's unit (`declared`) when that is of the family."""
     if fam != "metric":
         return peaks
     out = {}
     for k, v in peaks.items():
-        value, unit = display.shown(units.to_si(v["peak"], v["unit"]), v["unit"], fam)
+        own = (declared or {}).get(k)
+        value, unit = display.shown(units.to_si(v["peak"], v["unit"]), v["unit"], fam,
+                                    [own] if own else ())
         out[k] = {"peak": float(value), "unit": unit}
     return out
 
@@ -237,6 +241,8 @@ class SimulationSummary:
     duration_s: float
     chosen: list[str] = field(default_factory=list)  # the defaults fitted to the table
     display: str = "imperial"  # the units the report shows ("metric": mm, m/s², kN)
+    limits_shown: list[str] | None = None  # the exceedances in the `display` units
+    shown_units: dict[str, str] = field(default_factory=dict)  # the run file's units
 
     def __post_init__(self) -> None:
         self.files = [Path(f) for f in self.files]
@@ -251,8 +257,9 @@ class SimulationSummary:
         out = [f"{self.specimen}: {self.command}, {self.duration_s:.2f} s"]
         out += [f"  {c}" for c in self.chosen]
         out += [f"  note: {n}" for n in self.notes]
-        out += _peak_lines(_displayed(self.peaks, self.display))
-        out += [f"  limit: {e}" for e in self.exceedances]
+        out += _peak_lines(_displayed(self.peaks, self.display, self.shown_units))
+        limits = self.exceedances if self.limits_shown is None else self.limits_shown
+        out += [f"  limit: {e}" for e in limits]
         if self.files:
             out.append("  wrote " + ", ".join(_names(self.files)))
         return "\n".join(out)

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from typing import Any
 
-from vtable import units
 from vtable.diagnose.groups import short
 from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.statistics import Comparison
@@ -14,9 +13,9 @@ from vtable.display import amplitude
 
 
 def mils(x_m: float) -> str:
-    """A command amplitude in metres as mils (1 mil = 0.001 in = 25.4 µm)."""
-    v = 1000 * units.from_si(x_m, "in")
-    return f"{v:.0f}" if v >= 10 else f"{v:.2g}"
+    """A command amplitude in metres as mils (1 mil = 0.001 in = 25.4 µm), the number
+    only (`vtable.display.amplitude` gives it with its unit, mil or mm)."""
+    return amplitude(x_m).removesuffix(" mil")
 
 
 def amplitude_trend(cmp: Comparison, group: str | None = None) -> str:

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from vtable import display
 from vtable.diagnose.calibration import WIDEN, Calibration, bounding_setting
 from vtable.diagnose.model import AT_BOUND, SCREEN, TableModel
 from vtable.diagnose.noise import UNEXPLAINED_RULE
@@ -28,6 +29,7 @@ from vtable.effects.registry import get as effect
 from vtable.jsonable import jsonable
 from vtable.models.physics import Physics
 from vtable.runs.model import Run
+from vtable.units import to_si
 
 ERROR_DEFINITION = ("mean over runs and channel groups of the normalised RMS error "
                     "||model - measured|| / ||measured|| on the held-out last 40 % of every "
@@ -271,12 +273,20 @@ def evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
     g = c.gain
     removed = f"{max(g.share, 0.0):.0%}" if g is not None and np.isfinite(g.share) else "all"
     z = f", {g.z:.1f} standard errors of the noise" if g is not None else ""
-    params = ", ".join(f"{k} = {v:.3g} {p.unit}" for (k, v), p in
-                       zip(c.params.items(), effect(c.effect).params, strict=True))
+    params = params_text(c.effect, c.params, cmp.display, ".3g")
     return (f"residual concentrated in {where}" + (f" at {band[0]}" if band else "")
             + f"; adding {c.effect} removes {removed} of its systematic part (held-out error "
               f"{err:.2%} -> {c.error_after:.2%}{z}); fitted {params}")
 
+
+
+def params_text(name: str, params: dict[str, float], fam: str, spec: str = ".4g") -> str:
+    """An effect's fitted parameters (in its units) as the user reads them: 'friction =
+    2.98 kip' for a run in the report's units, '13.3 kN' for a metric one
+    (`vtable.display`)."""
+    units_of = {p.name: p.unit for p in effect(name).params}
+    return ", ".join(f"{k} = {display.quantity(to_si(v, units_of[k]), units_of[k], fam, spec)}"
+                     if k in units_of else f"{k} = {v:{spec}}" for k, v in params.items())
 
 
 def localise(d: Diagnosis) -> str:
@@ -418,6 +428,7 @@ class ModelComparison:
     flags: list[str] = field(default_factory=list)
     bands: dict[str, dict[str, float]] = field(default_factory=dict)
     files: list[Path] = field(default_factory=list)
+    display: str = "imperial"  # the runs' unit family (`vtable.display`), for the text
 
     @classmethod
     def of(cls, m: TableModel) -> ModelComparison:
@@ -427,7 +438,7 @@ class ModelComparison:
         return cls(list(m.effects), m.physics_.effects,
                    {"f_o_hz": ol.f_o, "xi_o": ol.xi_o, "k_o_per_s": ol.k_o}, c.error,
                    c.noise_floor, c.per_run, localisation_text(c), unexplained(c),
-                   m.notes_, m.base_, m.flags_, c.bands)
+                   m.notes_, m.base_, m.flags_, c.bands, display=c.display)
 
     def to_json(self) -> dict[str, Any]:
         """The JSON `vtable compare --json` writes."""
@@ -449,7 +460,7 @@ class ModelComparison:
         out.append(f"  base loop: f_o {b['f_o_hz']:.2f} Hz, ξ_o {b['xi_o']:.3f}, "
                    f"k_o {b['k_o_per_s']:.2f}")
         for e, p in self.params.items():
-            out.append(f"  {e}: " + ", ".join(f"{k} = {v:.4g}" for k, v in p.items()))
+            out.append(f"  {e}: " + params_text(e, p, self.display))
         out += [f"  flag: {f}" for f in self.flags]
         out += base_lines(self.base_fit, indent="  ")
         out.append(f"  held-out error {self.error:.2%}, noise floor {self.noise_floor:.2%}")

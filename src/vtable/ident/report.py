@@ -27,6 +27,7 @@ import numpy as np
 
 from vtable import units
 from vtable.analytic import closed_forms
+from vtable.display import run_family
 from vtable.errors import VtableError
 from vtable.ident import channels
 from vtable.ident.fits import Fit, fit_open_loop, fit_table_sdof
@@ -111,7 +112,7 @@ def identify_run(run: Run) -> Identification:
         JSON record, ``report()`` for the printed text.
     """
     out = Identification(run=run.name, fs_hz=run.fs, duration_s=run.duration,
-                         reports=list(run.reports))
+                         reports=list(run.reports), display=run_family(run))
     notes = out.notes
     spec = run.specimen()
     if run.declared.specimen is None:

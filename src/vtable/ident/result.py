@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from vtable import display, units
 from vtable.ident.loop import STRUCTURES
 from vtable.ident.validity import Flag, marker
 
@@ -41,11 +42,13 @@ class Identification:
     springs_from_frequencies: dict[str, Any] | None = None
     rocking_impedance: dict[str, Any] | None = None
     hysteresis: dict[str, Any] | None = None
+    display: str = field(default="imperial", metadata={"text only": True})  # `vtable.display`
 
     def to_json(self) -> dict[str, Any]:
-        """The JSON record (the sections made, in this order)."""
+        """The JSON record (the sections made, in this order; `display`, the units the
+        text shows, is not in it)."""
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
-                if getattr(self, f.name) is not None}
+                if getattr(self, f.name) is not None and not f.metadata.get("text only")}
 
     @classmethod
     def from_json(cls, d: dict[str, Any]) -> Identification:
@@ -54,7 +57,7 @@ class Identification:
 
     def report(self) -> str:
         """The printed identification (`identification_text`)."""
-        return identification_text(self.to_json())
+        return identification_text(self.to_json(), self.display)
 
 
 def _warn_lines(out: list[str], flags: list[dict[str, Any]], indent: str = "      ") -> None:
@@ -117,9 +120,17 @@ def _structure(out: list[str], ls: dict[str, Any]) -> None:
         out.append(f"      {c['name']}: {ps} (ΔAIC {c['delta_aic']:+.0f}, R² {c['r2']:.4f})")
 
 
-def identification_text(d: dict[str, Any]) -> str:
+def _in(values, report_unit: str, fam: str, spec: str = ".3g") -> tuple[str, str]:
+    """Values given in `report_unit` (the JSON's) as the text shows them (`vtable.display`:
+    the report's units, or metric for a metric run): the numbers joined and the unit."""
+    si = [units.to_si(v, report_unit) for v in np.atleast_1d(values)]
+    unit = display.unit_for(report_unit, fam)
+    return ", ".join(f"{display.from_si(v, unit):{spec}}" for v in si), display.label(unit)
+
+
+def identification_text(d: dict[str, Any], fam: str = "imperial") -> str:
     """The identification of one run (`Identification.to_json()`) as printed text, each
-    number with its flags (⚠)."""
+    number with its flags (⚠); its stiffnesses and dampings in the units of `fam`."""
     out: list[str] = []
     out.append(f"{d['run']}: {d['duration_s']:.1f} s at {d['fs_hz']:.0f} Hz")
     for r in d["reports"]:
@@ -147,12 +158,11 @@ def identification_text(d: dict[str, Any]) -> str:
         _warn_lines(out, fl)
         hs = d.get("horizontal_spring")
         if hs:
-            ks = ", ".join(f"{k:.3g}" for k in hs["k_h_kip_per_in"])
-            cs = ", ".join(f"{c:.3g}" for c in hs["c_h_lb_s_per_in"])
+            ks, ku = _in(hs["k_h_kip_per_in"], "kip/in", fam)
+            cs, cu = _in(hs["c_h_lb_s_per_in"], "lb-s/in", fam)
             fs = ", ".join(f"{f:g}" for f in hs["f_hz"])
-            out.append(f"  horizontal spring (eqs 5.15-5.16) at {fs} Hz: k_h {ks} kip/in, c_h {cs} "
-                       "lb-s/in"
-                       + (" ⚠ from a flagged fit" if hs["flags"] else ""))
+            out.append(f"  horizontal spring (eqs 5.15-5.16) at {fs} Hz: k_h {ks} {ku}, c_h {cs} "
+                       f"{cu}" + (" ⚠ from a flagged fit" if hs["flags"] else ""))
     if "table_sdof" in d:
         o = d["table_sdof"]
         p, fl = o["params"], o["flags"]
@@ -180,9 +190,12 @@ def identification_text(d: dict[str, Any]) -> str:
     if "springs_from_frequencies" in d:
         s = d["springs_from_frequencies"]
         fl, e = s["flags"], s["stderr"]
-        out.append(f"  springs (eqs 5.4, 5.5): k_r {s['k_r_lb_in_per_rad']:.3g} ± "
-                   f"{e['k_r_lb_in_per_rad']:.2g}{_mark(fl, 'k_r')} lb-in/rad, k_h "
-                   f"{s['k_h_kip_per_in']:.3g} ± {e['k_h_kip_per_in']:.2g}{_mark(fl, 'k_h')} kip/in"
+        kr, kru = _in(s["k_r_lb_in_per_rad"], "lb-in/rad", fam)
+        kh, khu = _in(s["k_h_kip_per_in"], "kip/in", fam)
+        ekr, ekh = (_in(e[k], u, fam, ".2g")[0] for k, u in (("k_r_lb_in_per_rad", "lb-in/rad"),
+                                                             ("k_h_kip_per_in", "kip/in")))
+        out.append(f"  springs (eqs 5.4, 5.5): k_r {kr} ± {ekr}{_mark(fl, 'k_r')} {kru}, k_h "
+                   f"{kh} ± {ekh}{_mark(fl, 'k_h')} {khu}"
                    + (" ⚠ from flagged frequencies" if any(f["source"] for f in fl) else ""))
         _warn_lines(out, s["flags"])
     if "rocking_impedance" in d:
@@ -194,14 +207,16 @@ def identification_text(d: dict[str, Any]) -> str:
                 out.append(f"    {k:<20} skipped: {g['skipped'][k]}")
                 continue
             fl = g[k]["flags"]
-            out.append(f"    {k:<20} k_r {g[k]['k_r_lb_in_per_rad']:.3g}{_mark(fl, 'k_r')} "
-                       f"lb-in/rad, c_r {g[k]['c_r_lb_in_s_per_rad']:.3g}{_mark(fl, 'c_r')} "
-                       "lb-in-s/rad "
+            kr, kru = _in(g[k]["k_r_lb_in_per_rad"], "lb-in/rad", fam)
+            cr, cru = _in(g[k]["c_r_lb_in_s_per_rad"], "lb-in-s/rad", fam)
+            out.append(f"    {k:<20} k_r {kr}{_mark(fl, 'k_r')} {kru}, c_r {cr}"
+                       f"{_mark(fl, 'c_r')} {cru} "
                        f"(γ² {g[k]['coherence']:.3f}, {int(g[k]['averages'])} avg)")
             _warn_lines(out, fl, "        ")
     if "hysteresis" in d:
         h = d["hysteresis"]
-        out.append(f"  hysteresis (eqs 5.12-5.13): k_r {h['k_r_lb_in_per_rad']:.3g} lb-in/rad "
+        kr, kru = _in(h["k_r_lb_in_per_rad"], "lb-in/rad", fam)
+        out.append(f"  hysteresis (eqs 5.12-5.13): k_r {kr} {kru} "
                    f"(R² {h['r2']:.3f}){' ⚠' if h['flags'] else ''}, ξ_v "
                    f"{100 * h['damping_ratio']:.2f} %{' ⚠' if h['loop_flags'] else ''}")
         _warn_lines(out, h["loop_flags"])

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from vtable import fileio
+from vtable import display, fileio
 from vtable import units as un
 from vtable.errors import VtableError
 from vtable.runs.channels import FORMAT_UNITS
@@ -18,11 +18,15 @@ from vtable.runs.paths import run_paths
 
 
 def file_meta(run: Run) -> dict[str, Any]:
-    """The run's metadata as a file holds it: the format key first, [units] only for
-    channels not in the format's units."""
+    """The run's metadata as a file holds it: the format key first; [units] for the
+    channels not in the format's units, or, for a metric run (`display.run_family`: a
+    simulated run on a metric table is written in mm, mm/s, g, kN), for every channel: its
+    file says its units in full, as a metric lab's do."""
     meta = {k: v for k, v in run.meta.items() if k != "format"}
+    every = display.run_family(run) == "metric"
     overrides = {h: u for h, u in run.units.items() if h in run.channels
-                 and FORMAT_UNITS.get(h) != u and not (h not in FORMAT_UNITS and u == "1")}
+                 and (every or FORMAT_UNITS.get(h) != u)
+                 and not (h not in FORMAT_UNITS and u == "1")}
     if overrides:
         meta["units"] = overrides
     else:

@@ -10,12 +10,14 @@ from typing import Any
 
 import numpy as np
 
-from vtable import units
+from vtable import display, units
 from vtable.analytic import configs
+from vtable.display import table_family
 from vtable.effects.registry import parse_spec
 from vtable.mjcf.export import export_mjcf as export
 from vtable.params.virtual import virtual_table_for
 from vtable.results import Demo, DemoSimulation, SimulationSummary, Written
+from vtable.runs import write_run
 from vtable.signals import make_command
 from vtable.sim.experiment import load_specimen, load_table, run_experiment
 from vtable.studies import response_spectrum
@@ -23,15 +25,28 @@ from vtable.units import to_si
 from vtable.verbs.analytic import margins_dict, modes_dict
 from vtable.viz.rerun_scene import log_run
 
+#: the channels of the peak table, each in its report unit (the JSON's)
+PEAK_CHANNELS = [("h_span", "in"), ("avg_hdisp", "in"), ("pitch_disp", "rad"),
+                 ("pitch_acc", "rad/s2"), ("acc_n_ne", "g"), ("pot_n_sw", "in"),
+                 ("h1_force", "kip"), ("v1_force", "kip"), ("p1_stab", "kip")]
 
-def simulation_summary(exp) -> dict[str, Any]:
-    """Peak table of a virtual-table experiment (report units)."""
-    ch = {k: exp.channel(k) for k in exp.run.channels}
-    keys = [("h_span", "in"), ("avg_hdisp", "in"), ("pitch_disp", "rad"), ("pitch_acc", "rad/s2"),
-            ("acc_n_ne", "g"), ("pot_n_sw", "in"), ("h1_force", "kip"), ("v1_force", "kip"),
-            ("p1_stab", "kip")]
-    peaks = {k: {"peak": float(np.max(np.abs(ch[k]))), "unit": u} for k, u in keys if k in ch}
+
+def exceedance_text(e, fam: str) -> str:
+    """A limit exceedance as the report shows it, in the table's units (`vtable.display`)."""
+    unit = {"stroke": "in", "velocity": "in/s", "force": "kip"}[e.quantity]
+    return (f"{e.actuator} {e.quantity} {display.quantity(e.peak, unit, fam)} exceeds "
+            f"{display.quantity(e.limit, unit, fam)} from t = {e.first_time:.3f} s")
+
+
+def simulation_summary(exp, fam: str = "imperial") -> dict[str, Any]:
+    """Peak table of a virtual-table experiment (report units, as the JSON holds it), the
+    limits exceeded (in the units of `fam`), files and notes."""
+    ch = exp.run.channels
+    peaks = {k: {"peak": float(units.from_si(np.max(np.abs(ch[k])), u)), "unit": u}
+             for k, u in PEAK_CHANNELS if k in ch}
     return {"peaks": peaks, "exceedances": [str(e) for e in exp.result.exceedances],
+            "limits_shown": [exceedance_text(e, fam) for e in exp.result.exceedances],
+            "shown_units": {k: exp.run.units[k] for k in peaks},
             "files": [str(f) for f in exp.files], "notes": list(exp.notes)}
 
 
@@ -47,16 +62,10 @@ LIMIT_SHARE = 0.8
 STROKE_SHARE = 0.5
 
 
-def table_family(lab) -> str:
-    """The units a table's quantities are shown in: the report's for the EERC table,
-    metric for a table described in SI (the presets other than eerc)."""
-    return "imperial" if lab.name == "eerc" else "metric"
-
-
 def _weight_text(mass_kg: float, fam: str) -> str:
     if fam == "metric":
-        return f"{mass_kg:.0f} kg"
-    return f"{units.from_si(mass_kg * units.G, 'kip'):.1f} kip"
+        return display.quantity(mass_kg, "kg", fam, ".0f")
+    return display.quantity(mass_kg * units.G, "kip", fam, ".1f")
 
 
 def default_specimen(lab, fam: str) -> tuple[str, str]:
@@ -105,7 +114,7 @@ def fit_peak(lab, kind: str, make, fam: str) -> tuple[Any, str]:
     peak_in *= scale
     cmd = make(peak_in)
     share = STROKE_SHARE if limit == "stroke" else LIMIT_SHARE
-    shown = f"{peak_in * 25.4:.3g} mm" if fam == "metric" else f"{peak_in:.3g} in"
+    shown = display.quantity(units.to_si(peak_in, "in"), "in", fam)
     return cmd, (f"peak {shown}: {share:.0%} of {lab.name}'s {limit} limit "
                  f"(--peak sets it, in inches)")
 
@@ -147,10 +156,14 @@ def simulate(specimen: str | None = None, kind: str = "random", *,
         chosen.append(why)
     else:
         cmd = make(peak)
-    exp = run_experiment(spec, cmd, vt=vt, valve=valve, out=out, effects=eff)
+    exp = run_experiment(spec, cmd, vt=vt, valve=valve, effects=eff)
+    exp.run.units = display.file_units(exp.run.units, fam)  # a metric table's: mm, g, kN
+    if out is not None:
+        exp.run.name = str(out)
+        exp.files += list(write_run(exp.run, out))
     if rerun is not None:
         exp.files.append(log_run(exp.run, rerun, exaggeration=exaggerate))
-    summary = simulation_summary(exp)
+    summary = simulation_summary(exp, fam)
     summary.update({"command": cmd.name, "specimen": spec.title,
                     "duration_s": float(exp.result.t[-1] - exp.result.t[0]),
                     "chosen": [c for c in chosen if c], "display": fam})
@@ -200,6 +213,8 @@ def _demo_simulation(out: str) -> DemoSimulation:
     ratio = float(response_spectrum(a_eff, dt, periods, 0.05).psa[0]
                   / response_spectrum(res.command_acc, dt, periods, 0.05).psa[0])
     summary = simulation_summary(exp)
+    for k in ("limits_shown", "shown_units"):  # the demo's run is the EERC table's: in, kip
+        summary.pop(k)
     summary.update({
         "command": cmd.name, "duration_s": float(res.t[-1] - res.t[0]),
         "peak_x_t_in": float(np.max(np.abs(x_t)) / to_si(1, "in")),
