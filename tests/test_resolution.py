@@ -74,15 +74,17 @@ def test_a_fitted_value_far_from_its_default_must_buy_that_distance():
     (what, z), = implausibility("force_feedback_filter", far.effects["force_feedback_filter"])
     assert z == pytest.approx(math.log(30) / math.log(3), rel=1e-9)
     assert "30 x its default 0.01" in what and "Table B.5" in what
-    g = Gain(e2_current=1.2e-3, e2_candidate=3e-4, f2=1e-4, se=1e-6)  # 1 % noise
+    # 1 % noise; the current model's systematic residual 1.1e-3, the candidate removes 55 %
+    g = Gain(e2_current=1.2e-3, e2_candidate=5.95e-4, f2=1e-4, se=1e-6)
     cost = prior_cost(g, far, "force_feedback_filter")
-    assert cost == pytest.approx(z * z * 1e-4, rel=1e-9)  # f² > r²: one σ costs f²
+    assert cost == pytest.approx(z * z * 0.05 * 1.1e-3, rel=1e-9)  # 48 % of the residual
     assert failing(g) == []  # without the prior the gain would count
     fails = failing(g, far, "force_feedback_filter")
     assert fails and "distance from their defaults" in fails[-1] and "rc 0.3 s" in fails[-1]
-    # a factor 3 (one σ) costs f² only: the same gain buys it
+    assert "needs 20%" in fails[0]  # 55 % - 48 % charged: 7 % of the residual is left
+    # a factor 3 (one σ) costs 5 % of the residual only: the same gain buys it
     near = _model({"force_feedback_filter": {"rc": 0.03}})
-    assert prior_cost(g, near, "force_feedback_filter") == pytest.approx(1e-4, rel=1e-9)
+    assert prior_cost(g, near, "force_feedback_filter") == pytest.approx(5.5e-5, rel=1e-9)
     assert failing(g, near, "force_feedback_filter") == []
     # at its default nothing is charged
     assert prior_cost(g, _model({"force_feedback_filter": {}}), "force_feedback_filter") == 0

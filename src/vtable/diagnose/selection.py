@@ -6,9 +6,14 @@ sensor noise and a systematic error add (e² = mean over runs and channel groups
 squared NRMS error; the noise alone costs f², the current model's systematic residual is
 e² - f²; `statistics.held_out_gain`). The candidate's e² is first charged its parameters'
 implausibility (`prior_cost`: each fitted parameter's distance from its declared default,
-in units of `PLAUSIBLE`, squared, times max(f², r²)), so that a value far outside its
-physical range buys that distance with evidence (a Gaussian prior on the log of the
-parameter, as the calibration's priors on the base: `vtable.diagnose.calibration`). A
+in units of `PLAUSIBLE`, squared, times `PRIOR_SHARE` of the current model's systematic
+residual), so that a value far outside its physical range buys that distance with evidence
+(a Gaussian prior on the log of the parameter, as the calibration's priors on the base:
+`vtable.diagnose.calibration`). It is charged against the systematic residual, not the
+noise: a patch of a model-form difference is systematic too, and stands any number of
+standard errors above the noise; what it cannot do is explain most of the residual with a
+value 30 times its physical one (at 3 σ, 48 % of the residual is charged, so it must remove
+68 % to meet criterion 2). A
 candidate is added only if its gain e²_current - e²_candidate, so charged,
 
 1. exceeds `Z_NOISE` (5) standard errors of what the held-out noise produces between the two
@@ -47,16 +52,19 @@ MIN_SHARE = 0.2  # ... remove 20 % of the current model's systematic residual (s
 #: reduced model with the candidate in (`resolution.resolution`)
 NOISE_SHARE = 0.05
 #: an effect parameter's prior width: a factor of 3 from its default on the log scale (a
-#: quarter of its range for a linear one) is one σ, and costs max(f², r²) on the e² scale
+#: quarter of its range for a linear one) is one σ ...
 PLAUSIBLE = 3.0
+#: ... and costs 5 % of the current model's systematic residual (e² - f²) on the e² scale
+PRIOR_SHARE = 0.05
 SELECTION = (f"an effect is added when, on the held-out last 40 % of every run and on the "
              f"scale where sensor noise and a systematic error add (the mean over runs and "
              f"channel groups of the squared NRMS error), its gain over the calibrated "
              f"current model, less the cost of its fitted parameters' distance from their "
              f"declared defaults (each parameter (ln(fitted/default) / ln {PLAUSIBLE:g})^2, "
-             f"a linear one ((fitted - default) / a quarter of its range)^2, times the "
-             f"larger of floor^2 and the model's resolution^2: a value far outside its "
-             f"physical range must buy that with evidence), (1) exceeds {Z_NOISE:g} standard "
+             f"a linear one ((fitted - default) / a quarter of its range)^2, times "
+             f"{PRIOR_SHARE:.0%} of the current model's systematic residual (error^2 - "
+             f"floor^2): a value far outside its physical range must buy that with "
+             f"evidence), (1) exceeds {Z_NOISE:g} standard "
              f"errors of what the held-out noise alone produces between the two predictions "
              f"(a likelihood-ratio test against the noise floor), (2) removes at least "
              f"{MIN_SHARE:.0%} of the current model's systematic residual (error^2 - "
@@ -95,11 +103,11 @@ def implausibility(name: str, values: dict[str, float], table=None) -> list[tupl
 
 def prior_cost(g: Gain, model: Physics | None, name: str | None, table=None) -> float:
     """What candidate `name`'s fitted parameters in `model` cost on the e² scale: Σ z² ×
-    max(f², r²) (`implausibility`; r the resolution of `model`)."""
+    `PRIOR_SHARE` × the current model's systematic residual (`implausibility`)."""
     if model is None or name is None or name not in model.effects:
         return 0.0
     z2 = sum(z * z for _, z in implausibility(name, model.effects[name], table))
-    return z2 * max(g.f2, resolution(model.effects) ** 2)
+    return z2 * PRIOR_SHARE * g.systematic
 
 
 def failing(g: Gain | None, model: Physics | None = None, name: str | None = None,
