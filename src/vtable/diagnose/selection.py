@@ -93,7 +93,8 @@ def implausibility(name: str, values: dict[str, float], table=None) -> list[tupl
         d = q.default if table is None else q.default_on(table)
         if q.log and v > 0 and d > 0:
             z = math.log(v / d) / math.log(PLAUSIBLE)
-            what = f"{q.name} {v:.3g} {q.unit} is {max(v / d, d / v):.3g} x its default {d:.3g}"
+            what = (f"{q.name} {v:.3g} {q.unit} is {max(v / d, d / v):.3g} x its default "
+                    f"{d:.3g} {q.unit}")
         else:
             z = (v - d) / (0.25 * (q.upper - q.lower))
             what = f"{q.name} {v:.3g} {q.unit} against its default {d:.3g}"
