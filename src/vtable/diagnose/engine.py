@@ -69,6 +69,7 @@ from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE
 from vtable.diagnose.statistics import Comparison, held_out_gain
 from vtable.effects.registry import get as effect
 from vtable.effects.registry import names as registered
+from vtable.effects.table import TableView
 from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
 from vtable.models.reduced import ReducedModel
@@ -115,6 +116,7 @@ class Diagnoser:
             effect(e)
         self.notes = self.campaign.notes
         self.vt = self.campaign.table
+        self.table_view = TableView.of(self.vt)  # the effects' defaults (`SELECTION`'s prior)
         self.specimen = self.runs[0].specimen()
         self.start = Physics(nominal_open_loop(self.vt), self.specimen,
                              {e: {} for e in start_effects})
@@ -266,7 +268,7 @@ class Diagnoser:
                                      self.campaign.noise)
                 return Candidate(name, dict(cand.effects[name]), err, train, "",
                                  len(effect(name).params), cand, flags, pred, screened,
-                                 cost_, gain)
+                                 cost_, gain, self.table_view)
 
             def task(name: str, base: Physics = current, baseline: float = cost) -> tuple:
                 start = base.with_effect(name)
@@ -360,7 +362,8 @@ class Diagnoser:
             physics, _, _, cost, _, pred, _ = fitted[name]
             if isinstance(pred, Exception):
                 continue
-            fails = failing(held_out_gain(pred, pred_cur, self.runs, self.campaign.noise))
+            fails = failing(held_out_gain(pred, pred_cur, self.runs, self.campaign.noise),
+                            st.current, name, self.table_view)
             if not fails:
                 continue
             err = compare(pred, self.runs, scored="held", floor=self.floor).error

@@ -65,6 +65,7 @@ class Candidate:
     screened: bool = False  # its first fit steps lowered the training cost < 1 %: stopped
     cost: float = float("nan")  # the fit's training cost (residuals and priors)
     gain: Gain | None = None  # its held-out gain over the current model (`SELECTION`)
+    table: Any = field(default=None, repr=False)  # the campaign's `TableView` (its defaults)
 
     @property
     def blocking(self) -> list[str]:
@@ -81,7 +82,7 @@ class Candidate:
 
     def failing(self) -> list[str]:
         """The statistical criteria of `SELECTION` this candidate's gain does not meet."""
-        return failing(self.gain)
+        return failing(self.gain, self.physics, self.effect, self.table)
 
 
 

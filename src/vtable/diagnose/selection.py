@@ -4,8 +4,17 @@ missing effect rather than noise or a patch; the loop (`engine`) applies it.
 Selection rule (`SELECTION`), on the held-out segments and on the squared scale where
 sensor noise and a systematic error add (e² = mean over runs and channel groups of the
 squared NRMS error; the noise alone costs f², the current model's systematic residual is
-e² - f²; `statistics.held_out_gain`). A candidate is added only if its gain e²_current -
-e²_candidate
+e² - f²; `statistics.held_out_gain`). The candidate's e² is first charged its parameters'
+implausibility (`prior_cost`: each fitted parameter's distance from its declared default,
+in units of `PLAUSIBLE`, squared, times `PRIOR_SHARE` of the current model's systematic
+residual), so that a value far outside its physical range buys that distance with evidence
+(a Gaussian prior on the log of the parameter, as the calibration's priors on the base:
+`vtable.diagnose.calibration`). It is charged against the systematic residual, not the
+noise: a patch of a model-form difference is systematic too, and stands any number of
+standard errors above the noise; what it cannot do is explain most of the residual with a
+value 30 times its physical one (at 3 σ, 48 % of the residual is charged, so it must remove
+68 % to meet criterion 2). A
+candidate is added only if its gain e²_current - e²_candidate, so charged,
 
 1. exceeds `Z_NOISE` (5) standard errors of what the held-out noise produces between the two
    predictions: both were fitted on the training segments, so the held-out noise enters the
@@ -14,61 +23,132 @@ e²_candidate
 2. removes at least `MIN_SHARE` (20 %) of the current model's systematic residual: the
    current model is itself calibrated, so this is what the effect explains that recalibrating
    the base cannot, and a small patch of a model-form difference is not a missing effect;
-3. is at least 5 % of what the noise alone costs (f²; the reduced model's resolution,
-   (0.5 %)², counts as noise where the sensors are quieter: `MODEL_RESOLUTION`): refitting
-   the base and an effect to other noise moves a held-out error by less;
+3. is at least `NOISE_SHARE` (5 %) of what the noise alone costs (f²): refitting the base and
+   an effect to other noise moves a held-out error by less;
+4. is at least r², the squared resolution of the reduced model with the candidate in
+   (`vtable.diagnose.resolution`: the base's and each present effect's measured agreement
+   with the virtual table): the most a patch of the model-form difference can remove;
 
-and (4) its fit is sound: no fitted effect parameter within 1 % of a bound (fitted scale),
+and (5) its fit is sound: no fitted effect parameter within 1 % of a bound (fitted scale),
 correlated beyond 0.95 with a base parameter, or without influence on the data
-(Gauss-Newton covariance at the solution). A candidate failing (4) is flagged in the
+(Gauss-Newton covariance at the solution). A candidate failing (5) is flagged in the
 ranking and not added on that evidence; the next sound one may be. Base parameters at a
 bound are flagged too but do not block: they say the model still lacks something.
 """
 
 from __future__ import annotations
 
-from vtable.diagnose.campaign import MODEL_RESOLUTION
+import math
+from dataclasses import replace
+
+from vtable.diagnose.resolution import resolution
 from vtable.diagnose.statistics import Gain
+from vtable.effects.registry import get as effect
+from vtable.models.physics import Physics
 
 Z_NOISE = 5.0  # the held-out gain must stand 5 standard errors above what noise produces ...
 MIN_SHARE = 0.2  # ... remove 20 % of the current model's systematic residual (squared) ...
-#: ... and be 5 % of what the noise alone costs (f²), the reduced model's own resolution
-#: (`MODEL_RESOLUTION`, a floor below which it cannot tell physics from its approximations)
-#: counting as noise when the sensors are quieter
+#: ... be 5 % of what the noise alone costs (f²) and at least the squared resolution of the
+#: reduced model with the candidate in (`resolution.resolution`)
 NOISE_SHARE = 0.05
+#: an effect parameter's prior width: a factor of 3 from its default on the log scale (a
+#: quarter of its range for a linear one) is one σ ...
+PLAUSIBLE = 3.0
+#: ... and costs 5 % of the current model's systematic residual (e² - f²) on the e² scale
+PRIOR_SHARE = 0.05
 SELECTION = (f"an effect is added when, on the held-out last 40 % of every run and on the "
              f"scale where sensor noise and a systematic error add (the mean over runs and "
              f"channel groups of the squared NRMS error), its gain over the calibrated "
-             f"current model (1) exceeds {Z_NOISE:g} standard errors of what the held-out "
-             f"noise alone produces between the two predictions (a likelihood-ratio test "
-             f"against the noise floor), (2) removes at least {MIN_SHARE:.0%} of the current "
-             f"model's systematic residual (error^2 - floor^2) and (3) is at least "
-             f"{NOISE_SHARE:.0%} of what the noise alone costs (floor^2; at least "
-             f"({MODEL_RESOLUTION:.1%})^2, what the reduced model cannot resolve): refitting "
-             "the base and an effect to other noise moves a held-out error by less; and "
-             "its fit is sound: none of its own parameters within 1 % of a bound, correlated "
-             "beyond 0.95 with a base parameter, or without influence on the data. The best "
-             "such candidate (largest gain) is added. After each addition every effect added "
-             "earlier is tested the same way against the model without it (refitted) and "
-             "removed when it no longer passes")
+             f"current model, less the cost of its fitted parameters' distance from their "
+             f"declared defaults (each parameter (ln(fitted/default) / ln {PLAUSIBLE:g})^2, "
+             f"a linear one ((fitted - default) / a quarter of its range)^2, times "
+             f"{PRIOR_SHARE:.0%} of the current model's systematic residual (error^2 - "
+             f"floor^2): a value far outside its physical range must buy that with "
+             f"evidence), (1) exceeds {Z_NOISE:g} standard "
+             f"errors of what the held-out noise alone produces between the two predictions "
+             f"(a likelihood-ratio test against the noise floor), (2) removes at least "
+             f"{MIN_SHARE:.0%} of the current model's systematic residual (error^2 - "
+             f"floor^2), (3) is at least {NOISE_SHARE:.0%} of what the noise alone costs "
+             "(floor^2): refitting the base and an effect to other noise moves a held-out "
+             "error by less, and (4) is at least the squared resolution of the reduced model "
+             "with the candidate in (the root-sum-square of the base's and each present "
+             "effect's measured agreement with the virtual table beyond the base's: the most "
+             "a patch of that model-form difference can remove); and its fit is sound: none "
+             "of its own parameters within 1 % of a bound, correlated beyond 0.95 with a base "
+             "parameter, or without influence on the data. The best such candidate (largest "
+             "gain) is added. After each addition every effect added earlier is tested the "
+             "same way against the model without it (refitted) and removed when it no longer "
+             "passes")
 
 
-def failing(g: Gain | None) -> list[str]:
-    """The statistical criteria of `SELECTION` a held-out gain does not meet (empty: it
-    passes)."""
-    if g is None:
-        return ["no valid model"]
-    out = []
-    if not g.z > Z_NOISE:
-        out.append(f"its gain is {g.z:.1f} standard errors of the noise (needs {Z_NOISE:g})")
-    if not g.gain >= MIN_SHARE * g.systematic:
-        out.append(f"it removes {max(g.share, 0):.0%} of the systematic residual (needs "
-                   f"{MIN_SHARE:.0%})")
-    f2 = max(g.f2, MODEL_RESOLUTION**2)
-    if not g.gain >= NOISE_SHARE * f2:
-        out.append(f"its gain is {max(g.gain, 0) / f2:.0%} of what the noise alone costs "
-                   f"(needs {NOISE_SHARE:.0%})" + ("" if g.f2 >= f2 else
-                                                   f"; the noise taken at the reduced model's "
-                                                   f"resolution, {MODEL_RESOLUTION:.1%}"))
+def implausibility(name: str, values: dict[str, float], table=None) -> list[tuple[str, float]]:
+    """Each of effect `name`'s parameters in `values` (its units) as (what, z): z its
+    distance from the default on `table` (a `vtable.effects.table.TableView`; None: the
+    EERC table's) in prior widths (`PLAUSIBLE`)."""
+    e, out = effect(name), []
+    for q in e.params:
+        if q.name not in values:
+            continue
+        v = float(values[q.name])
+        d = q.default if table is None else q.default_on(table)
+        if q.log and v > 0 and d > 0:
+            z = math.log(v / d) / math.log(PLAUSIBLE)
+            what = (f"{q.name} {v:.3g} {q.unit} is {max(v / d, d / v):.3g} x its default "
+                    f"{d:.3g} {q.unit}")
+        else:
+            z = (v - d) / (0.25 * (q.upper - q.lower))
+            what = f"{q.name} {v:.3g} {q.unit} against its default {d:.3g}"
+        out.append((f"{what} ({q.source or 'no source'})", z))
     return out
 
+
+def prior_cost(g: Gain, model: Physics | None, name: str | None, table=None) -> float:
+    """What candidate `name`'s fitted parameters in `model` cost on the e² scale: Σ z² ×
+    `PRIOR_SHARE` × the current model's systematic residual (`implausibility`)."""
+    if model is None or name is None or name not in model.effects:
+        return 0.0
+    z2 = sum(z * z for _, z in implausibility(name, model.effects[name], table))
+    return z2 * PRIOR_SHARE * g.systematic
+
+
+def failing(g: Gain | None, model: Physics | None = None, name: str | None = None,
+            table=None) -> list[str]:
+    """The statistical criteria of `SELECTION` a held-out gain does not meet (empty: it
+    passes).
+
+    Parameters
+    ----------
+    g
+        The gain of the model with the candidate over the model without it.
+    model
+        The model with the candidate (its effects give the resolution, criterion 4; its
+        fitted parameters the prior cost); None: the base's resolution, no prior.
+    name
+        The candidate effect.
+    table
+        The campaign's table (`vtable.effects.table.TableView`) the defaults are taken on;
+        None: the EERC table's.
+    """
+    if g is None:
+        return ["no valid model"]
+    cost = prior_cost(g, model, name, table)
+    net = replace(g, e2_candidate=g.e2_candidate + cost)
+    out = []
+    if not net.z > Z_NOISE:
+        out.append(f"its gain is {net.z:.1f} standard errors of the noise (needs {Z_NOISE:g})")
+    if not net.gain >= MIN_SHARE * net.systematic:
+        out.append(f"it removes {max(net.share, 0):.0%} of the systematic residual (needs "
+                   f"{MIN_SHARE:.0%})")
+    if not net.gain >= NOISE_SHARE * g.f2:
+        out.append(f"its gain is {max(net.gain, 0) / g.f2:.0%} of what the noise alone costs "
+                   f"(needs {NOISE_SHARE:.0%})" if g.f2 > 0 else "it gains nothing")
+    r = resolution(() if model is None else model.effects)
+    if not net.gain >= r * r:
+        out.append(f"its gain ({math.sqrt(max(net.gain, 0)):.2%} on the NRMS scale) is below "
+                   f"the resolution of the reduced model with it in ({r:.2%}: a patch of the "
+                   "model-form difference could buy that)")
+    if out and cost > 0:
+        far = [w for w, z in implausibility(name, model.effects[name], table) if abs(z) > 1]
+        out.append(f"its parameters' distance from their defaults costs {cost:.3g} of the "
+                   f"gain {g.gain:.3g}" + (f" ({'; '.join(far)})" if far else ""))
+    return out
