@@ -15,6 +15,7 @@ from vtable.errors import VtableError
 
 BUILT_IN = ("three_variable", "pid", "tvc")
 _REGISTRY: dict[str, ControllerKind] = {}
+_FILES: dict[str, str] = {}  # a lab's kind -> the file that registered it
 
 
 def _load_built_in() -> None:
@@ -32,7 +33,12 @@ def register(kind: ControllerKind) -> ControllerKind:
         raise VtableError(f"controller kind {kind.name!r} is the catalog's; name yours "
                           "another way")
     _REGISTRY[kind.name] = kind
+    _FILES.pop(kind.name, None)  # load_file records it again when it is loading one
+    _LOADING.append(kind.name)
     return kind
+
+
+_LOADING: list[str] = []  # the kinds registered while a file loads (load_file)
 
 
 def names() -> list[str]:
@@ -54,13 +60,14 @@ def load_file(path: str | Path) -> list[str]:
     p = Path(path)
     if not p.is_file():
         raise VtableError(f"{p}: no such file (--controller-from)")
-    before = set(names())
+    _load_built_in()
     modname = "vtable_user_controller_" + \
         hashlib.sha256(str(p.resolve()).encode()).hexdigest()[:16]
     spec = importlib.util.spec_from_file_location(modname, p)
     if spec is None or spec.loader is None:
         raise VtableError(f"{p}: cannot be loaded as a Python file")
     module = importlib.util.module_from_spec(spec)
+    _LOADING.clear()
     try:
         sys.modules[modname] = module
         spec.loader.exec_module(module)
@@ -70,11 +77,22 @@ def load_file(path: str | Path) -> list[str]:
         raise VtableError(f"{p}: line {e.lineno}: syntax error: {e.msg}") from None
     except Exception as e:
         raise VtableError(f"{p}: {type(e).__name__} while loading: {e}") from None
-    added = [n for n in names() if n not in before]
+    finally:
+        added = list(dict.fromkeys(_LOADING))
+        _LOADING.clear()
     if not added:
         raise VtableError(f"{p}: registers no controller kind (call "
                           "vtable.controllers.kinds.register(...))")
+    for n in added:
+        _FILES[n] = str(p.resolve())
     return added
 
 
-__all__ = ["BUILT_IN", "ControlUse", "ControllerKind", "get", "load_file", "names", "register"]
+def source_file(name: str) -> str | None:
+    """The file a lab's kind was loaded from (`load_file`); None for the catalog's and for
+    one registered from code (another process cannot load it again)."""
+    return _FILES.get(name)
+
+
+__all__ = ["BUILT_IN", "ControlUse", "ControllerKind", "get", "load_file", "names", "register",
+           "source_file"]

@@ -57,16 +57,19 @@ def cmd_presets(a: argparse.Namespace) -> Result:
 
 
 def cmd_identify(a: argparse.Namespace) -> Result:
+    verbs.load_controllers(a.controller_from)
     return verbs.identify(a.runs)
 
 
 def cmd_compare(a: argparse.Namespace) -> Result:
+    verbs.load_controllers(a.controller_from)
     verbs.load_effects(a.effects_from)
     return verbs.compare(a.runs, verbs.effect_names(a.with_), a.calibrate)
 
 
 def cmd_diagnose(a: argparse.Namespace) -> Result:
     diagnose, interrupted = verbs.diagnose, verbs.DiagnosisInterrupted  # loads the diagnosis
+    verbs.load_controllers(a.controller_from)
     verbs.load_effects(a.effects_from)
     try:
         return diagnose(a.runs, verbs.effect_names(a.with_), verbs.effect_names(a.effects),
@@ -85,6 +88,7 @@ def cmd_diagnose(a: argparse.Namespace) -> Result:
 
 
 def cmd_simulate(a: argparse.Namespace) -> Result:
+    verbs.load_controllers(a.controller_from)
     verbs.load_effects(a.effects_from)
     band = tuple(a.band) if a.band else None
     return verbs.simulate(a.specimen, a.kind, duration=a.duration, band=band,

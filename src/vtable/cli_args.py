@@ -48,6 +48,9 @@ _CALIBRATE = ("how far the base may move from the runs' declarations: 'none', or
               "(relative, 0.1), com_height (x declared, 2), pitch_inertia (factor, 1.5), "
               "prior_weight (0.3)")
 _EFFECTS_FROM = "a Python file of your own effects (it calls vtable.effects.register)"
+_CONTROLLER_FROM = ("a Python file of your lab's controller kinds (it calls "
+                    "vtable.controllers.kinds.register); a run's [table.controller] kind "
+                    "may then name them")
 
 
 def parser() -> argparse.ArgumentParser:
@@ -99,6 +102,8 @@ def parser() -> argparse.ArgumentParser:
                           "(e.g. actuator_friction:friction=3); repeatable")
     sim.add_argument("--effects-from", action="append", default=[], metavar="FILE",
                      help=_EFFECTS_FROM)
+    sim.add_argument("--controller-from", action="append", default=[], metavar="FILE",
+                     help=_CONTROLLER_FROM)
     sim.add_argument("--out", default=None, help="run file stem (writes STEM.csv, STEM.toml)")
     sim.add_argument("--rerun", default=None, help="write a Rerun recording (.rrd)")
     sim.add_argument("--exaggerate", type=_number, default=50.0,
@@ -131,6 +136,8 @@ def parser() -> argparse.ArgumentParser:
     dg.add_argument("--effects", default="", help="catalog subset to try [all]")
     dg.add_argument("--effects-from", action="append", default=[], metavar="FILE",
                     help=_EFFECTS_FROM)
+    dg.add_argument("--controller-from", action="append", default=[], metavar="FILE",
+                    help=_CONTROLLER_FROM)
     dg.add_argument("--max-rounds", type=_integer, default=4,
                     help="stop after this many rounds of adding an effect [4]")
     dg.add_argument("--calibrate", default="", metavar="SPEC", help=_CALIBRATE)
@@ -144,9 +151,13 @@ def parser() -> argparse.ArgumentParser:
     cp.add_argument("--calibrate", default="", metavar="SPEC", help=_CALIBRATE)
     cp.add_argument("--effects-from", action="append", default=[], metavar="FILE",
                     help=_EFFECTS_FROM)
+    cp.add_argument("--controller-from", action="append", default=[], metavar="FILE",
+                    help=_CONTROLLER_FROM)
     _add_json(cp)
     ident = sub.add_parser("identify", help="identify the report's parameters from runs")
     ident.add_argument("runs", nargs="+", help="RUN.toml (or .h5) files of one configuration")
+    ident.add_argument("--controller-from", action="append", default=[], metavar="FILE",
+                       help=_CONTROLLER_FROM)
     _add_json(ident)
     asx = sub.add_parser("assess", help="how the table changes what a specimen feels: the "
                          "five models of §9.4, coupled modes, spectra, a verdict and plots")

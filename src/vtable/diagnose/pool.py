@@ -22,6 +22,7 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from typing import Any
 
+from vtable.controllers import kinds
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.model import TableModel
@@ -64,8 +65,8 @@ class Fits:
 
     def pool(self) -> CandidatePool | None:
         """The worker processes for this diagnosis's candidates (`workers.CandidatePool`),
-        or None: one worker, or an effect registered from code (not from a file another
-        process can load)."""
+        or None: one worker, or an effect or controller kind registered from code (not from
+        a file another process can load)."""
         if self.workers < 2:
             return None
         files = []
@@ -74,8 +75,15 @@ class Fits:
                 f = source_file(e)
                 if f is None:
                     return None
-                files.append(f)
-        pool = CandidatePool.get(self.workers, tuple(sorted(set(files))))
+                files.append(("effects", f))
+        table = self.campaign.runs[0].table()  # TableDescription or None (the EERC table)
+        kind = table.controller.kind if table is not None and table.controller else None
+        if kind is not None and kind not in kinds.BUILT_IN:  # a lab's controller: its file
+            f = kinds.source_file(kind)
+            if f is None:
+                return None
+            files.insert(0, ("controller", f))
+        pool = CandidatePool.get(self.workers, tuple(sorted(set(files))))  # controller first
         if self.procs is None:  # this diagnosis's first round: a stop left from before goes
             pool.stop.clear()
         self.procs = pool

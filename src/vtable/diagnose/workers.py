@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from vtable.controllers import kinds
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.model import TableModel
@@ -39,21 +40,21 @@ from vtable.models.physics import Physics, nominal_open_loop
 from vtable.models.reduced import ReducedModel
 from vtable.params.specimen import NoSpecimen
 
-_POOLS: dict[tuple[int, tuple[str, ...]], CandidatePool] = {}
+_POOLS: dict[tuple[int, tuple[tuple[str, str], ...]], CandidatePool] = {}
 
 # -- in the worker ----------------------------------------------------------------------
 _STOP: Any = None
 _CAMPAIGN: tuple[str, Campaign] | None = None
 
 
-def _init(files: tuple[str, ...], stop) -> None:
-    """A worker's start: Ctrl-C is the parent's to handle, the user's effect files are
-    loaded, the kernels warmed up."""
+def _init(files: tuple[tuple[str, str], ...], stop) -> None:
+    """A worker's start: Ctrl-C is the parent's to handle, the user's files are loaded
+    (("effects", path) and ("controller", path) pairs), the kernels warmed up."""
     global _STOP
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _STOP = stop
-    for f in files:
-        load_file(f)
+    for what, f in files:
+        (load_file if what == "effects" else kinds.load_file)(f)
     _warm_up()
 
 
@@ -101,7 +102,7 @@ def fitted(model, campaign: Campaign) -> tuple:
 class CandidatePool:
     """`n` worker processes for candidate fits (see the module docstring)."""
 
-    def __init__(self, n: int, files: tuple[str, ...]) -> None:
+    def __init__(self, n: int, files: tuple[tuple[str, str], ...]) -> None:
         ctx = multiprocessing.get_context("spawn")
         self.stop = ctx.Event()
         self.executor = ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_init,
@@ -120,7 +121,7 @@ class CandidatePool:
             main.__spec__ = spec
 
     @classmethod
-    def get(cls, n: int, files: tuple[str, ...]) -> CandidatePool:
+    def get(cls, n: int, files: tuple[tuple[str, str], ...]) -> CandidatePool:
         key = (n, files)
         pool = _POOLS.get(key)
         if pool is None:

@@ -47,6 +47,9 @@ class LabTable:
     payload: float | None = None    # kg
     band: tuple[float, float] | None = None  # Hz
     force_measured: str = "load_cell"  # the force channels: "load_cell" or "delta_p" (A·ΔP)
+    #: the run-format [table] it was read from (a run made on it writes this back); None:
+    #: a preset, written as its name
+    declared: dict | None = dataclasses.field(default=None, compare=False)
 
     @property
     def uniaxial(self) -> bool:

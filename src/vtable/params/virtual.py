@@ -14,7 +14,7 @@ Two sets are *derived* from the report rather than typed:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -114,6 +114,8 @@ class VirtualTable:
     #: what the horizontal force channels measure: "load_cell", the net force the rod
     #: transmits to the platen (after friction and any force stage); "delta_p", A·ΔP
     force_measured: str = "load_cell"
+    #: the run-format [table] the table was declared with (`LabTable.declared`)
+    declared: dict | None = field(default=None, compare=False)
 
     @property
     def limits_source(self) -> str:
@@ -287,7 +289,8 @@ def virtual_table_for(lab) -> VirtualTable:
             servo = replace(lab.servo, mass=vt.horizontal_servo.mass)
             vt = replace(vt, table=replace(vt.table, geometry=g), horizontal_servo=servo)
         return replace(vt, valve_lag=lab.valve_time_constant,
-                       force_measured=lab.force_measured, control=lab.control)
+                       force_measured=lab.force_measured, control=lab.control,
+                       declared=lab.declared)
     if not lab.uniaxial:
         raise VtableError(f"table {lab.name!r}: the virtual table models the EERC table or a "
                           f"uniaxial platen, not DOFs {', '.join(lab.dofs)}")
@@ -332,7 +335,8 @@ def uniaxial_table(lab) -> VirtualTable:
                         horizontal_servo=s, vertical_servo=None, pitch_loop=None,
                         stabilizers=Stabilizers((), 0.0, 0.0, 0.0, 0.0),
                         settings={}, dofs=("x",), knobs=False, valve_lag=lab.valve_time_constant,
-                        control=lab.control, name=lab.name, force_measured=lab.force_measured)
+                        control=lab.control, name=lab.name, force_measured=lab.force_measured,
+                        declared=lab.declared)
 
 
 def describe(vt: VirtualTable) -> dict[str, Any]:

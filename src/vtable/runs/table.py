@@ -310,15 +310,14 @@ def _parse(d: dict[str, Any], where: str, notes: list[str]) -> dict[str, Any]:
     if "controller" in d:
         c = d["controller"]
         w = _sub(where, "controller")
-        kind = kinds.get(c["kind"]) if isinstance(c, dict) and "kind" in c and \
-            c["kind"] in kinds.names() else None
+        if isinstance(c, dict) and "kind" in c and c["kind"] not in kinds.names():
+            raise VtableError(f"{w}.kind: expected one of {', '.join(kinds.names())}, got "
+                              f"{c['kind']!r} (a lab's own kind: --controller-from FILE)")
+        kind = kinds.get(c["kind"]) if isinstance(c, dict) and "kind" in c else None
         own = tuple(kind.user_keys) if kind is not None else ()
         ctl = _level({k: v for k, v in c.items() if k not in own} if isinstance(c, dict)
                      else c, _CONTROLLER, w, notes, plain=("kind", "notch"))
         if "kind" in c:
-            if c["kind"] not in kinds.names():
-                raise VtableError(f"{w}.kind: expected one of {', '.join(kinds.names())}, "
-                                  f"got {c['kind']!r}")
             ctl["kind"] = c["kind"]
         if "notch" in c:
             ctl["notches"] = _notches(c["notch"], f"{w}.notch")

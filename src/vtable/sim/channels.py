@@ -78,7 +78,9 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
             extra_units[f"state_v_{jn}"] = "m/s" if slide else "rad/s"
         for i, s in enumerate(res.controller_state_names):
             out[f"state_{s}"] = res.controller_states[:, i]
-            extra_units[f"state_{s}"] = "Pa"
+            # the chamber pressures P_* in Pa; a stage's own states (filters, integrals)
+            # are in the SI units of their stage's law, kept as they are ("1": no factor)
+            extra_units[f"state_{s}"] = "Pa" if s.startswith("P_") else "1"
     return out, extra_units
 
 

@@ -4,6 +4,7 @@ interchange format (the verbs write the Rerun recording, `vtable.viz.rerun_scene
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -63,7 +64,9 @@ def load_table(name_or_path: str | None):
     p = Path(name_or_path)
     if name_or_path.endswith(".toml") or p.is_file():
         d = read_toml(p)
-        return lab_table(table_from_dict(d.get("table", d), f"{p} [table]"))
+        given = d.get("table", d)
+        return dataclasses.replace(lab_table(table_from_dict(given, f"{p} [table]")),
+                                   declared=given)
     return lab_table(table_from_dict({"preset": name_or_path}, f"--table {name_or_path}"))
 
 

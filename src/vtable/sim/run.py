@@ -138,7 +138,7 @@ def simulate(physics: phys.Physics, command: Command, rate: float = OUTPUT_FS, *
                                     output_dt=dt if filters else k * dt, check=check)
     meta = {"title": title or f"{command.name}, {physics.specimen.title} (vtable virtual "
                               f"table: {physics.label})",
-            "table": {"preset": built.vt.name},
+            "table": built.vt.declared or {"preset": built.vt.name},
             **({"control": {d: s.to_dict() for d, s in vt.settings.items()}} if vt.knobs
                else {}),
             "specimen": specimen_table(physics.specimen), "command": command.table}

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:  # what `__getattr__` gives, for type checkers and editors
     from vtable.verbs.analytic import config_tf, margins, modes, presets
     from vtable.verbs.diagnosis import DiagnosisInterrupted, compare, diagnose
-    from vtable.verbs.effects import effect_names, load_effects
+    from vtable.verbs.effects import effect_names, load_controllers, load_effects
     from vtable.verbs.runs import identify, is_run, run_tf, tf
     from vtable.verbs.simulation import demo, export_mjcf, simulate, simulation_summary
     from vtable.verbs.studies import assess, study
@@ -34,7 +34,7 @@ if TYPE_CHECKING:  # what `__getattr__` gives, for type checkers and editors
 VERBS: dict[str, str] = {
     "modes": "analytic", "margins": "analytic", "presets": "analytic", "config_tf": "analytic",
     "tf": "runs", "run_tf": "runs", "is_run": "runs", "identify": "runs",
-    "load_effects": "effects", "effect_names": "effects",
+    "load_effects": "effects", "effect_names": "effects", "load_controllers": "effects",
     "compare": "diagnosis", "diagnose": "diagnosis", "DiagnosisInterrupted": "diagnosis",
     "simulate": "simulation", "simulation_summary": "simulation", "export_mjcf": "simulation",
     "demo": "simulation",
@@ -43,8 +43,8 @@ VERBS: dict[str, str] = {
 
 __all__ = [  # = sorted(VERBS), spelled out for linters
     "DiagnosisInterrupted", "assess", "compare", "config_tf", "demo", "diagnose",
-    "effect_names", "export_mjcf", "identify", "is_run", "load_effects", "margins", "modes",
-    "presets", "run_tf", "simulate", "simulation_summary", "study", "tf",
+    "effect_names", "export_mjcf", "identify", "is_run", "load_controllers", "load_effects",
+    "margins", "modes", "presets", "run_tf", "simulate", "simulation_summary", "study", "tf",
 ]
 
 
