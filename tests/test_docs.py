@@ -132,7 +132,8 @@ def _table_keys() -> set[str]:
     for schema in (tb._TOP, tb._HORIZONTAL, tb._CONTROLLER, tb._LIMITS):
         for q in schema:
             keys |= set(q.keys)
-    return keys | set(tb.DOFS) | set(tb.CONTROLLER_KINDS) | set(tb.TABLE_PRESETS)
+    return keys | set(tb.DOFS) | set(tb.CONTROLLER_KINDS) | set(tb.TABLE_PRESETS) | \
+        set(tb.NOTCH_KEYS)
 
 
 def _specimen_keys() -> set[str]:
@@ -153,7 +154,7 @@ def test_every_accepted_run_key_is_in_run_format_md():
                         ("[units] values", set(units.UNITS))):
         missing = _named(text, names)
         assert not missing, f"docs/run-format.md does not name these {what} keys: {missing}"
-    assert len(_table_keys()) == 71 and len(FORMAT_UNITS) == 35
+    assert len(_table_keys()) == 79 and len(FORMAT_UNITS) == 35
 
 
 def test_the_readers_refuse_what_run_format_md_says_they_do_not_read_yet():
@@ -170,8 +171,10 @@ def test_the_readers_refuse_what_run_format_md_says_they_do_not_read_yet():
     assert "force_measured" not in text
     assert all(f"`{k}`" in _text("run-format.md") for k in ("force_measured", "load_cell",
                                                               "delta_p"))
-    with pytest.raises(VtableError, match="'tvc'"):
-        table_from_dict({"controller": {"kind": "tvc"}})
+    # the digital three-variable controller is read now (issue 18), and not listed here
+    assert table_from_dict({"preset": "lnec-st1d", "controller": {
+        "kind": "tvc", "displacement_gain_v_per_m": 130.0, "p": 1.0}}).controller.kind == "tvc"
+    assert "tvc" not in text
     with pytest.raises(VtableError, match="'opensees'"):
         specimen_from_dict({"kind": "opensees", "model": "frame.py"})
     # one damping ratio per mode is read now (issue 18), and the page no longer lists it
@@ -186,6 +189,6 @@ def test_the_readers_refuse_what_run_format_md_says_they_do_not_read_yet():
     with pytest.raises(VtableError, match="unknown key 'mass_kg'"):
         specimen_from_dict({"kind": "sdof", "mass_kg": 3e4, "height_in": 219,
                             "frequency_hz": 2.87, "damping": 0.01})
-    for k in ("tvc", "opensees", "floorK_drift", "floorK_shear", "mass_kg"):
+    for k in ("opensees", "floorK_drift", "floorK_shear", "mass_kg"):
         assert k in text
     assert "floor1_drift" not in FORMAT_UNITS and "floor1_acc" in FORMAT_UNITS
