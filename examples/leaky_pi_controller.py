@@ -40,5 +40,5 @@ def leaky_pi_params(c) -> dict[str, float]:
 
 register(ControllerKind(
     "leaky_pi", "P on the displacement error plus a leaky integral k_i/(s + 1/T_l)",
-    stage=LEAKY_PI, params=leaky_pi_params, calibrated={"k_i": (0.5, 2.0)},
+    stage=LEAKY_PI, params=leaky_pi_params, calibrated={"k_i": (0.5, 2.0, "1/s")},
     user_keys={"integral_gain_per_s": "1/s", "leak_time_s": "s"}))

@@ -30,7 +30,7 @@ class ControlUse(NamedTuple):
 
     stage: Stage
     params: dict[str, float]
-    calibrated: dict[str, tuple[float, float]]
+    calibrated: dict[str, tuple]
 
     @property
     def use(self) -> tuple[Stage, dict[str, float]]:
@@ -59,7 +59,8 @@ class ControllerKind:
         gain) from the declared controller, or None when its terms are all off.
     calibrated
         Stage parameters a diagnosis may refit: name -> (lower, upper) factor of the
-        declared value.
+        declared value, optionally with the parameter's unit (``(0.5, 2.0, "s")``;
+        without one it is shown as a number).
     user_keys
         Keys of its own (name -> unit), for a lab's controller file.
     """
@@ -69,7 +70,7 @@ class ControllerKind:
     keys: tuple[str, ...] = ()
     stage: Stage | None = None
     params: Callable | None = None
-    calibrated: dict[str, tuple[float, float]] = field(default_factory=dict)
+    calibrated: dict[str, tuple] = field(default_factory=dict)
     user_keys: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -83,6 +84,10 @@ class ControllerKind:
                 raise VtableError(f"{where}: a stage needs params(description)")
         if set(self.calibrated) - set(self.stage.params if self.stage else ()):
             raise VtableError(f"{where}: calibrated names an unknown stage parameter")
+        for k, v in self.calibrated.items():
+            if not (isinstance(v, tuple) and len(v) in (2, 3) and 0 < v[0] <= 1 <= v[1]):
+                raise VtableError(f"{where}: calibrated[{k!r}] must be (lower, upper[, unit]) "
+                                  "factors with lower <= 1 <= upper")
 
     def stage_use(self, description) -> ControlUse | None:
         """The stage with its parameters for a declared controller, None when it adds

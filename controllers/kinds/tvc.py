@@ -11,4 +11,4 @@ KIND = ControllerKind(
     keys=("i", "d", "derivative_filter", "feedforward_velocity", "feedforward_acceleration",
           "acceleration_gain", "reference_frequency", "reference_damping", "notches"),
     stage=DIGITAL, params=digital_params,
-    calibrated={"t_v": (0.5, 2.0), "t_a": (0.5, 2.0), "k_a": (0.5, 2.0)})
+    calibrated={"t_v": (0.5, 2.0, "s"), "t_a": (0.5, 2.0, "s2"), "k_a": (0.5, 2.0, "s2")})

@@ -335,7 +335,8 @@ def _table_param(name: str, key: str, unit: str, declared: float, lo: float, hi:
     return BaseParam(key, unit, declared, lo, hi, log, prior, group, get, put)
 
 
-def _control_param(name: str, declared: float, lo: float, hi: float) -> BaseParam:
+def _control_param(name: str, declared: float, lo: float, hi: float,
+                   unit: str = "1") -> BaseParam:
     """A declared controller's stage parameter, declared ×(lo..hi) with a log prior of
     half the wider side."""
     key = f"control.{name}"
@@ -347,7 +348,7 @@ def _control_param(name: str, declared: float, lo: float, hi: float) -> BasePara
         return dataclasses.replace(ph, table={**ph.table, key: v})
 
     prior = max(math.log(hi), -math.log(lo)) / 2
-    return BaseParam(f"controller.{name}", "SI", declared, declared * lo, declared * hi, True,
+    return BaseParam(f"controller.{name}", unit, declared, declared * lo, declared * hi, True,
                      prior, "loop", get, put)
 
 
@@ -365,10 +366,10 @@ def base_params(spec, vt: VirtualTable, cal: Calibration, *, pitch: bool,
                             m0 * (1 - cal.mass), m0 * (1 + cal.mass), False,
                             m0 * cal.mass / 2 or None, "table", vt))
     if vt.control is not None:  # the declared controller's terms a lab may have off
-        for name, (lo, hi) in vt.control.calibrated.items():
+        for name, (lo, hi, *unit) in vt.control.calibrated.items():
             v0 = vt.control.params[name]
             if v0 > 0:
-                out.append(_control_param(name, v0, lo, hi))
+                out.append(_control_param(name, v0, lo, hi, *unit))
     if pitch:
         h0 = _table_value("com_height", vt)
         if h0 > 0:
