@@ -40,8 +40,11 @@ def test_closed_pipe_ends_quietly():
 
 
 def test_ctrl_c_is_one_line_and_exit_130(tmp_path):
+    # Ctrl-C's default disposition in the child: a shell that starts the tests in the
+    # background leaves SIGINT ignored, and Python keeps an ignored SIGINT ignored
     p = subprocess.Popen([*_exe(), "simulate", "--duration", "1500", "--peak", "0.01"],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     time.sleep(2.0)
     p.send_signal(signal.SIGINT)
     _out, err = p.communicate(timeout=60)

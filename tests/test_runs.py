@@ -474,11 +474,13 @@ p = 1.0''')).table()
     ('dofs = ["x", "sideways"]', "[table].dofs: 'sideways' is not a platen motion"),
     ('dofs = "x"', "[table].dofs: expected a non-empty list of names"),
     ('[table.controller]\nkind = "fuzzy"',
-     "[table.controller].kind: expected one of three_variable, pid, got 'fuzzy'"),
+     "[table.controller].kind: expected one of three_variable, pid, tvc, got 'fuzzy' (a "
+     "lab's own kind: --controller-from FILE)"),
     ("[table.controller]\np = 1.0", "[table.controller]: missing key 'kind'"),
     ('[table.controller]\nkind = "pid"', "[table.controller]: a pid controller needs gains"),
     ('[table.controller]\nkind = "pid"\np = 1.0\ngain = 9.0',
-     "'gain' is a knob of the three_variable controller, not of a pid"),
+     "[table.controller]: 'gain' is not a term of a pid controller (it reads "
+     "displacement_gain_v_per_m, p,"),
     ("[table.horizontal]\ncount = 0", "[table.horizontal].count: expected a whole number from "
                                       "1 to 100, got 0"),
     ("[table.horizontal]\npiston_area_m2 = -0.01", "piston_area_m2: must be > 0"),
