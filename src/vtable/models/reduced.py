@@ -221,11 +221,23 @@ def _storey_masses(spec) -> list[float]:
     return []
 
 
+#: the interpolator's stop-band attenuation (dB) and transition (fraction of the run's
+#: Nyquist frequency below it): a control stage that reads the command's velocity and
+#: acceleration (feedforward) weighs an image at f_s - f by (f_s/f)² over the command at f,
+#: so the images must be far below the 55 dB of `resample_poly`'s default filter (issue
+#: 18: an earthquake's 1 Hz content imaged at 199 Hz made a PID + acceleration
+#: feedforward model's table acceleration 3.5 x its displacement's second derivative)
+INTERPOLATOR_DB, INTERPOLATOR_WIDTH = 120.0, 0.2
+
+
 @functools.lru_cache(maxsize=16)
 def _interpolator(up: int) -> np.ndarray:
-    """`resample_poly`'s own default filter for an upsampling by `up` (a Kaiser-windowed
-    sinc, β = 5, half-length 10 up), designed once instead of at every simulation."""
-    h = scipy.signal.firwin(20 * up + 1, 1.0 / up, window=("kaiser", 5.0))
+    """The anti-imaging filter of an upsampling by `up`: a Kaiser-windowed sinc passing
+    the run's band to 0.8 of its Nyquist frequency and stopping INTERPOLATOR_DB from its
+    Nyquist frequency on (`scipy.signal.kaiserord`), designed once per `up`."""
+    n, beta = scipy.signal.kaiserord(INTERPOLATOR_DB, INTERPOLATOR_WIDTH / up)
+    n += 1 - n % 2  # odd: a linear-phase filter with a whole-sample delay
+    h = scipy.signal.firwin(n, (1.0 - INTERPOLATOR_WIDTH / 2) / up, window=("kaiser", beta))
     h.flags.writeable = False
     return h
 
