@@ -165,6 +165,23 @@ def identify_run(run: Run) -> Identification:
 
 
 # ---- the servo loop -------------------------------------------------------------------
+#: the digital stage's terms (`vtable.controllers.kinds.digital`) by their run-format names
+_TERMS = (("i", "i_per_s"), ("d", "d_s"), ("t_v", "feedforward_velocity_s"),
+          ("t_a", "feedforward_acceleration_s2"), ("k_a", "acceleration_gain_v_s2_per_m"),
+          ("ref", "reference generator"))
+
+
+def _controller_terms(table: LabTable) -> list[str]:
+    """The declared controller's terms beyond the P law (eqs 6.1-6.4) that are on."""
+    if table.control is None:
+        return []
+    p = table.control.params
+    on = [name for key, name in _TERMS if p.get(key, 0.0)]
+    if p.get("n1_zz", 1.0) != p.get("n1_zp", 1.0):  # a declared notch (ζ_z < ζ_p)
+        on.append("notch")
+    return on
+
+
 def _servo_loop(run: Run, spec, m_t: float, table: LabTable, out: Identification) -> None:
     """x_t/x_c: eq 6.15 (bare table, rigid mass; x a first-order valve lag when the
     table has a valve time constant), checked against the other loop structures first,
@@ -240,6 +257,12 @@ def _servo_loop(run: Run, spec, m_t: float, table: LabTable, out: Identification
             d["valve_lag_s"] = tau
             d["note_valve"] = (f"eq 7.9 with the valve lag τ {tau:g} s of the table's "
                                "description held in the loop")
+        held = _controller_terms(table)
+        if held:
+            d["note_controller"] = (
+                f"eq 7.9 is the report's P loop: the declared {table.controller} controller's "
+                f"own terms ({', '.join(held)}) are not in this fit, so its k_o is an "
+                "effective one")
         if channels.usable(run, "pitch_acc"):
             d["note"] = ("eq 7.9 has no pitch: on a pitching table f_s, ξ_s are the "
                          "structure's on the rocking table (compare Table 3.1's base "

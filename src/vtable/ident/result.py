@@ -173,8 +173,9 @@ def identification_text(d: dict[str, Any], fam: str = "imperial") -> str:
         _warn_lines(out, fl)
         if fl:
             out.append(f"      frames: {o['frame']}")
-        if o.get("note"):
-            out.append(f"      note: {o['note']}")
+        for key in ("note_controller", "note"):
+            if o.get(key):
+                out.append(f"      note: {o[key]}")
     if d.get("table_3_1"):
         out.append(f"  {'Table 3.1':<28} {'f (Hz)':>8} {'damping (%)':>12}   frames")
         for row in d["table_3_1"]:

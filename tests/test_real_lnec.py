@@ -1,0 +1,175 @@
+"""Issue 18's real-data acceptance on LNEC's measured pink-noise run (../shared/data/real):
+what `identify` can quote of the loop, and why the time-domain diagnosis cannot end near
+the noise floor. Skipped when the data are not beside the repository.
+
+Measured on this run (H1, 2048-point frames unless said; numbers in the asserts):
+
+- Declared as shipped (a bare table under LNEC's P control, the `lnec-st1d` preset),
+  eq 6.15 with the valve lag fits x_t/x_c only roughly (R² 0.966) and quotes k_o 16.7 1/s,
+  17 % under the design's 20.18 1/s (K_q x 129.93 V/m / A): the record holds a notch near
+  3.2 Hz (|x_t/x_c| 0.39, a specimen holding the platen) and a rise to 1.24 at 2 Hz that
+  a P-controlled bare table cannot make, and the bare loop bends k_o to absorb them.
+- Declared with the specimen nobody documented, a SDOF (eq 7.9, the valve lag held): the
+  fit's R² over the specimen mass is highest (0.994) for 0.9-1.0 t, where k_o is 19.6-19.9
+  1/s (within 3 % of the design) and f_s 3.22-3.25 Hz, ξ_s 0.075-0.082. The mass is read
+  from the data (the R² profile), not chosen to hit k_o.
+- The two table channels disagree with each other whatever the model: the measured
+  acceleration differs from the second derivative of the measured displacement by 41 %
+  (5-10 Hz) and 90 % (10-20 Hz) of the acceleration, at coherence 0.98 between them
+  (a systematic transducer or platen-to-actuator dynamic, not noise); a model of one rigid
+  platen seen by both channels cannot come within a few noise floors of both.
+- No time-invariant model driven by h_span can end within 3x the noise floor (5.3 %):
+  even the non-parametric H1 leaves 8.0 % of the displacement (79 % of it at 2-5 Hz) and
+  16.8 % of the acceleration (82 % at 5-20 Hz) incoherent with the drive.
+- The specimen softens during the run: the notch of x_t/x_c moves from 3.22 Hz (first
+  32 s) to 2.93 Hz (last 32 s), which no time-invariant model follows.
+"""
+
+from __future__ import annotations
+
+import gzip
+import os
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import scipy.signal as sg
+
+from vtable.ident.report import identify_run
+from vtable.runs import read_run
+
+K_O_DESIGN = 1.9345e-3 * 129.93 / 0.012456  # 1/s: K_q x displacement gain / A = 20.18
+KG_PER_KIP = 4448.2216 / 9.80665
+
+
+def _real_data() -> Path | None:
+    root = Path(__file__).resolve().parents[1]
+    env = os.environ.get("VTABLE_REAL_DATA")
+    for d in ([Path(env)] if env else []) + [root.parent / "shared/data/real",
+                                              root.parent.parent / "shared/data/real"]:
+        if (d / "lnec_pink_2.toml").is_file() and (d / "lnec_pink_2.csv.gz").is_file():
+            return d
+    return None
+
+
+pytestmark = pytest.mark.skipif(_real_data() is None,
+                                reason="../shared/data/real is not beside the repo")
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory) -> Path:
+    """A copy of the run (TOML + decompressed CSV) in a temporary folder."""
+    src = _real_data()
+    assert src is not None
+    d = tmp_path_factory.mktemp("real_lnec")
+    shutil.copy(src / "lnec_pink_2.toml", d)
+    with gzip.open(src / "lnec_pink_2.csv.gz", "rb") as a, open(d / "lnec_pink_2.csv", "wb") as b:
+        shutil.copyfileobj(a, b)
+    return d
+
+
+def _with_specimen(run_dir: Path, name: str, specimen: str) -> Path:
+    """The run with its [specimen] replaced (the CSV shared by a symlink)."""
+    text = (run_dir / "lnec_pink_2.toml").read_text()
+    new = re.sub(r"\[specimen\]\n(?:[^\[\n].*\n|\n)*", specimen + "\n", text, count=1)
+    assert new != text
+    (run_dir / f"{name}.toml").write_text(new)
+    csv = run_dir / f"{name}.csv"
+    if not csv.exists():
+        csv.symlink_to(run_dir / "lnec_pink_2.csv")
+    return run_dir / f"{name}.toml"
+
+
+def _sdof(run_dir: Path, weight_kip: float) -> dict:
+    path = _with_specimen(run_dir, f"sdof_{weight_kip:g}", (
+        f'[specimen]\nkind = "sdof"\nweight_kip = {weight_kip}\nheight_in = 40.0\n'
+        'frequency_hz = 3.2\ndamping = 0.08\n'))
+    return identify_run(read_run(path)).to_json()["table_sdof"]
+
+
+def test_as_declared_the_bare_loop_bends_k_o(run_dir):
+    ol = identify_run(read_run(run_dir / "lnec_pink_2.toml")).to_json()["open_loop"]
+    k_o = ol["params"]["k_o"]
+    assert 15.8 < k_o < 17.6, k_o  # 16.7 ± 0.44
+    assert k_o < 0.9 * K_O_DESIGN  # more than 10 % under the design: not quotable
+    assert 0.95 < ol["r2"] < 0.98, ol["r2"]  # 0.966: the loop holds what eq 6.15 has not
+
+
+def test_with_the_undocumented_specimen_k_o_is_the_designs(run_dir):
+    weights = (1.4, 2.0, 2.2, 2.9)  # kip: 635, 907, 998, 1315 kg
+    fits = {w: _sdof(run_dir, w) for w in weights}
+    r2 = {w: f["r2"] for w, f in fits.items()}
+    best = max(r2, key=r2.get)
+    # the data choose the mass: R² 0.987 at 635 kg, 0.994 at 0.9-1.0 t, 0.991 at 1.3 t
+    assert best in (2.0, 2.2), r2
+    assert r2[best] > 0.99 and r2[best] - r2[1.4] > 0.005 and r2[best] - r2[2.9] > 0.002, r2
+    p = fits[best]["params"]
+    assert abs(p["k_o"] / K_O_DESIGN - 1) < 0.05, p  # 19.6-19.9 1/s vs 20.18
+    assert 3.1 < p["f_s"] < 3.35 and 0.05 < p["xi_s"] < 0.12, p
+    assert not fits[best]["flags"], fits[best]["flags"]
+    assert 0.8e3 < best * KG_PER_KIP < 1.1e3
+
+
+def _channels(run_dir: Path) -> pd.DataFrame:
+    return pd.read_csv(run_dir / "lnec_pink_2.csv")
+
+
+def test_the_two_table_channels_disagree_beyond_any_rigid_platen(run_dir):
+    d = _channels(run_dir)
+    fs = 1 / (d.time[1] - d.time[0])
+    x = d.avg_hdisp.to_numpy() * 1e-3
+    a = d.avg_hacc.to_numpy() * 9.80665
+    f = np.fft.rfftfreq(len(x), 1 / fs)
+    X, A = np.fft.rfft(x - x.mean()), np.fft.rfft(a - a.mean())
+
+    def mismatch(lo: float, hi: float) -> float:
+        b = (f >= lo) & (f < hi)
+        return float(np.sqrt(np.sum(abs(A[b] + (2 * np.pi * f[b]) ** 2 * X[b]) ** 2)
+                             / np.sum(abs(A[b]) ** 2)))
+
+    assert mismatch(2, 5) < 0.25  # 19 %: where the channels roughly agree
+    assert mismatch(5, 10) > 0.33  # 41 %
+    assert mismatch(10, 20) > 0.75  # 90 %
+    fc, coh = sg.coherence(x, a, fs=fs, nperseg=2048)
+    band = (fc > 5) & (fc < 12)
+    # systematic: the channels are coherent where they differ (median 0.977, least 0.87)
+    assert np.median(coh[band]) > 0.95 and coh[band].min() > 0.8
+
+
+def test_the_specimen_softens_during_the_run(run_dir):
+    d = _channels(run_dir)
+    fs = 1 / (d.time[1] - d.time[0])
+    xc, xt = d.h_span.to_numpy(), d.avg_hdisp.to_numpy()
+    w = int(32 * fs)
+
+    def notch(s0: int) -> float:
+        f, gxy = sg.csd(xc[s0:s0 + w], xt[s0:s0 + w], fs=fs, nperseg=2048)
+        _, gxx = sg.welch(xc[s0:s0 + w], fs=fs, nperseg=2048)
+        m = (f > 2.3) & (f < 4.5)
+        return float(f[m][np.argmin(abs(gxy / gxx)[m])])
+
+    first, last = notch(0), notch(len(xc) - w)
+    assert 3.15 < first < 3.3, first  # 3.22 Hz
+    assert last < first - 0.15, (first, last)  # 2.93 Hz: at least 1.5 lines lower
+
+
+def test_no_time_invariant_model_of_the_drive_reaches_three_noise_floors(run_dir):
+    """What any linear time-invariant model driven by h_span must leave: the incoherent
+    part (1 - γ²) of each channel's power (H1 on 4096-point frames, the best such model
+    there is). `vtable diagnose` puts the run's noise floor at 1.78 % (3x: 5.3 %)."""
+    d = _channels(run_dir)
+    fs = 1 / (d.time[1] - d.time[0])
+    floor3 = 3 * 0.0178
+    for ch, least, band, share in (("avg_hdisp", 0.065, (2, 5), 0.6),  # 8.0 %, 79 %
+                                   ("avg_hacc", 0.14, (5, 20), 0.7)):  # 16.8 %, 82 %
+        y = d[ch].to_numpy()
+        f, pyy = sg.welch(y, fs=fs, nperseg=4096)
+        _, coh = sg.coherence(d.h_span.to_numpy(), y, fs=fs, nperseg=4096)
+        u = (1 - coh) * pyy
+        lti = np.sqrt(u[f > 0].sum() / pyy[f > 0].sum())
+        assert lti > least > floor3, (ch, lti)
+        in_band = u[(f >= band[0]) & (f < band[1])].sum() / u[f > 0].sum()
+        assert in_band > share, (ch, in_band)
