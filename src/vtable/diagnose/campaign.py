@@ -18,6 +18,7 @@ from vtable.diagnose.compare import (
     run_groups,
     segments,
 )
+from vtable.diagnose.sensors import sensor_check
 from vtable.errors import VtableError
 from vtable.params.lab import run_table
 from vtable.params.virtual import virtual_table_for
@@ -80,6 +81,8 @@ class Campaign:
     notes: list[str]
     floor: float
     targets: list[tuple[Run, str, np.ndarray, float]] = field(repr=False)
+    #: runs whose table acceleration and displacement disagree (`sensors.sensor_check`)
+    sensors: list = field(default_factory=list)
 
     @classmethod
     def of(cls, runs: Sequence[Run] | Campaign) -> Campaign:
@@ -95,12 +98,14 @@ class Campaign:
                     yt = y[tr][::2]
                     targets.append((r, g, yt, float(np.linalg.norm(yt))))
         notes, floor = campaign_notes(a), noise_floor(a)
+        sensors = [c for c in map(sensor_check, a) if c is not None and not c.agree]
+        notes += [c.text() for c in sensors]
         if floor < MODEL_RESOLUTION:
             notes.append(f"the runs' sensor noise ({floor:.2%} of the signals) is below what "
                          f"the reduced model resolves ({MODEL_RESOLUTION:.1%}, its agreement "
                          "with the multibody table); that is the noise floor used")
             floor = MODEL_RESOLUTION
-        return cls(list(runs), a, notes, floor, targets)
+        return cls(list(runs), a, notes, floor, targets, sensors)
 
     @property
     def noise(self) -> dict[str, dict[str, float]]:

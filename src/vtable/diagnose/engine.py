@@ -414,6 +414,8 @@ class Diagnoser:
                              f"{err:.2%} is {unexp['ratio_to_floor']:.1f} x the noise floor "
                              f"({floor:.2%}), above the {NOISE_FACTOR:g} x noise alone explains;"
                              f" it lives in {unexp['where']}")
+                for c in self.campaign.sensors:  # what no effect on the platen can fit
+                    parts.append(c.text())
         base = self.base_table(current)
         start = getattr(self, "start_fitted", None)
         at_bounds = [] if err is None else base_at_bounds(
