@@ -157,6 +157,22 @@ def h_open_loop_lag(f_hz, f_o: float, xi_o: float, k_o: float, tau: float) -> np
     return k_o / (s * (1 + tau * s) * (s * s / w**2 + 2 * xi_o * s / w + 1) + k_o)
 
 
+def h_resonator_lag(f_hz, f_o: float, xi_o: float, k_o: float, tau: float, f_s: float,
+                    xi_s: float, u: float) -> np.ndarray:
+    """Eq 7.9 with the valve lag of `h_open_loop_lag`: the loop of eq 6.15 carrying a
+    resonator of mass ratio u = m_s/m_t (ω_s, ξ_s) on the platen. The platen's inertia
+    and the oil column's damping see the dynamic mass 1 + u T_s, T_s = (2ξ_s ω_s s +
+    ω_s²)/(s² + 2ξ_s ω_s s + ω_s²), so
+    H = k_o/(s(1 + τs)[(1 + u T_s)(s²/ω_o² + 2ξ_o s/ω_o) + 1] + k_o);
+    τ = 0 is eq 7.9 exactly (its coefficients a0-a5, with the a2 typo corrected), u = 0
+    is `h_open_loop_lag`."""
+    s = 1j * TWO_PI * np.asarray(f_hz, dtype=float)
+    w, ws = TWO_PI * f_o, TWO_PI * f_s
+    t_s = (2 * xi_s * ws * s + ws**2) / (s * s + 2 * xi_s * ws * s + ws**2)
+    d = (1 + u * t_s) * (s * s / w**2 + 2 * xi_o * s / w) + 1
+    return k_o / (s * (1 + tau * s) * d + k_o)
+
+
 def h_type0(f_hz, gain: float, f_n: float, zeta: float) -> np.ndarray:
     """A type-0 second-order loop (no integrator: an electrodynamic shaker, a stiff
     plant under proportional control): H = K ω_n²/(s² + 2ζω_n s + ω_n²), DC gain K."""

@@ -9,6 +9,11 @@ Candidates, each fitted to the complex H1 of x_t over x_c (real and imaginary pa
   around the platen (`vtable.analytic.controlled`, eq 6.15 generalised), (f_o, ξ_o, k_o, τ)
   with the controller's own terms as declared, type 1 — a candidate when the table
   declares such a controller (`Prior.declared`);
+- ``resonator``: eq 7.9 with the valve lag (`vtable.ident.fits.h_resonator_lag`), (f_o,
+  ξ_o, k_o, τ, f_s, ξ_s, u): the loop carrying a resonance on the platen that the run does
+  not declare (an undocumented specimen, a reaction mass), type 1 — kept only when its
+  AIC beats every other structure's by `AIC_MARGIN` and it found a resonance
+  (`is_resonance`); else the run has no such resonance;
 - ``type_0``: a type-0 second-order loop K ω_n²/(s² + 2ζω_n s + ω_n²), (K, f_n, ζ): a
   plant without an integrator (an electrodynamic shaker under proportional control).
 
@@ -51,6 +56,7 @@ from vtable.ident.fits import (
     _select,
     h_open_loop,
     h_open_loop_lag,
+    h_resonator_lag,
     h_type0,
     phase_crossover,
 )
@@ -101,6 +107,12 @@ STRUCTURES: dict[str, Structure] = {
                              ("f_o", "xi_o", "k_o", "tau"), h_open_loop_lag,
                              (0.1, 1e-3, 0.1, 0.0), (1000.0, 10.0, 1e4, 1.0), True,
                              (("f_o", "xi_o"),)),
+    "resonator": Structure("resonator", "eq 7.9 with a valve lag: a resonator on the "
+                           "platen the run does not declare",
+                           ("f_o", "xi_o", "k_o", "tau", "f_s", "xi_s", "u"), h_resonator_lag,
+                           (0.1, 1e-3, 0.1, 0.0, 0.2, 1e-3, 1e-3),
+                           (1000.0, 10.0, 1e4, 1.0, 200.0, 1.0, 20.0), True,
+                           (("f_o", "xi_o"), ("f_s", "xi_s"))),
     "type_0": Structure("type_0", "a type-0 second-order loop", ("gain", "f_n", "zeta"),
                         h_type0, (1e-3, 0.05, 1e-3), (100.0, 1000.0, 10.0), False,
                         (("f_n", "zeta"),)),
@@ -235,8 +247,39 @@ def _starts(st: Structure, data: LoopData, prior: Prior | None) -> list[list[flo
         out.append([k0, fn0, z0])
         if prior is not None:
             out.append([k0, prior.open_loop.f_o, 0.5])
+    if len(st.params) == 7:  # the resonator: at the deepest dip of |H| and on a grid
+        x = out[0]
+        grid = [_dip(data), *np.geomspace(0.5, 0.8 * float(data.f[-1]), 8)]
+        out = [[*x[:3], x[3] if len(x) == 4 else 0.001, f_s0, 0.05, u0]
+               for f_s0 in grid for u0 in (0.2, 1.0)]
     lo, hi = np.array(st.lower), np.array(st.upper)
     return [list(np.clip(x, lo * (1 + 1e-6) + 1e-12, hi * (1 - 1e-6))) for x in out]
+
+
+#: a fitted resonator counts as one only with ξ_s up to this (a peak and a notch)
+RESONANCE_MAX_DAMPING = 0.3
+
+
+def is_resonance(fit: Fit) -> bool:
+    """A resonator fit that found a resonance: ξ_s ≤ `RESONANCE_MAX_DAMPING` and none of
+    f_s, ξ_s, u flagged (at a bound, or a standard error beyond the value): else the
+    extra freedom only patched a loop the other structures cannot reach."""
+    if fit["xi_s"] > RESONANCE_MAX_DAMPING:
+        return False
+    return not any(f.param in ("f_s", "xi_s", "u") and f.code != "correlated"
+                   for f in fit.flags)
+
+
+def _dip(data: LoopData) -> float:
+    """The frequency of the deepest dip of |H| relative to its running trend (a
+    resonator's notch), among the lines below 80 % of the highest."""
+    m = np.abs(data.H)
+    k = data.f < 0.8 * data.f[-1]
+    if k.sum() < 5:
+        return float(data.f[len(data.f) // 2])
+    trend = np.convolve(m, np.ones(9) / 9, mode="same")
+    r = np.where(k, m / np.maximum(trend, 1e-12), np.inf)
+    return float(data.f[int(np.argmin(r))])
 
 
 def structures(prior: Prior | None) -> dict[str, Structure]:
@@ -401,6 +444,12 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
     cands = structures(prior)
     fits = {k: fit_structure(k, data, prior, delay_dt) for k in cands}
     crit = {k: aic(f) for k, f in fits.items()}
+    others = {k: a for k, a in crit.items() if k != "resonator"}
+    if "resonator" in crit and not (crit["resonator"] + AIC_MARGIN < min(others.values())
+                                    and is_resonance(fits["resonator"])):
+        cands = {k: v for k, v in cands.items() if k != "resonator"}  # no resonance found
+        fits = {k: fits[k] for k in cands}
+        crit = others
     best = min(crit, key=crit.__getitem__)
     ones = [k for k in cands if cands[k].type1]
     type1 = min(crit[k] for k in ones)

@@ -202,7 +202,10 @@ def _servo_loop(run: Run, spec, m_t: float, table: LabTable, out: Identification
         out.loop_structure = ls.to_json()
         if not ls.fits_eq_6_15:
             raise VtableError(ls.why + "; its eq 6.15 parameters would not be physical")
-        if "declared" in ls.fits:  # the declared controller's terms held, the loop fitted
+        if ls.best == "resonator":  # a resonance the run does not declare, fitted with it
+            fit = ls.fits["resonator"]
+            what = f"{STRUCTURES['resonator'].name} fit"
+        elif "declared" in ls.fits:  # the declared controller's terms held, the loop fitted
             fit = ls.fits["declared"]
             what = f"the declared {table.controller} controller's loop fit"
         elif tau > 0:  # the table's valve lag: eq 6.15 x 1/(1 + τs), τ fitted
@@ -217,6 +220,14 @@ def _servo_loop(run: Run, spec, m_t: float, table: LabTable, out: Identification
         d = _fit_dict(fit)
         d["model"] = what.removesuffix(" fit")
         d["band_hz"] = list(band)
+        if ls.best == "resonator":
+            m_s = fit["u"] * m_t
+            d["note_resonator"] = (
+                f"x_t/x_c has the peak and notch of a resonance on the platen that the run "
+                f"does not declare: f_s {fit['f_s']:.2f} Hz, ξ_s {fit['xi_s']:.3f}, mass "
+                f"ratio u {fit['u']:.3f} (about {m_s:.0f} kg on the {m_t:.0f} kg platen); the "
+                "loop is quoted with it held. Declare the specimen ([specimen] sdof) or "
+                "diagnose with the platen_resonator effect")
         d["gain_margin"] = closed_forms.gain_margin_bare(ol)
         d["gain_margin_flags"] = flags_json(derived)
         out.open_loop = d

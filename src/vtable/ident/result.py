@@ -156,6 +156,8 @@ def identification_text(d: dict[str, Any], fam: str = "imperial") -> str:
                    f"{lag} (R² {o['r2']:.4f}{_frame(o)}); gain margin (eq 6.20) "
                    f"{o['gain_margin']:.2f}{gm}")
         _warn_lines(out, fl)
+        if "note_resonator" in o:
+            out.append(f"      note: {o['note_resonator']}")
         hs = d.get("horizontal_spring")
         if hs:
             ks, ku = _in(hs["k_h_kip_per_in"], "kip/in", fam)
