@@ -67,7 +67,7 @@ def check_campaign(runs: Sequence[Run]) -> list[Run]:
 #: the noise floor of a campaign whose sensors are quieter (noise-free runs): the verdict
 #: judges the final error against at least this. The selection does not use it: it takes
 #: the resolution of each model it compares from the effects in it, measured
-#: (`vtable.diagnose.resolution`: 0.31 % for the base, 0.26-0.62 % with one catalog effect)
+#: (`vtable.diagnose.resolution`: 0.33 % for the base, 0.28-0.63 % with one catalog effect)
 MODEL_RESOLUTION = 0.005
 
 

@@ -328,8 +328,7 @@ class Diagnoser:
                 what = (f"the best candidate ({top.effect}) would change the held-out error "
                         f"{err:.2%} -> {top.error_after:.2%}")
                 if top.failing():
-                    reason = f"{what}, not a gain the noise cannot produce: " + \
-                        "; ".join(top.failing())
+                    reason = f"{what}, not added: " + "; ".join(top.failing())
                 else:
                     reason = (f"{what}, but it is not added on that evidence: "
                               + "; ".join(top.blocking))

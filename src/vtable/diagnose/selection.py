@@ -148,7 +148,9 @@ def failing(g: Gain | None, model: Physics | None = None, name: str | None = Non
                    f"the resolution of the reduced model with it in ({r:.2%}: a patch of the "
                    "model-form difference could buy that)")
     if out and cost > 0:
+        out[0] = "charged for its parameters' distance from their defaults, " + out[0]
         far = [w for w, z in implausibility(name, model.effects[name], table) if abs(z) > 1]
+        whole = " (more than the whole gain)" if cost >= g.gain > 0 else ""
         out.append(f"its parameters' distance from their defaults costs {cost:.3g} of the "
-                   f"gain {g.gain:.3g}" + (f" ({'; '.join(far)})" if far else ""))
+                   f"gain {g.gain:.3g}{whole}" + (f" ({'; '.join(far)})" if far else ""))
     return out
