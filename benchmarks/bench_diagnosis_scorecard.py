@@ -12,7 +12,9 @@ diagnosed with the full catalog; one line per case and the acceptance totals.
 Campaigns and results are cached under $VTABLE_SCORECARD_CACHE (default
 ~/.cache/vtable-scorecard; results are keyed by the case and the vtable source, so a changed
 engine is diagnosed again; `--fresh` ignores cached results). `--json FILE` writes every
-result. Case definitions and rules: tests/scorecard.py.
+result. Case definitions and rules: tests/scorecard.py (issue 18's: CASES_18, judge18:
+the exact effect set; "unexplained" said by the verdict; every suspect declaration named in
+base_at_bounds and the verdict; a campaign vtable refuses fails with its refusal).
 """
 
 from __future__ import annotations
@@ -140,10 +142,15 @@ def main(argv: list[str] | None = None) -> int:
                     help="issue 12's 40 cases (default), issue 18's 30, or all")
     a = ap.parse_args(argv)
     if a.list:
-        for c in sc.CASES:
+        for c in sc.CASES if a.set in ("12", "all") else []:
             print(f"{c.name:<30} {_short(c.kind):<8} {c.specimen:<8} {c.pitch:<15} "
                   f"com {c.com_height_in:4.1f} in  {c.fs:5g} Hz  noise {c.noise:.0%}  "
                   f"{c.record:<9} seed {c.seed}  {_truth(c)}")
+        for c in sc.CASES_18 if a.set in ("18", "all") else []:
+            ctl = c.table.law.kind if c.table.declare_controller else "preset"
+            print(f"{c.name:<38} {c.kind:<13} {c.table.preset:<9} {ctl:<14} "
+                  f"{c.specimen.kind:<14} {c.fs:5g} Hz  noise {c.noise:.0%}  seed {c.seed}  "
+                  f"{_expected(c)}")
         return 0
     names = ([c.name for c in sc.CASES] if a.set in ("12", "all") else []) + (
         [c.name for c in sc.CASES_18] if a.set in ("18", "all") else [])

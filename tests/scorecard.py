@@ -412,12 +412,13 @@ def totals(results: list[tuple[Case, dict]]) -> dict[str, Any]:
 
 
 # ---------------------------------------------------------------------------------------------
-# issue 18's new cases (data only: vtable cannot read these declarations yet, so they are not
-# in CASES nor diagnosed by the scorecard test). Each is a truth table (its controller
-# declared in [table.controller] when not the preset's own, force_measured when set, a
-# platen mass off by platen_mass_factor undeclared), the true and the declared specimen, the
-# commands, and what a perfect diagnosis says: the exact effect set, "unexplained", or
-# "suspect declaration" naming the declared values the data push beyond their bounds.
+# issue 18's new cases (CASES_18: in the benchmark with --set 18; the cached-subset test
+# does not diagnose them, tests/test_scorecard.py checks their rule, `judge18`). Each is a
+# truth table (its controller declared in [table.controller] when not the preset's own,
+# force_measured when set, a platen mass off by platen_mass_factor undeclared), the true and
+# the declared specimen, the commands, and what a perfect diagnosis says: the exact effect
+# set, "unexplained", or "suspect declaration" naming the declared values the data push
+# beyond their bounds.
 
 KINDS_18 = ("in_catalog", "null", "outside", "beyond_bounds")
 UNEXPLAINED = "unexplained"
