@@ -123,7 +123,8 @@ def _totals18(tot: dict) -> None:
           + (" (" + "; ".join(f"{k}: {','.join(v)}" for k, v in fp.items()) + ")" if fp else "")
           + " (acceptance: 0)")
     print(f"outside the catalog: unexplained in {_frac(tot['unexplained'])}; beyond the "
-          f"bounds: the suspect named in {_frac(tot['suspect'])} (acceptance: all)")
+          f"bounds: right in {_frac(tot['suspect'])} (acceptance: all; the suspect named, "
+          f"whatever was added: {_frac(tot['suspect_named'])})")
     if tot["refused"]:
         print(f"refused by vtable: {', '.join(tot['refused'])}")
 

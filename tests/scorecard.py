@@ -667,6 +667,15 @@ def names_suspect(suspect: str, parameter: str) -> bool:
             and _PER_MODE.get(what) == p_what)
 
 
+def missing_suspects(case: Case18, r: dict) -> list[str]:
+    """The case's `suspect` declarations that `base_at_bounds` or the verdict leaves
+    unnamed."""
+    params = [b["parameter"] for b in r.get("base_at_bounds") or []]
+    verdict = r.get("verdict") or ""
+    return [s for s in case.suspect
+            if not any(names_suspect(s, p) and p in verdict for p in params)]
+
+
 def judge18(case: Case18, r: dict) -> dict:
     """An issue-18 case's rule: {"ok", "why", "false_positive"}. An effect list: the final
     set is exactly it; UNEXPLAINED: the verdict says the residual is unexplained (and
@@ -684,9 +693,7 @@ def judge18(case: Case18, r: dict) -> dict:
                              + (f" (added {found})" if found else ""))
     elif case.expected == SUSPECT:
         params = [b["parameter"] for b in r.get("base_at_bounds") or []]
-        miss = [s for s in case.suspect
-                if not any(names_suspect(s, p) for p in params)
-                or not any(names_suspect(s, p) and p in verdict for p in params)]
+        miss = missing_suspects(case, r)
         ok = not miss and not found
         why = "; ".join(([f"suspect {miss} not named (at bounds: {params or 'none'})"]
                          if miss else []) + ([f"added {found}"] if found else []))
@@ -703,11 +710,14 @@ def totals18(results: list[tuple[Case18, dict]]) -> dict[str, Any]:
     fps = {c.name: r.get("false_positive") or [] for c, r in results}
     une = [bool(r["ok"]) for c, r in results if c.expected == UNEXPLAINED]
     sus = [bool(r["ok"]) for c, r in results if c.expected == SUSPECT]
+    named = [not r.get("refused") and not missing_suspects(c, r) for c, r in results
+             if c.expected == SUSPECT]
     frac = sum(ok) / len(ok) if ok else None
     n_fp = sum(bool(v) for v in fps.values())
     return {"exact": (sum(ok), len(ok)), "exact_fraction": frac,
             "false_positives": {k: v for k, v in fps.items() if v}, "n_false_positive": n_fp,
             "unexplained": (sum(une), len(une)), "suspect": (sum(sus), len(sus)),
+            "suspect_named": (sum(named), len(named)),
             "refused": sorted(c.name for c, r in results if r.get("refused")),
             "accepted": (frac is not None and frac >= 0.95 and n_fp == 0 and all(une)
                          and all(sus)),

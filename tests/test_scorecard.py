@@ -157,6 +157,10 @@ def test_the_rules_of_issue_18():
     assert tot["exact"] == (3, 4) and tot["exact_fraction"] == 0.75
     assert tot["false_positives"] == {"lnec_pid_ff_null": ["actuator_friction"]}
     assert tot["unexplained"] == (1, 1) and tot["suspect"] == (1, 1)
+    assert tot["suspect_named"] == (1, 1)
+    added = sc.totals18([(one, {**b, "found": ["valve_dynamics"], "ok": False,
+                                "time_s": 1.0})])
+    assert added["suspect"] == (0, 1) and added["suspect_named"] == (1, 1)
     assert not tot["accepted"] and tot["time_s"] == 5.0
 
 
