@@ -6,11 +6,15 @@ diagnosed with the full catalog; one line per case and the acceptance totals.
     python benchmarks/bench_diagnosis_scorecard.py --quick          # 3 cases, one per kind
     python benchmarks/bench_diagnosis_scorecard.py --cases backlash_1,null_sdof_elcentro
     python benchmarks/bench_diagnosis_scorecard.py --list
+    python benchmarks/bench_diagnosis_scorecard.py --set 18         # issue 18's 30 cases
+    python benchmarks/bench_diagnosis_scorecard.py --set all        # both (70 cases)
 
 Campaigns and results are cached under $VTABLE_SCORECARD_CACHE (default
 ~/.cache/vtable-scorecard; results are keyed by the case and the vtable source, so a changed
 engine is diagnosed again; `--fresh` ignores cached results). `--json FILE` writes every
-result. Case definitions and rules: tests/scorecard.py.
+result. Case definitions and rules: tests/scorecard.py (issue 18's: CASES_18, judge18:
+the exact effect set; "unexplained" said by the verdict; every suspect declaration named in
+base_at_bounds and the verdict; a campaign vtable refuses fails with its refusal).
 """
 
 from __future__ import annotations
@@ -28,6 +32,10 @@ import scorecard as sc
 
 HEAD = (f"{'case':<30} {'kind':<8} {'truth':<44} {'found':<56} {'first-ranked':<24} "
         f"{'start':>6} {'final':>6} {'floor':>6} {'ratio':>5} {'time':>6}  ok")
+
+
+HEAD_18 = (f"{'case (issue 18)':<38} {'kind':<13} {'expected':<34} {'found':<40} "
+           f"{'final / floor':>15} {'time':>6}  ok")
 
 
 def _short(kind: str) -> str:
@@ -54,8 +62,71 @@ def line(case: sc.Case, r: dict) -> str:
             + (" (cached)" if r.get("cached") else ""))
 
 
+def _case(name: str) -> sc.Case | sc.Case18:
+    return sc.BY_NAME[name] if name in sc.BY_NAME else sc.BY_NAME_18[name]
+
+
+def _expected(case: sc.Case18) -> str:
+    if case.expected == sc.SUSPECT:
+        return "suspect " + ",".join(case.suspect)
+    return case.expected if isinstance(case.expected, str) else ",".join(case.expected) or "-"
+
+
+def line18(case: sc.Case18, r: dict) -> str:
+    """One issue-18 case: expected, found, final error / floor, time, ok or why."""
+    found = ",".join(r["found"]) or "-"
+    if r.get("refused"):
+        errs = f"{'refused':>15}"
+    else:
+        errs = f"{r['final_error']:6.2%} / {r['noise_floor']:6.2%}"
+    return (f"{case.name:<38} {case.kind:<13} {_expected(case):<34.34} {found:<40.40} "
+            f"{errs} {r['time_s']:5.0f}s  {'yes' if r['ok'] else 'NO: ' + r['why']}"
+            + (" (cached)" if r.get("cached") else ""))
+
+
+def _line(name: str, r: dict) -> str:
+    c = _case(name)
+    return line18(c, r) if isinstance(c, sc.Case18) else line(c, r)
+
+
 def _run(name: str, fresh: bool, workers: int | None = None) -> tuple[str, dict]:
-    return name, sc.diagnose_case(sc.BY_NAME[name], use_cache=not fresh, workers=workers)
+    return name, sc.diagnose_case(_case(name), use_cache=not fresh, workers=workers)
+
+
+def _frac(p: tuple[int, int]) -> str:
+    return f"{p[0]}/{p[1]}" if p[1] else "none run"
+
+
+def _totals12(tot: dict) -> None:
+    """Issue 12's acceptance figures."""
+    fr = tot["in_catalog_fraction"]
+    print(f"in-catalog: exact hidden set in {_frac(tot['in_catalog'])}"
+          + (f" ({fr:.0%}; acceptance >= 90 %)" if fr is not None else ""))
+    print(f"null and mis-declared null: nothing added in {_frac(tot['null'])} "
+          "(acceptance: all)")
+    print(f"outside the catalog: unexplained not null in {_frac(tot['outside'])} "
+          "(acceptance: all)")
+    cal = tot["calibration"]
+    if cal["cases"]:
+        print(f"calibrated base on the {cal['cases']} null cases: every mode frequency within "
+              f"{cal['frequency']:.2%} of the truth (acceptance 0.5 %), damping within "
+              f"{cal['damping']:.1%} (acceptance 20 %)")
+
+
+def _totals18(tot: dict) -> None:
+    """Issue 18's acceptance figures."""
+    fr = tot["exact_fraction"]
+    print(f"issue 18: right in {_frac(tot['exact'])}"
+          + (f" ({fr:.0%}; acceptance >= 95 %)" if fr is not None else ""))
+    fp = tot["false_positives"]
+    print(f"false positives (added in a null or beyond-bounds case): {len(fp)}"
+          + (" (" + "; ".join(f"{k}: {','.join(v)}" for k, v in fp.items()) + ")" if fp else "")
+          + " (acceptance: 0)")
+    print(f"outside the catalog: unexplained in {_frac(tot['unexplained'])}; beyond the "
+          f"bounds: right in {_frac(tot['suspect'])} (acceptance: all; the suspect named, "
+          f"whatever was added: {_frac(tot['suspect_named'])})")
+    if tot["refused"]:
+        print(f"refused by vtable: {', '.join(tot['refused'])}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -68,25 +139,36 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--fresh", action="store_true", help="ignore cached results")
     ap.add_argument("--json", help="write every result to this file")
     ap.add_argument("--list", action="store_true", help="list the cases and exit")
+    ap.add_argument("--set", choices=("12", "18", "all"), default="12",
+                    help="issue 12's 40 cases (default), issue 18's 30, or all")
     a = ap.parse_args(argv)
     if a.list:
-        for c in sc.CASES:
+        for c in sc.CASES if a.set in ("12", "all") else []:
             print(f"{c.name:<30} {_short(c.kind):<8} {c.specimen:<8} {c.pitch:<15} "
                   f"com {c.com_height_in:4.1f} in  {c.fs:5g} Hz  noise {c.noise:.0%}  "
                   f"{c.record:<9} seed {c.seed}  {_truth(c)}")
+        for c in sc.CASES_18 if a.set in ("18", "all") else []:
+            ctl = c.table.law.kind if c.table.declare_controller else "preset"
+            print(f"{c.name:<38} {c.kind:<13} {c.table.preset:<9} {ctl:<14} "
+                  f"{c.specimen.kind:<14} {c.fs:5g} Hz  noise {c.noise:.0%}  seed {c.seed}  "
+                  f"{_expected(c)}")
         return 0
-    names = [c.name for c in sc.CASES]
+    names = ([c.name for c in sc.CASES] if a.set in ("12", "all") else []) + (
+        [c.name for c in sc.CASES_18] if a.set in ("18", "all") else [])
     if a.quick:
         names = list(sc.QUICK)
     if a.cases:
         names = [n.strip() for n in a.cases.split(",") if n.strip()]
-        bad = [n for n in names if n not in sc.BY_NAME]
+        bad = [n for n in names if n not in sc.BY_NAME and n not in sc.BY_NAME_18]
         if bad:
             print(f"unknown case(s) {', '.join(bad)}; --list shows them", file=sys.stderr)
             return 2
     print(f"diagnosis scorecard: {len(names)} case(s), {a.jobs} process(es), cache "
           f"{sc.cache_root()}, engine {sc.engine_fingerprint()}")
-    print(HEAD)
+    if any(n in sc.BY_NAME for n in names):
+        print(HEAD)
+    if any(n in sc.BY_NAME_18 for n in names):
+        print(HEAD_18)
     t0 = time.perf_counter()
     results: dict[str, dict] = {}
     if a.jobs > 1:
@@ -95,39 +177,35 @@ def main(argv: list[str] | None = None) -> int:
             for f in as_completed(futs):
                 n, r = f.result()
                 results[n] = r
-                print(line(sc.BY_NAME[n], r), flush=True)
+                print(_line(n, r), flush=True)
     else:
         for n in names:
             _, r = _run(n, a.fresh)
             results[n] = r
-            print(line(sc.BY_NAME[n], r), flush=True)
+            print(_line(n, r), flush=True)
     wall = time.perf_counter() - t0
-    done = [(sc.BY_NAME[n], results[n]) for n in names]
+    done_all = [(_case(n), results[n]) for n in names]
+    done = [(c, r) for c, r in done_all if isinstance(c, sc.Case)]
+    done18 = [(c, r) for c, r in done_all if isinstance(c, sc.Case18)]
     tot = sc.totals(done)
-
-    def frac(p):
-        return f"{p[0]}/{p[1]}" if p[1] else "none run"
+    tot18 = sc.totals18(done18)
 
     print()
-    fr = tot["in_catalog_fraction"]
-    print(f"in-catalog: exact hidden set in {frac(tot['in_catalog'])}"
-          + (f" ({fr:.0%}; acceptance >= 90 %)" if fr is not None else ""))
-    print(f"null and mis-declared null: nothing added in {frac(tot['null'])} (acceptance: all)")
-    print(f"outside the catalog: unexplained not null in {frac(tot['outside'])} "
-          "(acceptance: all)")
-    cal = tot["calibration"]
-    if cal["cases"]:
-        print(f"calibrated base on the {cal['cases']} null cases: every mode frequency within "
-              f"{cal['frequency']:.2%} of the truth (acceptance 0.5 %), damping within "
-              f"{cal['damping']:.1%} (acceptance 20 %)")
-    n_new = sum(not r.get("cached") for _, r in done)
-    per = tot["time_s"] / len(done) if done else 0.0
-    print(f"diagnosis time: {tot['time_s']:.0f} s in all, {per:.0f} s per case "
-          f"({n_new} diagnosed now, {len(done) - n_new} from the cache); wall {wall:.0f} s")
-    print("acceptance on these cases: " + ("MET" if tot["accepted"] else "NOT MET"))
+    if done:
+        _totals12(tot)
+    if done18:
+        _totals18(tot18)
+    n_new = sum(not r.get("cached") for _, r in done_all)
+    t_all = sum(r["time_s"] for _, r in done_all)
+    per = t_all / len(done_all) if done_all else 0.0
+    print(f"diagnosis time: {t_all:.0f} s in all, {per:.0f} s per case "
+          f"({n_new} diagnosed now, {len(done_all) - n_new} from the cache); wall {wall:.0f} s")
+    met = (not done or tot["accepted"]) and (not done18 or tot18["accepted"])
+    print("acceptance on these cases: " + ("MET" if met else "NOT MET"))
     if a.json:
-        Path(a.json).write_text(json.dumps({"totals": tot, "results": results}, indent=1,
-                                           default=float))
+        Path(a.json).write_text(json.dumps({"totals": tot, "totals_18": tot18,
+                                            "results": results}, indent=1,
+                                           default=str))
     return 0
 
 

@@ -107,6 +107,78 @@ def test_the_rules():
     assert not sc.totals([(null, r)])["accepted"]
 
 
+def test_the_rules_of_issue_18():
+    """judge18 on hand-made results: exact sets, unexplained, suspects, refusals."""
+    by = sc.BY_NAME_18
+    inc, null, out = by["lnec_pid_ff_friction"], by["lnec_pid_ff_null"], by["lnec_pid_backlash"]
+    one, bld, plat = (by["eerc_sdof_frequency_8pct"], by["eerc_3storey_frequency_minus_8pct"],
+                      by["eerc_platen_mass_20pct"])
+    r = {"found": ["actuator_friction"], "unexplained": None, "verdict": "added ..."}
+    assert sc.judge(inc, r) == {"ok": True, "why": "", "false_positive": []}
+    assert not sc.judge(inc, {**r, "found": ["actuator_friction", "sensor_filter"]})["ok"]
+    j = sc.judge(null, r)
+    assert not j["ok"] and j["false_positive"] == ["actuator_friction"]
+    assert sc.judge(null, {**r, "found": []})["ok"]
+    # outside the catalog: `unexplained` set and the verdict saying so
+    u = {"found": [], "unexplained": {"ratio_to_floor": 3.1},
+         "verdict": "no effect added: a residual remains unexplained: ..."}
+    assert sc.judge(out, u)["ok"]
+    assert not sc.judge(out, {**u, "unexplained": None})["ok"]
+    assert not sc.judge(out, {**u, "verdict": "no missing effect"})["ok"]
+    # beyond the bounds: base_at_bounds and the verdict name the suspect, nothing added
+    at = {"parameter": "specimen.frequency_hz", "declared": 3.1, "fitted": 2.95, "bound": 2.945,
+          "model": "final"}
+    b = {"found": [], "unexplained": None, "base_at_bounds": [at],
+         "verdict": "no missing effect; specimen.frequency_hz ends at its lower bound ..."}
+    assert sc.judge(one, b)["ok"]
+    assert not sc.judge(one, {**b, "base_at_bounds": []})["ok"]
+    assert not sc.judge(one, {**b, "verdict": "no missing effect"})["ok"]
+    j = sc.judge(one, {**b, "found": ["valve_dynamics"]})
+    assert not j["ok"] and j["false_positive"] == ["valve_dynamics"]
+    m2 = {**at, "parameter": "specimen.mode2.frequency_hz"}
+    assert sc.judge(bld, {**b, "base_at_bounds": [m2],
+                          "verdict": "specimen.mode2.frequency_hz at its bound"})["ok"]
+    assert not sc.judge(bld, {**b, "base_at_bounds": [{**at, "parameter":
+                                                        "specimen.mode2.damping"}],
+                              "verdict": "specimen.mode2.damping at its bound"})["ok"]
+    pm = {**at, "parameter": "table.platen_mass_kg"}
+    assert sc.judge(plat, {**b, "base_at_bounds": [pm],
+                           "verdict": "table.platen_mass_kg at its upper bound"})["ok"]
+    assert not sc.judge(plat, b)["ok"]  # the specimen's frequency is not the platen mass
+    # a refusal fails with its text
+    ref = {"found": [], "unexplained": None, "refused": "a tvc controller's terms are ..."}
+    j = sc.judge(null, ref)
+    assert not j["ok"] and "refused: a tvc" in j["why"]
+    tot = sc.totals18([(inc, {**r, "ok": True, "time_s": 1.0}),
+                       (null, {**r, "ok": False, "false_positive": ["actuator_friction"],
+                               "time_s": 2.0}),
+                       (out, {**u, "ok": True, "time_s": 1.0}),
+                       (one, {**b, "ok": True, "time_s": 1.0})])
+    assert tot["exact"] == (3, 4) and tot["exact_fraction"] == 0.75
+    assert tot["false_positives"] == {"lnec_pid_ff_null": ["actuator_friction"]}
+    assert tot["unexplained"] == (1, 1) and tot["suspect"] == (1, 1)
+    assert tot["suspect_named"] == (1, 1)
+    added = sc.totals18([(one, {**b, "found": ["valve_dynamics"], "ok": False,
+                                "time_s": 1.0})])
+    assert added["suspect"] == (0, 1) and added["suspect_named"] == (1, 1)
+    assert not tot["accepted"] and tot["time_s"] == 5.0
+
+
+def test_issue_18_cases_have_keys_and_expectations():
+    keys = {c.key() for c in sc.CASES_18}
+    assert len(keys) == len(sc.CASES_18) == 30  # every definition hashes apart
+    for c in sc.CASES_18:
+        assert c.kind in sc.KINDS_18, c.name
+        if c.kind == "beyond_bounds":
+            assert c.expected == sc.SUSPECT and c.suspect and c.hidden == [], c.name
+        elif c.kind == "outside":
+            assert c.expected == sc.UNEXPLAINED and c.outside, c.name
+        elif c.kind == "null":
+            assert c.expected == () and c.hidden == [], c.name
+        else:
+            assert c.hidden == sorted(c.table.effects), c.name
+
+
 # ---------------------------------------------------------------------------------------------
 # the diagnosis on the cached subset
 
