@@ -168,3 +168,23 @@ def test_virtual_table_agrees_with_the_reduced_model_under_each_controller(case)
     with_ctl = _virtual_vs_reduced(lab(case))
     for ch in bare:
         assert with_ctl[ch] < bare[ch] + 0.003 and with_ctl[ch] < 0.02, (ch, with_ctl, bare)
+
+
+def test_a_digital_controller_on_the_eerc_6_dof_table():
+    """PID + feedforward + ΔP stabilisation on Berkeley's table: the control stage drives
+    H1-H3's x DOF (twist keeps the P law) in the multibody table, and the reduced model's
+    lumped x loop. On x_t they agree better than under the report's analog loop; on ẍ_t
+    the velocity feedforward (on a valve without lag) opens a gap the LNEC table does not
+    show: 2.4 % against the analog loop's 1.0 % (measured; its cause is not yet found —
+    neither the command's interpolation nor the step, which the integral term alone also
+    tightens without a gap). Bounded here so that a change is seen."""
+    kd = 2.0 / 0.0254
+    ctl = {"kind": "pid", "displacement_gain_v_per_m": kd, "p": 1.0, "i_per_s": 1.0,
+           "feedforward_velocity_s": 0.02, "pressure_gain_v_per_pa": 1.5e-8}
+    # the valve flow gain K_q = k_t/k_d of Table B.5's loop, as a lab would declare it
+    t = lab_table(table_from_dict({"preset": "eerc", "controller": ctl, "horizontal": {
+        "valve_flow_gain_m3_per_s_v": 0.005432311716}}))
+    assert t.control is not None and not t.uniaxial
+    got, bare = _virtual_vs_reduced(t), _virtual_vs_reduced(lab_table(None))
+    assert got["avg_hdisp"] < bare["avg_hdisp"] + 0.003, (got, bare)
+    assert got["avg_hacc"] < 0.03, (got, bare)

@@ -175,10 +175,12 @@ def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str) -> s
         else:
             calls["force"].append(f"    F = _law{k}(F, v, {p})")
         o, so, li = o + len(s.params), so + s.states, li + 1 + (s.rate is not None)
-    drive = (["    u = dof_error(qc, q, p, qd, 1.0, kp, kv)", *calls["control"],
+    drive = (["    if not ctl:", "        return dof_error(qc, q, p, qd, g, kp, kv)",
+              "    u = dof_error(qc, q, p, qd, 1.0, kp, kv)", *calls["control"],
               "    return g * u"] if calls["control"] else
              ["    return dof_error(qc, q, p, qd, g, kp, kv)"])
-    body = ["", "", "@njit(cache=True)", "def dof_drive(qc, q, p, qd, g, kp, kv, z, o, sp, dz):",
+    body = ["", "", "@njit(cache=True)",
+            "def dof_drive(qc, q, p, qd, g, kp, kv, z, o, sp, dz, ctl):",
             *drive, "", "", "@njit(cache=True)", "def fed_back(z, o, sp):",
             *(calls["feedback"] or ["    return z[o]"]),
             "", "", "@njit(cache=True)", "def actuator_rates(z, o, drive, v, sp, dz):",

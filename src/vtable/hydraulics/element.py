@@ -49,9 +49,10 @@ def dof_error(qc, q, p, qd, g, kp, kv):
 
 
 @njit(cache=True)
-def dof_drive(qc, q, p, qd, g, kp, kv, z, o, sp, dz):
+def dof_drive(qc, q, p, qd, g, kp, kv, z, o, sp, dz, ctl):
     """One DOF's drive through the controller (`dof_error`: no control stage; a control
-    stage's states start at z[o + 1], the actuator's whose drive it makes)."""
+    stage's states start at z[o + 1], the actuator's whose drive it makes, and it acts on
+    the DOF called with `ctl` true: the law's first, x)."""
     return dof_error(qc, q, p, qd, g, kp, kv)
 
 
@@ -98,8 +99,8 @@ def actuator_rates(z, o, drive, v, sp, dz):
 def servo_rates(z, x, v, qc, T, Tp, g, kp, kv, sp, dz, force):
     """Rates dz (n·NS: each actuator's states in turn) and forces (n) of a group of n
     actuators: each actuator's drive T G e from the DOF errors (`dof_drive`), then
-    `actuator_rates`. A control stage runs one copy per actuator (its law holds one DOF:
-    `law.ServoLaw` refuses it on several)."""
+    `actuator_rates`. A control stage runs one copy per actuator on the law's first DOF
+    (x; `law.ServoLaw` refuses it on a law whose first DOF is another)."""
     n, d = T.shape
     for i in range(n):
         drive = 0.0
@@ -112,7 +113,7 @@ def servo_rates(z, x, v, qc, T, Tp, g, kp, kv, sp, dz, force):
                 acc_v += Tp[j, a] * v[a]
                 acc_p += Tp[j, a] * fed_back(z, a * NS, sp)
             drive += T[i, j] * dof_drive(qc[j], acc_x, acc_p, acc_v, g[j], kp[j], kv[j], z,
-                                         i * NS, sp, dz)
+                                         i * NS, sp, dz, j == 0)
         force[i] = actuator_rates(z, i * NS, drive, v[i], sp, dz)
 
 

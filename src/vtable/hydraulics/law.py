@@ -66,9 +66,9 @@ class ServoLaw:
     stages: tuple[StageUse, ...] = ()
 
     def __post_init__(self) -> None:
-        if len(self.dofs) > 1 and any(s.kind == "control" for s, _ in self.stages):
-            raise VtableError(f"a control stage drives one DOF, not {', '.join(self.dofs)}: "
-                              "its states run per actuator")
+        if self.dofs[0] != "x" and any(s.kind == "control" for s, _ in self.stages):
+            raise VtableError(f"a control stage drives the horizontal DOF x, and this law's "
+                              f"first DOF is {self.dofs[0]} ({', '.join(self.dofs)})")
 
     @property
     def linear(self) -> bool:

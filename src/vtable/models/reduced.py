@@ -13,14 +13,12 @@ Python) and output filters. `ReducedModel` integrates what they made
 
 from __future__ import annotations
 
-import functools
 import math
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.signal
 
 from vtable._numba import njit
 from vtable.analytic.virtual_table import mechanics
@@ -31,6 +29,7 @@ from vtable.errors import VtableError
 from vtable.hydraulics import group_law
 from vtable.hydraulics.element import PISTON_AREA
 from vtable.hydraulics.stage import Stage, add_stage
+from vtable.interpolate import upsample
 from vtable.models import physics as phys
 from vtable.models.reduced_kernel import (
     KERNELS,
@@ -221,32 +220,11 @@ def _storey_masses(spec) -> list[float]:
     return []
 
 
-#: the interpolator's stop-band attenuation (dB) and transition (fraction of the run's
-#: Nyquist frequency below it): a control stage that reads the command's velocity and
-#: acceleration (feedforward) weighs an image at f_s - f by (f_s/f)² over the command at f,
-#: so the images must be far below the 55 dB of `resample_poly`'s default filter (issue
-#: 18: an earthquake's 1 Hz content imaged at 199 Hz made a PID + acceleration
-#: feedforward model's table acceleration 3.5 x its displacement's second derivative)
-INTERPOLATOR_DB, INTERPOLATOR_WIDTH = 120.0, 0.2
-
-
-@functools.lru_cache(maxsize=16)
-def _interpolator(up: int) -> np.ndarray:
-    """The anti-imaging filter of an upsampling by `up`: a Kaiser-windowed sinc passing
-    the run's band to 0.8 of its Nyquist frequency and stopping INTERPOLATOR_DB from its
-    Nyquist frequency on (`scipy.signal.kaiserord`), designed once per `up`."""
-    n, beta = scipy.signal.kaiserord(INTERPOLATOR_DB, INTERPOLATOR_WIDTH / up)
-    n += 1 - n % 2  # odd: a linear-phase filter with a whole-sample delay
-    h = scipy.signal.firwin(n, (1.0 - INTERPOLATOR_WIDTH / 2) / up, window=("kaiser", beta))
-    h.flags.writeable = False
-    return h
-
-
 _UPSAMPLED: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
 
 
 def _upsampled(x_c: np.ndarray, n: int, up: int) -> np.ndarray:
-    """The command interpolated band-limited onto the integration step (`resample_poly`),
+    """The command interpolated band-limited onto the integration step (`upsample`),
     kept for the last few command arrays (a fit drives the model by the same array
     hundreds of times; the array is held with its result, so its id stays its own)."""
     if up == 1:
@@ -255,7 +233,7 @@ def _upsampled(x_c: np.ndarray, n: int, up: int) -> np.ndarray:
     hit = _UPSAMPLED.get(key)
     if hit is not None and hit[0] is x_c:
         return hit[1]
-    xc = scipy.signal.resample_poly(x_c, up, 1, window=_interpolator(up))[: (n - 1) * up + 1]
+    xc = upsample(x_c, up)[: (n - 1) * up + 1]
     xc.flags.writeable = False
     if len(_UPSAMPLED) >= 32:
         _UPSAMPLED.pop(next(iter(_UPSAMPLED)))

@@ -51,7 +51,7 @@ def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, 
     t = Tp[0, 0]
     p_fb = fed_back(y, s0, sp)
     drive = T[0, 0] * dof_drive(xc, t * xa, t * p_fb, t * va, g[0], kp[0], kv[0], y, s0, sp,
-                                dy)
+                                dy, True)
     force = actuator_rates(y, s0, drive, va, sp, dy)
     for i in range(nq):
         r = bF[i] * force + fe[i]

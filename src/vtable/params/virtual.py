@@ -277,10 +277,6 @@ def virtual_table_for(lab) -> VirtualTable:
     uniaxial platen (`uniaxial_table`); what the lab description changes of the EERC
     table (its mass, its loop constants) is applied to the EERC model; the controller's
     own terms (a control stage) go with it."""
-    if lab.control is not None and not lab.uniaxial:
-        raise VtableError(f"table {lab.name!r}: a {lab.controller} controller's terms are "
-                          "modelled on a uniaxial table (one horizontal DOF), not on DOFs "
-                          f"{', '.join(lab.dofs)}")
     if lab.name == "eerc" and lab.uniaxial is False:
         vt = virtual_table()
         if lab.servo != replace(vt.horizontal_servo, mass=lab.servo.mass) or \

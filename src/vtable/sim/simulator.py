@@ -18,6 +18,7 @@ import numpy as np
 from vtable import display, units
 from vtable.controllers import DOFS, Controller, LinearController, standard_controllers
 from vtable.errors import VtableError
+from vtable.interpolate import upsample
 from vtable.mjcf.builder import SLAB_JOINTS, BuiltModel
 from vtable.sim.stepping import mujoco_steps, sparse_rows, step_linear
 
@@ -102,8 +103,22 @@ def resample_commands(t: np.ndarray, commands: Mapping[str, np.ndarray],
             raise VtableError(f"command {k!r} has {v.size} samples for {t.size} times")
         if not np.all(np.isfinite(v)):
             raise VtableError(f"command {k!r} has non-finite samples")
-        out[:, DOFS.index(k)] = np.interp(t_new, t, v)
+        out[:, DOFS.index(k)] = _resampled(t, v, t_new)
     return out
+
+
+def _resampled(t: np.ndarray, v: np.ndarray, t_new: np.ndarray) -> np.ndarray:
+    """v on t_new: band-limited (`vtable.interpolate.upsample`) when both grids are uniform
+    from the same start and t_new is an integer number of times finer (the command
+    on the control step), else linear."""
+    dt, dt_new = (t[-1] - t[0]) / (len(t) - 1), (t_new[-1] - t_new[0]) / max(len(t_new) - 1, 1)
+    up = round(dt / dt_new) if dt_new > 0 else 0
+    if (up > 1 and abs(up * dt_new - dt) < 1e-9 * dt and abs(t_new[0] - t[0]) < 1e-9 * dt
+            and np.allclose(np.diff(t), dt, rtol=1e-6, atol=0)):
+        fine = upsample(v, up)
+        if len(fine) >= len(t_new):
+            return fine[:len(t_new)]
+    return np.interp(t_new, t, v)
 
 
 def check_commands(built: BuiltModel, t: np.ndarray, cmd: np.ndarray) -> None:
