@@ -15,9 +15,6 @@ a type-0 loop still is, with or without such a peak.
 from __future__ import annotations
 
 import functools
-import gzip
-import os
-import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -27,6 +24,7 @@ import pytest
 import scipy.signal as sg
 
 sys.path.insert(0, str(Path(__file__).parent))
+import real_data
 import truth
 
 from vtable.ident.loop import DC_TOL, LoopData, dc_gain
@@ -163,25 +161,9 @@ def test_dc_gain_without_lines_is_not_judged():
 
 
 # ---- LNEC's measured run ------------------------------------------------------------------
-def _real_data() -> Path | None:
-    root = Path(__file__).resolve().parents[1]
-    env = os.environ.get("VTABLE_REAL_DATA")
-    for d in ([Path(env)] if env else []) + [root.parent / "shared/data/real",
-                                              root.parent.parent / "shared/data/real"]:
-        if (d / "lnec_pink_2.toml").is_file() and (d / "lnec_pink_2.csv.gz").is_file():
-            return d
-    return None
-
-
-@pytest.mark.skipif(_real_data() is None, reason="../shared/data/real is not beside the repo")
+@real_data.NEEDED
 def test_lnec_measured_pink_noise_run_is_not_falsely_refused(tmp_path):
-    src = _real_data()
-    assert src is not None
-    shutil.copy(src / "lnec_pink_2.toml", tmp_path)
-    with gzip.open(src / "lnec_pink_2.csv.gz", "rb") as a, \
-            open(tmp_path / "lnec_pink_2.csv", "wb") as b:
-        shutil.copyfileobj(a, b)
-    ls = identify_run(read_run(tmp_path / "lnec_pink_2.toml")).to_json()["loop_structure"]
+    ls = identify_run(read_run(real_data.copy_run(tmp_path))).to_json()["loop_structure"]
     g, sd = ls["dc_gain"], ls["dc_gain_stderr"]
     # H1 with 8192-point frames: 1.002 at 0.05 Hz, 1.007 at 0.1 Hz
     assert abs(g - 1) <= 2 * sd and sd < 0.02, (g, sd)

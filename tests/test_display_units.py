@@ -12,19 +12,17 @@ here: 1 in = 25.4 mm, 1 kip = 4.4482216152605 kN.
 from __future__ import annotations
 
 import functools
-import gzip
 import json
 import re
-import shutil
 import sys
 import tempfile
 import tomllib
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
+import real_data
 import truth
 
 from vtable import display
@@ -197,22 +195,9 @@ def test_the_display_conversions():
     assert display.amplitude(0.762e-3) == "30 mil"
 
 
-def _real_lnec() -> Path | None:
-    root = Path(__file__).resolve().parents[1]
-    for d in (root.parent / "shared/data/real", root.parent.parent / "shared/data/real"):
-        if (d / "lnec_pink_2.toml").is_file() and (d / "lnec_pink_2.csv.gz").is_file():
-            return d / "lnec_pink_2.toml"
-    return None
-
-
-@pytest.mark.skipif(_real_lnec() is None, reason="../shared/data/real is not beside the repo")
+@real_data.NEEDED
 def test_lnecs_measured_run_is_shown_in_its_units(tmp_path, capsys):
-    src = _real_lnec()
-    shutil.copy(src, tmp_path)
-    with gzip.open(src.with_suffix(".csv.gz"), "rb") as a, \
-            open(tmp_path / "lnec_pink_2.csv", "wb") as b:
-        shutil.copyfileobj(a, b)
-    run = read_run(tmp_path / "lnec_pink_2.toml")
+    run = read_run(real_data.copy_run(tmp_path))
     assert display.run_family(run) == "metric"
     assert display.family(run.units.values()) == "metric"  # mm and g: g is neither family's
     assert display.unit_for("g", "metric", run.units.values()) == "g"  # the lab's own

@@ -30,14 +30,12 @@ Measured on this run (H1, 2048-point frames unless said; numbers in the asserts)
 
 from __future__ import annotations
 
-import gzip
-import os
 import re
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
+import real_data
 import scipy.signal as sg
 
 from vtable.ident.report import identify_run
@@ -47,30 +45,13 @@ K_O_DESIGN = 1.9345e-3 * 129.93 / 0.012456  # 1/s: K_q x displacement gain / A =
 KG_PER_KIP = 4448.2216 / 9.80665
 
 
-def _real_data() -> Path | None:
-    root = Path(__file__).resolve().parents[1]
-    env = os.environ.get("VTABLE_REAL_DATA")
-    for d in ([Path(env)] if env else []) + [root.parent / "shared/data/real",
-                                              root.parent.parent / "shared/data/real"]:
-        if (d / "lnec_pink_2.toml").is_file() and (d / "lnec_pink_2.csv.gz").is_file():
-            return d
-    return None
-
-
-pytestmark = pytest.mark.skipif(_real_data() is None,
-                                reason="../shared/data/real is not beside the repo")
+pytestmark = real_data.NEEDED
 
 
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory) -> Path:
     """A copy of the run (TOML + decompressed CSV) in a temporary folder."""
-    src = _real_data()
-    assert src is not None
-    d = tmp_path_factory.mktemp("real_lnec")
-    shutil.copy(src / "lnec_pink_2.toml", d)
-    with gzip.open(src / "lnec_pink_2.csv.gz", "rb") as a, open(d / "lnec_pink_2.csv", "wb") as b:
-        shutil.copyfileobj(a, b)
-    return d
+    return real_data.copy_run(tmp_path_factory.mktemp("real_lnec")).parent
 
 
 def _with_specimen(run_dir: Path, name: str, specimen: str) -> Path:

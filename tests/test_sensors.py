@@ -9,16 +9,14 @@ independently by H1: |ẍ/s²x| 1.5 near 10 Hz, about 2.4 near 15 Hz, phase thro
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+import real_data
 
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.sensors import sensor_check
 from vtable.runs import read_run
-
-REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 
 
 @pytest.fixture(scope="module")
@@ -70,16 +68,9 @@ def test_an_accelerometer_on_a_mount_is_flagged_and_its_mount_fitted(truth_run):
     assert "14.0 Hz" in c.text() and "no effect on the platen" in c.text()
 
 
-@pytest.mark.skipif(not (REAL / "lnec_pink_2.toml").exists(), reason="../shared/data/real "
-                    "is not beside the repository")
+@real_data.NEEDED
 def test_lnecs_measured_run_is_flagged(tmp_path):
-    import gzip
-    import shutil
-    (tmp_path / "lnec_pink_2.toml").write_text((REAL / "lnec_pink_2.toml").read_text())
-    with gzip.open(REAL / "lnec_pink_2.csv.gz", "rb") as src, \
-            open(tmp_path / "lnec_pink_2.csv", "wb") as dst:
-        shutil.copyfileobj(src, dst)
-    run = read_run(tmp_path / "lnec_pink_2.toml")
+    run = read_run(real_data.copy_run(tmp_path))
     c = sensor_check(run)
     assert c is not None and not c.agree
     ratio = {b: m for b, m, _, _ in c.bands}

@@ -130,6 +130,9 @@ class Prior:
     source: str
     #: the table's declared controller as a structure (`declared_structure`), if any
     declared: Structure | None = None
+    #: the largest mass ratio a resonator on the platen can have: the table's payload over
+    #: its platen mass (None: no payload declared)
+    u_max: float | None = None
 
 
 def declared_structure(vt) -> Structure:
@@ -146,7 +149,8 @@ def prior_of(table) -> Prior:
     its valve time constant and its declared controller's structure."""
     declared = declared_structure(virtual_table_for(table)) if table.control is not None \
         else None
-    return Prior(table.open_loop(), table.valve_time_constant, table.name, declared)
+    u_max = table.payload / table.platen_mass if table.payload else None
+    return Prior(table.open_loop(), table.valve_time_constant, table.name, declared, u_max)
 
 
 @dataclass(frozen=True)
@@ -262,8 +266,10 @@ RESONANCE_MAX_DAMPING = 0.3
 
 def is_resonance(fit: Fit) -> bool:
     """A resonator fit that found a resonance: ξ_s ≤ `RESONANCE_MAX_DAMPING` and none of
-    f_s, ξ_s, u flagged (at a bound, or a standard error beyond the value): else the
-    extra freedom only patched a loop the other structures cannot reach."""
+    f_s, ξ_s, u flagged (at a bound — u's upper one is the table's payload — or a standard
+    error beyond the value): else the extra freedom only patched a loop the other
+    structures cannot reach (a PI controller's low-frequency peak asks for a 10 t
+    resonator on LNEC's 5 t table)."""
     if fit["xi_s"] > RESONANCE_MAX_DAMPING:
         return False
     return not any(f.param in ("f_s", "xi_s", "u") and f.code != "correlated"
@@ -300,6 +306,8 @@ def fit_structure(key: str, data: LoopData, prior: Prior | None = None,
     st = structures(prior)[key]
     names = list(st.params)
     lo, hi = list(st.lower), list(st.upper)
+    if "u" in names and prior is not None and prior.u_max:  # no heavier than the payload
+        hi[names.index("u")] = min(hi[names.index("u")], prior.u_max)
     if gain:
         names, lo, hi = [*names, "gain"], [*lo, 0.001], [*hi, 100.0]
     if delay_dt is not None:
