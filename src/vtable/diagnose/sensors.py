@@ -80,8 +80,22 @@ def mount_ratio(f: np.ndarray, f_m: float, z_m: float, f_c: float) -> np.ndarray
 
 
 def sensor_check(run: Run) -> SensorCheck | None:
-    """The check of the module docstring; None when the run lacks either channel or has
-    no coherent band."""
+    """Whether `run`'s table acceleration is its table displacement's second derivative.
+
+    Parameters
+    ----------
+    run
+        A measured or simulated run with the "table displacement" and "table
+        acceleration" channel groups (`vtable.diagnose.groups`).
+
+    Returns
+    -------
+    SensorCheck or None
+        |R| and its phase per band (`BANDS`) where the channels are coherent
+        (γ² ≥ `COHERENCE`), and, when some band departs from 1 by more than `TOLERANCE`,
+        the fitted mount (f_m, ζ_m, f_c) of the module docstring; None when the run
+        lacks either channel or has no coherent band.
+    """
     d = group_signal(run, "table displacement")
     a = group_signal(run, "table acceleration")
     if d is None or a is None:
