@@ -46,6 +46,8 @@ class LinearController:
 
     actuators: tuple[str, ...] = ()
     state_names: tuple[str, ...] = ()
+    #: the units of `state_names` (`vtable.units`; empty: "1" each)
+    state_units: tuple[str, ...] = ()
     A: np.ndarray
     Bs: np.ndarray
     Bc: np.ndarray

@@ -32,10 +32,14 @@ class ServoController(LinearController):
         self.actuators = tuple(a for law in self.laws.values() for a in law.actuators)
         # state order (see `bind`): every group's first states (one per actuator), then
         # every group's others
-        names = [law.state_names() for law in self.laws.values()]
         ks = [len(law.actuators) for law in self.laws.values()]
-        self.state_names = tuple([s for n, k in zip(names, ks, strict=True) for s in n[:k]] +
-                                 [s for n, k in zip(names, ks, strict=True) for s in n[k:]])
+
+        def ordered(per_law: list[tuple[str, ...]]) -> tuple[str, ...]:
+            return tuple([s for n, k in zip(per_law, ks, strict=True) for s in n[:k]] +
+                         [s for n, k in zip(per_law, ks, strict=True) for s in n[k:]])
+
+        self.state_names = ordered([law.state_names() for law in self.laws.values()])
+        self.state_units = ordered([law.state_units() for law in self.laws.values()])
 
     def bind(self, actuator_names: tuple[str, ...]) -> None:
         n = len(actuator_names)

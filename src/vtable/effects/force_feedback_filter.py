@@ -19,7 +19,8 @@ def filter_rate(P, dP, z, p, dz):
     dz[0] = dP - z[0] / p.rc
 
 
-RC_FILTER = Stage("rc_filter", "feedback", filtered, ("rc",), states=1, linear=True,
+RC_FILTER = Stage("rc_filter", "feedback", filtered, ("rc",), states=1, state_units=("Pa",),
+                  linear=True,
                   rate=filter_rate)
 
 

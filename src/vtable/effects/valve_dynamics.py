@@ -14,7 +14,8 @@ def spool_lag(q, z, p, dz):
     return z[0]
 
 
-SPOOL_LAG = Stage("spool_lag", "valve", spool_lag, ("tau",), states=1, linear=True)
+SPOOL_LAG = Stage("spool_lag", "valve", spool_lag, ("tau",), states=1, linear=True,
+                  state_units=("m3/s",))
 
 
 class ValveDynamics(Effect):

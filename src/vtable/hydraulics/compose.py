@@ -65,6 +65,11 @@ class Composition:
         """One actuator's states: P, then each stage's."""
         return ("P", *(f"{s.name}{k}" for s in self.stages for k in range(s.states)))
 
+    def state_units(self) -> tuple[str, ...]:
+        """The units of `state_names` (a stage's `state_units`, "1" when it gives none)."""
+        return ("Pa", *(u for s in self.stages
+                        for u in (s.state_units or ("1",) * s.states)))
+
 
 def ordered(stages: Sequence[Stage]) -> tuple[Stage, ...]:
     """Stages in the element's order: by kind (valve, flow, pressure, feedback, force),

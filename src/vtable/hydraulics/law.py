@@ -92,6 +92,10 @@ class ServoLaw:
         names = self.composition().state_names()
         return tuple(f"{k}_{a}" for a in self.actuators for k in names)
 
+    def state_units(self) -> tuple[str, ...]:
+        """The units of `state_names`."""
+        return tuple(self.composition().state_units()) * len(self.actuators)
+
     @property
     def Tp(self) -> np.ndarray:
         return np.linalg.pinv(self.T)

@@ -64,6 +64,8 @@ class Stage:
     order: float = 0.0
     #: parameters that add when actuators act together as one (flows, forces)
     extensive: tuple[str, ...] = ()
+    #: each state's unit (`vtable.units`; empty: "1", states of mixed or no dimension)
+    state_units: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         where = f"stage {self.name!r}"
@@ -85,6 +87,9 @@ class Stage:
                               "p, dz)")
         if set(self.extensive) - set(self.params):
             raise VtableError(f"{where}: extensive names an unknown parameter")
+        if self.state_units and len(self.state_units) != self.states:
+            raise VtableError(f"{where}: state_units names {len(self.state_units)} units for "
+                              f"{self.states} states")
         if self.states and self.kind not in ("control", "valve", "feedback"):
             raise VtableError(f"{where}: only control, valve and feedback stages have states")
 

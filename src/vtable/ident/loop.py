@@ -9,11 +9,9 @@ Candidates, each fitted to the complex H1 of x_t over x_c (real and imaginary pa
   around the platen (`vtable.analytic.controlled`, eq 6.15 generalised), (f_o, ξ_o, k_o, τ)
   with the controller's own terms as declared, type 1 — a candidate when the table
   declares such a controller (`Prior.declared`);
-- ``resonator``: eq 7.9 with the valve lag (`vtable.ident.fits.h_resonator_lag`), (f_o,
-  ξ_o, k_o, τ, f_s, ξ_s, u): the loop carrying a resonance on the platen that the run does
-  not declare (an undocumented specimen, a reaction mass), type 1 — kept only when its
-  AIC beats every other structure's by `AIC_MARGIN` and it found a resonance
-  (`is_resonance`); else the run has no such resonance;
+- ``resonator``: eq 7.9 with the valve lag (`vtable.ident.resonator`), (f_o, ξ_o, k_o, τ,
+  f_s, ξ_s, u): a resonance on the platen the run does not declare, type 1 — kept only
+  when it beats every other structure's AIC by `AIC_MARGIN` and `is_resonance`;
 - ``type_0``: a type-0 second-order loop K ω_n²/(s² + 2ζω_n s + ω_n²), (K, f_n, ζ): a
   plant without an integrator (an electrodynamic shaker under proportional control).
 
@@ -60,6 +58,7 @@ from vtable.ident.fits import (
     h_type0,
     phase_crossover,
 )
+from vtable.ident.resonator import dip, is_resonance
 from vtable.ident.tf import TransferFunction
 from vtable.params.loops import OpenLoop
 from vtable.params.virtual import virtual_table_for
@@ -253,39 +252,11 @@ def _starts(st: Structure, data: LoopData, prior: Prior | None) -> list[list[flo
             out.append([k0, prior.open_loop.f_o, 0.5])
     if len(st.params) == 7:  # the resonator: at the deepest dip of |H| and on a grid
         x = out[0]
-        grid = [_dip(data), *np.geomspace(0.5, 0.8 * float(data.f[-1]), 8)]
+        grid = [dip(data), *np.geomspace(0.5, 0.8 * float(data.f[-1]), 8)]
         out = [[*x[:3], x[3] if len(x) == 4 else 0.001, f_s0, 0.05, u0]
                for f_s0 in grid for u0 in (0.2, 1.0)]
     lo, hi = np.array(st.lower), np.array(st.upper)
     return [list(np.clip(x, lo * (1 + 1e-6) + 1e-12, hi * (1 - 1e-6))) for x in out]
-
-
-#: a fitted resonator counts as one only with ξ_s up to this (a peak and a notch)
-RESONANCE_MAX_DAMPING = 0.3
-
-
-def is_resonance(fit: Fit) -> bool:
-    """A resonator fit that found a resonance: ξ_s ≤ `RESONANCE_MAX_DAMPING` and none of
-    f_s, ξ_s, u flagged (at a bound — u's upper one is the table's payload — or a standard
-    error beyond the value): else the extra freedom only patched a loop the other
-    structures cannot reach (a PI controller's low-frequency peak asks for a 10 t
-    resonator on LNEC's 5 t table)."""
-    if fit["xi_s"] > RESONANCE_MAX_DAMPING:
-        return False
-    return not any(f.param in ("f_s", "xi_s", "u") and f.code != "correlated"
-                   for f in fit.flags)
-
-
-def _dip(data: LoopData) -> float:
-    """The frequency of the deepest dip of |H| relative to its running trend (a
-    resonator's notch), among the lines below 80 % of the highest."""
-    m = np.abs(data.H)
-    k = data.f < 0.8 * data.f[-1]
-    if k.sum() < 5:
-        return float(data.f[len(data.f) // 2])
-    trend = np.convolve(m, np.ones(9) / 9, mode="same")
-    r = np.where(k, m / np.maximum(trend, 1e-12), np.inf)
-    return float(data.f[int(np.argmin(r))])
 
 
 def structures(prior: Prior | None) -> dict[str, Structure]:

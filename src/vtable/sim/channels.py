@@ -76,11 +76,10 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
             out[f"state_v_{jn}"] = res.qvel[:, m.jnt_dofadr[j]]
             extra_units[f"state_q_{jn}"] = "m" if slide else "rad"
             extra_units[f"state_v_{jn}"] = "m/s" if slide else "rad/s"
-        for i, s in enumerate(res.controller_state_names):
+        units = res.controller_state_units or ("1",) * len(res.controller_state_names)
+        for i, (s, u) in enumerate(zip(res.controller_state_names, units, strict=True)):
             out[f"state_{s}"] = res.controller_states[:, i]
-            # the chamber pressures P_* in Pa; a stage's own states (filters, integrals)
-            # are in the SI units of their stage's law, kept as they are ("1": no factor)
-            extra_units[f"state_{s}"] = "Pa" if s.startswith("P_") else "1"
+            extra_units[f"state_{s}"] = u  # the stage's (`Stage.state_units`), SI
     return out, extra_units
 
 

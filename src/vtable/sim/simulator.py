@@ -68,6 +68,8 @@ class SimResult:
     #: (n_t, n_actuators), N: each actuator's piston force A·P_L (equal to `forces` but
     #: where a controller's force stages, e.g. friction, make them differ)
     pressure_forces: np.ndarray | None = None
+    #: the units of `controller_state_names` (`vtable.units`)
+    controller_state_units: tuple[str, ...] = ()
 
     def joint(self, name: str, what: str = "qpos") -> np.ndarray:
         """A joint's history; a locked slab joint (left out of the model) is zero."""
@@ -205,6 +207,8 @@ class Simulator:
         rest = np.concatenate([self.rest_length, np.zeros(n)])
         self.offset = -(M[:, P] + M[:, S]) @ rest
         self.state_names = tuple(s for c in lin for s in c.state_names)
+        self.state_units = tuple(u for c in lin
+                                 for u in (c.state_units or ("1",) * len(c.state_names)))
 
     def run(self, t: np.ndarray, commands: Mapping[str, np.ndarray], *, output_dt: float = 0.005,
             check: bool = True, max_extension: float | None = None) -> SimResult:
@@ -314,7 +318,8 @@ class Simulator:
                         sensors=rec["sensors"], commands=cmd[out_idx],
                         command_acc=np.gradient(np.gradient(cmd[:, 0], dt), dt)[out_idx],
                         controller_states=full[out_idx, ns:ns + nz].copy(),
-                        controller_state_names=self.state_names)
+                        controller_state_names=self.state_names,
+                        controller_state_units=self.state_units)
         res.pressure_forces = np.where(np.isnan(pressure), res.forces, pressure)
         res.exceedances = exceedances(self.built, tk, ext_all, forces_all)
         return res
