@@ -150,3 +150,43 @@ def test_both_models_implement_the_whole_assembly_vocabulary():
             assert callable(getattr(cls, v, None)), f"{cls.__name__} lacks {v}"
             want = list(inspect.signature(getattr(Assembly, v)).parameters)
             assert list(inspect.signature(getattr(cls, v)).parameters) == want, (cls, v)
+
+
+def test_every_catalog_effect_applies_on_a_table_with_its_own_valve_lag():
+    """LNEC's table declares its valve's 24.6 ms lag: every catalog effect but the pitch's
+    (the platen cannot pitch) builds in the reduced model (valve_dynamics was refused
+    there as a stage added twice; it is a further lag in series: x_t/x_c's phase at 10 Hz
+    falls by about atan(2π 10 τ))."""
+    import math
+
+    from vtable.effects import BUILT_IN
+    from vtable.models.physics import Physics
+    from vtable.models.reduced import ReducedModel
+    from vtable.params.lab import lab_table
+    from vtable.params.specimen import NoSpecimen
+    from vtable.params.virtual import virtual_table_for
+    from vtable.runs.table import table_from_dict
+
+    t = lab_table(table_from_dict({"preset": "lnec-st1d"}))
+    vt = virtual_table_for(t)
+    from vtable.errors import VtableError
+    built = []
+    for name in BUILT_IN:
+        try:
+            ReducedModel(Physics(t.open_loop(), NoSpecimen(), {name: {}}), vt)
+            built.append(name)
+        except VtableError as e:  # a physical refusal (no pitch on this table), said
+            assert "no pitch motion" in str(e), (name, str(e))
+    assert "valve_dynamics" in built and len(built) >= len(BUILT_IN) - 1
+
+    def phase_10hz(effects):
+        m = ReducedModel(Physics(t.open_loop(), NoSpecimen(), effects), vt)
+        A, B = m._linear[0], m._linear[1]
+        c = np.zeros(A.shape[0])
+        c[:m.M.shape[0]] = m.ax
+        h = c @ np.linalg.solve(2j * math.pi * 10.0 * np.eye(len(A)) - A, B)
+        return np.angle(h)
+
+    tau = 0.002
+    drop = phase_10hz({}) - phase_10hz({"valve_dynamics": {"tau": tau}})
+    assert 0.5 * math.atan(2 * math.pi * 10 * tau) < drop < 2 * math.atan(2 * math.pi * 10 * tau)

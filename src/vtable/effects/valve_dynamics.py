@@ -1,6 +1,8 @@
 """valve_dynamics: the servovalve does not respond instantly (§6.2, app. C): the valve
 flow q_v follows the commanded flow q through a first-order spool lag τ,
-τ q̇_v = q - q_v — a valve stage of the hydraulic element (linear)."""
+τ q̇_v = q - q_v — a valve stage of the hydraulic element (linear). On a table that
+declares its valve's time constant (its own `SPOOL_LAG`) the effect is a further lag in
+series (`VALVE_LAG`)."""
 
 from __future__ import annotations
 
@@ -16,6 +18,10 @@ def spool_lag(q, z, p, dz):
 
 SPOOL_LAG = Stage("spool_lag", "valve", spool_lag, ("tau",), states=1, linear=True,
                   state_units=("m3/s",))
+#: the same law as the effect's own stage: a lag beyond a table's declared valve lag
+#: (`SPOOL_LAG`, the table's own), in series with it
+VALVE_LAG = Stage("valve_lag", "valve", spool_lag, ("tau",), states=1, linear=True,
+                  state_units=("m3/s",))
 
 
 class ValveDynamics(Effect):
@@ -26,7 +32,9 @@ class ValveDynamics(Effect):
     params = (Param("tau", "s", 0.002, 1e-4, 0.05, log=True, source="assumed"),)
 
     def apply(self, m, p):
-        m.add_stage(SPOOL_LAG, tau=p["tau"])
+        # on a table that declares its valve's lag (SPOOL_LAG, LNEC's 24.6 ms) this is a
+        # further lag in series: what the declared valve does not hold
+        m.add_stage(VALVE_LAG, tau=p["tau"])
 
 
 EFFECT = ValveDynamics()
