@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from vtable.diagnose.calibration import Calibration
+from vtable.diagnose.calibration import Calibration, bounding_setting
 from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import compare
 from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
@@ -145,6 +145,24 @@ class Diagnoser:
         `flags_`, `cost_`, `screened_`)."""
         return self.model(ph, multistart, baseline, seed).fit(self.campaign)
 
+    def _widened_start(self, start: Physics) -> tuple | None:
+        """When the calibrated starting model leans on bounds (`base_at_bounds`): the
+        calibration with them widened, the parameters, and the starting model refitted
+        with it — its held-out predictions, the baseline a candidate effect must also
+        beat (SELECTION: an effect is not added in place of a wrong declaration); None
+        when nothing leans or the bounds are at their widest."""
+        lean = base_at_bounds(self.base_table(start), self.calibration)
+        names = [bounding_setting(b["parameter"], b["side"]) for b in lean]
+        wider = self.calibration.widened([n for n in names if n is not None])
+        if not lean or wider == self.calibration:
+            return None
+        refit = TableModel(start=self.start, stop=self._stop, calibration=wider,
+                           ).fit(self.campaign)
+        self.notes.append(f"the calibrated starting model leans on its bounds "
+                          f"({', '.join(b['parameter'] for b in lean)}): candidates must "
+                          f"also beat it refitted with --calibrate {wider.text()}")
+        return wider, [b["parameter"] for b in lean], self.predict(refit.physics_)
+
     def _inapplicable(self, ph: Physics) -> str:
         """Why a model cannot be built for this campaign's table (an effect needing a
         motion the platen has not, say), or ''."""
@@ -234,6 +252,7 @@ class Diagnoser:
         done += 1
         st.cmp0 = self._detail(st)
         st.err = st.start_err = err = st.cmp0.error
+        widened = self._widened_start(current)
         reason = ""
         seeds: dict[str, dict[str, float]] = {}  # each candidate's last fitted parameters
         spent: dict[str, float] = {}  # each candidate's last fit's CPU seconds
@@ -308,7 +327,14 @@ class Diagnoser:
             # SELECTION: the candidate with the largest held-out gain that passes the
             # statistical criteria and whose fit is sound (no parameter at a bound, none
             # entangled with the base) is added
-            best = next((c for c in ranking if not c.failing() and not c.blocking), None)
+            if widened is not None:  # a candidate must also beat a wrong declaration
+                for c in ranking:
+                    if c.predictions is not None:
+                        c.stand_in = failing(held_out_gain(
+                            widened[2], c.predictions, self.runs, self.campaign.noise),
+                            c.physics, c.effect, self.table_view)
+            best = next((c for c in ranking if not c.failing() and not c.blocking
+                         and not c.stand_in), None)
             for c in ranking:
                 c.evidence = evidence(c, err, self.floor, cmp_cur)
                 if c is not best:
@@ -327,7 +353,12 @@ class Diagnoser:
                 top = ranking[0]
                 what = (f"the best candidate ({top.effect}) would change the held-out error "
                         f"{err:.2%} -> {top.error_after:.2%}")
-                if top.failing():
+                if top.stand_in and not top.failing() and not top.blocking:
+                    reason = (f"{what}, but the starting model with its bounds widened "
+                              f"(--calibrate {widened[0].text()}: {', '.join(widened[1])} "
+                              f"move) explains as much: {'; '.join(top.stand_in)} over it; "
+                              "it would stand in for a wrong declaration")
+                elif top.failing():
                     reason = f"{what}, not added: " + "; ".join(top.failing())
                 else:
                     reason = (f"{what}, but it is not added on that evidence: "

@@ -66,6 +66,9 @@ class Candidate:
     cost: float = float("nan")  # the fit's training cost (residuals and priors)
     gain: Gain | None = None  # its held-out gain over the current model (`SELECTION`)
     table: Any = field(default=None, repr=False)  # the campaign's `TableView` (its defaults)
+    #: the SELECTION criteria its gain fails over the starting model refitted with its
+    #: leaning bounds widened (empty: it beats a wrong declaration too, or none leaned)
+    stand_in: list[str] = field(default_factory=list)
 
     @property
     def blocking(self) -> list[str]:

@@ -29,6 +29,11 @@ candidate is added only if its gain e²_current - e²_candidate, so charged,
    (`vtable.diagnose.resolution`: the base's and each present effect's measured agreement
    with the virtual table): the most a patch of the model-form difference can remove;
 
+(6) when the calibrated starting model leans on a bound (`result.base_at_bounds`), its gain
+over the starting model refitted with those bounds widened (`Calibration.widened`) passes
+(1)-(4) too: an effect that only stands in for a wrong declaration is not added, and the
+verdict names the declaration (`engine`);
+
 and (5) its fit is sound: no fitted effect parameter within 1 % of a bound (fitted scale),
 correlated beyond 0.95 with a base parameter, or without influence on the data
 (Gauss-Newton covariance at the solution). A candidate failing (5) is flagged in the
@@ -75,10 +80,13 @@ SELECTION = (f"an effect is added when, on the held-out last 40 % of every run a
              "effect's measured agreement with the virtual table beyond the base's: the most "
              "a patch of that model-form difference can remove); and its fit is sound: none "
              "of its own parameters within 1 % of a bound, correlated beyond 0.95 with a base "
-             "parameter, or without influence on the data. The best such candidate (largest "
-             "gain) is added. After each addition every effect added earlier is tested the "
-             "same way against the model without it (refitted) and removed when it no longer "
-             "passes")
+             "parameter, or without influence on the data. When the calibrated starting "
+             "model leans on a bound of its declared values, the gain must also pass (1)-(4) "
+             "over the starting model refitted with those bounds widened: an effect is not "
+             "added where a wrong declaration explains as much. The best such candidate "
+             "(largest gain) is added. After each addition every effect added earlier is "
+             "tested the same way against the model without it (refitted) and removed when "
+             "it no longer passes")
 
 
 def implausibility(name: str, values: dict[str, float], table=None) -> list[tuple[str, float]]:
