@@ -4,14 +4,12 @@
 
 from __future__ import annotations
 
-import hashlib
 import importlib
-import importlib.util
-import sys
 from pathlib import Path
 
 from vtable.controllers.kinds.base import ControllerKind, ControlUse
 from vtable.errors import VtableError
+from vtable.userfile import run_user_file
 
 BUILT_IN = ("three_variable", "pid", "tvc")
 _REGISTRY: dict[str, ControllerKind] = {}
@@ -55,28 +53,13 @@ def get(name: str) -> ControllerKind:
 
 
 def load_file(path: str | Path) -> list[str]:
-    """Run a lab's controller file (it calls `register`); returns the kinds it added. Any
-    problem is one line naming the file."""
+    """Run a lab's controller file (it calls `register`); returns the kinds it registered.
+    Any problem is one line naming the file (`vtable.userfile.run_user_file`)."""
     p = Path(path)
-    if not p.is_file():
-        raise VtableError(f"{p}: no such file (--controller-from)")
     _load_built_in()
-    modname = "vtable_user_controller_" + \
-        hashlib.sha256(str(p.resolve()).encode()).hexdigest()[:16]
-    spec = importlib.util.spec_from_file_location(modname, p)
-    if spec is None or spec.loader is None:
-        raise VtableError(f"{p}: cannot be loaded as a Python file")
-    module = importlib.util.module_from_spec(spec)
     _LOADING.clear()
     try:
-        sys.modules[modname] = module
-        spec.loader.exec_module(module)
-    except VtableError as e:
-        raise VtableError(str(e) if str(p) in str(e) else f"{p}: {e}") from None
-    except SyntaxError as e:
-        raise VtableError(f"{p}: line {e.lineno}: syntax error: {e.msg}") from None
-    except Exception as e:
-        raise VtableError(f"{p}: {type(e).__name__} while loading: {e}") from None
+        resolved = run_user_file(p, "vtable_user_controller_", "--controller-from")
     finally:
         added = list(dict.fromkeys(_LOADING))
         _LOADING.clear()
@@ -84,7 +67,7 @@ def load_file(path: str | Path) -> list[str]:
         raise VtableError(f"{p}: registers no controller kind (call "
                           "vtable.controllers.kinds.register(...))")
     for n in added:
-        _FILES[n] = str(p.resolve())
+        _FILES[n] = str(resolved)
     return added
 
 

@@ -3,15 +3,13 @@ docs/effects.md) and the ones users register from their own files."""
 
 from __future__ import annotations
 
-import hashlib
 import importlib
-import importlib.util
-import sys
 from pathlib import Path
 
 from vtable.effects.base import Effect
 from vtable.effects.verbs import check_verbs
 from vtable.errors import VtableError
+from vtable.userfile import run_user_file
 
 #: the catalog, in the spec's order (modules of vtable.effects)
 BUILT_IN = ("pitch_flexibility", "force_feedback_filter", "valve_flow_nonlinearity",
@@ -127,36 +125,21 @@ def is_user(name: str) -> bool:
 def load_file(path: str | Path) -> list[str]:
     """Run a user's effects file (plain Python that calls `register`); returns the names it
     registered. Any problem — a missing file, a syntax error, an exception while it runs,
-    a bad declaration, a name clash, registering nothing — is one line naming the file."""
+    a bad declaration, a name clash, registering nothing — is one line naming the file
+    (`vtable.userfile.run_user_file`)."""
     p = Path(path)
-    if not p.is_file():
-        raise VtableError(f"{p}: no such file (--effects-from)")
     _load_built_in()
-    # named by its path, the same in every process (a compiled stage refers to its module)
-    modname = "vtable_user_effects_" + \
-        hashlib.sha256(str(p.resolve()).encode()).hexdigest()[:16]
-    spec = importlib.util.spec_from_file_location(modname, p)
-    if spec is None or spec.loader is None:
-        raise VtableError(f"{p}: cannot be loaded as a Python file")
-    module = importlib.util.module_from_spec(spec)
     _SOURCE.clear()
     _SOURCE["file"] = str(p)
     try:
-        sys.modules[modname] = module
-        spec.loader.exec_module(module)
-    except VtableError as e:
-        raise VtableError(str(e) if str(p) in str(e) else f"{p}: {e}") from None
-    except SyntaxError as e:
-        raise VtableError(f"{p}: line {e.lineno}: syntax error: {e.msg}") from None
-    except Exception as e:
-        raise VtableError(f"{p}: {type(e).__name__} while loading: {e}") from None
+        resolved = run_user_file(p, "vtable_user_effects_", "--effects-from")
     finally:
         done = list(_SOURCE.get("registered", []))
         _SOURCE.clear()
     if not done:
         raise VtableError(f"{p}: registers no effect (call vtable.effects.register(...))")
     for name in done:
-        _FILES[name] = str(p.resolve())
+        _FILES[name] = str(resolved)
     return done
 
 
