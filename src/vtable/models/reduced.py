@@ -233,7 +233,7 @@ def _upsampled(x_c: np.ndarray, n: int, up: int) -> np.ndarray:
     hit = _UPSAMPLED.get(key)
     if hit is not None and hit[0] is x_c:
         return hit[1]
-    xc = upsample(x_c, up)[: (n - 1) * up + 1]
+    xc = upsample(x_c, up)  # (n - 1) up + 1 samples
     xc.flags.writeable = False
     if len(_UPSAMPLED) >= 32:
         _UPSAMPLED.pop(next(iter(_UPSAMPLED)))
