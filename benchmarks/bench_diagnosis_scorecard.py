@@ -129,6 +129,25 @@ def _totals18(tot: dict) -> None:
         print(f"refused by vtable: {', '.join(tot['refused'])}")
 
 
+def _combined(done: list, done18: list, tot: dict, tot18: dict) -> bool:
+    """Issue 18's acceptance on the whole scorecard (issue 12's cases and its own): >= 95 %
+    right, no effect added in a null or beyond-bounds case, every outside-catalog case
+    unexplained, every beyond-bounds case right."""
+    right = sum(bool(r["ok"]) for _, r in done) + tot18["exact"][0]
+    n = len(done) + len(done18)
+    fp = [c.name for c, r in done if c.kind in ("null", "misdeclared_null") and r["found"]]
+    fp += list(tot18["false_positives"])
+    out_ok = tot["outside"][0] + tot18["unexplained"][0]
+    out_n = tot["outside"][1] + tot18["unexplained"][1]
+    met = right >= 0.95 * n and not fp and out_ok == out_n and all(
+        bool(r["ok"]) for c, r in done18 if c.kind == "beyond_bounds")
+    print(f"the whole scorecard ({n} cases; issue 18's acceptance): right in {right}/{n} "
+          f"({right / n:.1%}; acceptance >= 95 %), false positives {len(fp)}, outside the "
+          f"catalog unexplained in {out_ok}/{out_n}, beyond the bounds right in "
+          f"{_frac(tot18['suspect'])}: " + ("MET" if met else "NOT MET"))
+    return met
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", help="comma-separated case names (default: all)")
@@ -201,7 +220,10 @@ def main(argv: list[str] | None = None) -> int:
     print(f"diagnosis time: {t_all:.0f} s in all, {per:.0f} s per case "
           f"({n_new} diagnosed now, {len(done_all) - n_new} from the cache); wall {wall:.0f} s")
     met = (not done or tot["accepted"]) and (not done18 or tot18["accepted"])
-    print("acceptance on these cases: " + ("MET" if met else "NOT MET"))
+    print("acceptance on these cases: " + ("MET" if met else "NOT MET")
+          + (" (issue 18's set alone; the whole scorecard below)" if done and done18 else ""))
+    if done and done18:
+        _combined(done, done18, tot, tot18)
     if a.json:
         Path(a.json).write_text(json.dumps({"totals": tot, "totals_18": tot18,
                                             "results": results}, indent=1,

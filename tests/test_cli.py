@@ -3,6 +3,7 @@ import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from vtable.cli import main
@@ -47,6 +48,38 @@ def test_simulate_command(capsys, tmp_path):
     d = json.loads(out)
     assert d["peaks"]["h_span"]["peak"] == pytest.approx(0.2, rel=1e-3)
     assert (tmp_path / "blk.csv").is_file() and (tmp_path / "blk.rrd").is_file()
+
+
+def test_simulate_noise_is_the_fraction_asked_of_each_measured_channel(capsys, tmp_path):
+    """`--noise 0.01`: the noisy run less the noise-free one (same seed) has 1 % of each
+    measured channel's RMS, within 10 %; the command is clean; the title says so."""
+    from vtable.runs import read_run
+    from vtable.runs.model import COMMAND_CHANNELS
+
+    runs = {}
+    for noise, name in (("0", "clean"), ("0.01", "noisy")):
+        stem = tmp_path / name
+        code, _, err = run(capsys, "simulate", "--command", "random", "--peak", "0.1",
+                           "--duration", "4", "--seed", "7", "--noise", noise, "--out",
+                           str(stem))
+        assert code == 0, err
+        runs[noise] = read_run(stem.with_suffix(".toml"))
+    clean, noisy = runs["0"], runs["0.01"]
+    assert set(clean.channels) == set(noisy.channels)
+    measured = 0
+    for k, v in clean.channels.items():
+        d = noisy.channels[k] - v
+        if k in COMMAND_CHANNELS or k.startswith("state_"):
+            assert not d.any(), k
+            continue
+        rms = float(np.sqrt(np.mean(v**2)))
+        if rms > 0:
+            measured += 1
+            assert float(np.sqrt(np.mean(d**2))) / rms == pytest.approx(0.01, rel=0.1), k
+    assert measured >= 10
+    assert "0.01 x RMS white sensor noise (seed 7)" in noisy.meta["title"]
+    code, _, err = run(capsys, "simulate", "--noise", "-0.1")
+    assert code == 2 and err.count("\n") == 1 and "--noise: expected a fraction" in err
 
 
 @pytest.mark.parametrize("args, msg", [

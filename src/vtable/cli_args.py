@@ -93,6 +93,9 @@ def parser() -> argparse.ArgumentParser:
                           "table's stroke and 80 %% of its velocity and acceleration]")
     sim.add_argument("--freq", type=_number, default=2.0, help="sine frequency, Hz [2]")
     sim.add_argument("--seed", type=_integer, default=0)
+    sim.add_argument("--noise", type=_number, default=0.0, metavar="FRACTION",
+                     help="white Gaussian sensor noise on every measured channel, FRACTION x "
+                          "its RMS (the command stays clean; seeded by --seed) [0]")
     sim.add_argument("--valve", choices=["linear", "nonlinear"], default="linear",
                      help="linear servovalves (eqs 6.1-6.5) or appendix C valves on H1-H3; "
                           "nonlinear is an alias for --effect valve_flow_nonlinearity "

@@ -4,9 +4,13 @@ specimen's modes, damping and mass, the platen's mass, and its centre-of-mass he
 pitch inertia when the effect lets it pitch: `vtable.diagnose.calibration`) and the effects
 already in the model on the training segments of the campaign, score on the held-out
 segments, rank by held-out gain, add the best that passes the selection rule, repeat.
-Nonlinear candidates (an order of magnitude costlier to simulate) are screened: if a few
-least-squares steps from their best start do not lower the training cost by 1 %, their fit
-stops there (`TableModel`'s `baseline`).
+Each candidate starts from the best of a grid across its parameters' ranges and from its
+defaults (with the base as fitted, and with everything at its prior's
+centre: a free loop that absorbed part of the effect gives it back only when every
+parameter moves together; `TableModel`'s `multistart`). Nonlinear candidates (an order of
+magnitude costlier to simulate) are screened: if a few least-squares steps from their best
+starts do not lower the training cost by 1 %, their fit stops there (`TableModel`'s
+`baseline`).
 
 The selection rule is `vtable.diagnose.selection`'s (`SELECTION`); what a diagnosis
 returns is `vtable.diagnose.result`'s (`Diagnosis`, with `to_json()`, `report()` and
@@ -63,6 +67,7 @@ from vtable.diagnose.result import (
     base_at_bounds,
     bounds_verdict,
     evidence,
+    leaning,
     localise,
 )
 from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE, failing
@@ -93,6 +98,9 @@ class _State:
     stages: list[Stage] = field(default_factory=list)
     result: Diagnosis | None = None
     error: BaseException | None = None
+    #: declarations the final model leans on that a widened refit moves beyond their
+    #: bounds (`Diagnoser._pushed_beyond`)
+    pushed: list[dict[str, Any]] = field(default_factory=list)
 
 
 class Diagnoser:
@@ -162,6 +170,52 @@ class Diagnoser:
                           f"({', '.join(b['parameter'] for b in lean)}): candidates must "
                           f"also beat it refitted with --calibrate {wider.text()}")
         return wider, [b["parameter"] for b in lean], self.predict(refit.physics_)
+
+    def _pushed_beyond(self, st: _State) -> list[dict[str, Any]]:
+        """The declarations the final model leans on (`leaning`: within a quarter of their
+        range from a bound a --calibrate setting sets, short of `AT_BOUND`) that the data
+        push beyond it: the final model refitted with those bounds widened moves each beyond
+        its old bound, and the gain of that refit over the final model passes `SELECTION`'s
+        statistical criteria (a wrong declaration, e.g. a platen mass 20 % off, whose error
+        the free servo loop half absorbs, so the fit stops short of the bound against the
+        prior). Each as a `base_at_bounds` entry with `model` "widened", the refit's
+        value as `fitted` and the gain's figures."""
+        current = st.current
+        if current is None or not self.calibration.enabled:
+            return []
+        base = self.base_table(current)
+        lean = [(k, side) for k, side in leaning(base)
+                if k not in {b["parameter"] for b in base_at_bounds(base, self.calibration)}]
+        names = [bounding_setting(k, side) for k, side in lean]
+        wider = self.calibration.widened([n for n in names if n is not None])
+        if not lean or wider == self.calibration:
+            return []
+        refit = TableModel(start=current, stop=self._stop, calibration=wider).fit(self.campaign)
+        pred = self.predict(refit.physics_)
+        gain = held_out_gain(st.stages[-1].predictions, pred, self.runs, self.campaign.noise)
+        wide = TableModel(stop=self._stop, calibration=wider)
+        wide.vt, wide.declared = self.vt, self.campaign.specimen
+        moved = wide.base_table(refit.physics_)
+        err = compare(pred, self.runs, scored="held", floor=self.floor).error
+        fails = failing(gain)
+        out = []
+        for k, side in lean:
+            lo, hi = base[k]["bounds"]
+            v = moved[k]["fitted"]
+            beyond = v < lo if side == "lower" else v > hi
+            self.notes.append(
+                f"the final model leans on the {side} bound of {k} ({base[k]['fitted']:.4g} "
+                f"{base[k]['unit']}); refitted with --calibrate {wider.text()} it moves to "
+                f"{v:.4g} {base[k]['unit']}, held-out error {st.err:.2%} -> {err:.2%} ("
+                + ("the data push it beyond its bound" if beyond and not fails else
+                   "; ".join(fails) if beyond else "within its bound") + ")")
+            if beyond and not fails:
+                out.append({"parameter": k, "model": "widened",
+                            "declared": base[k]["declared"], "fitted": v,
+                            "bound": lo if side == "lower" else hi, "side": side,
+                            "unit": base[k]["unit"], "error_before": st.err,
+                            "error_after": err, "z": gain.z})
+        return out
 
     def _inapplicable(self, ph: Physics) -> str:
         """Why a model cannot be built for this campaign's table (an effect needing a
@@ -378,6 +432,8 @@ class Diagnoser:
         if not reason:
             reason = f"stopped after {self.max_rounds} rounds"
         final_cmp = self._detail(st)
+        progress(steps - 1, steps, "testing the declarations the final model leans on")
+        st.pushed = self._pushed_beyond(st)
         progress(steps, steps, "done")
         return self._diagnosis(st, final_cmp, reason)
 
@@ -449,7 +505,8 @@ class Diagnoser:
         base = self.base_table(current)
         start = getattr(self, "start_fitted", None)
         at_bounds = [] if err is None else base_at_bounds(
-            base, self.calibration, None if start is None else self.base_table(start))
+            base, self.calibration, None if start is None else self.base_table(start),
+            st.pushed)
         if at_bounds:  # deliverable 6 of issue 18: the suspect declarations named
             parts.append(bounds_verdict(at_bounds, self.calibration))
         if reason:

@@ -44,6 +44,10 @@ SCREEN_STEPS = 3  # ... (least-squares iterations from the best start) to be ref
 BASE_PARAMS = LOOP
 MULTISTART = (0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95, None)  # fractions of a range; None: as is
 RIVAL = 10.0  # base starts whose refined grid cost is within this factor of the best go on
+#: least-squares iterations from a start with the effect at its defaults before the rivals
+#: are compared: such a start's base has absorbed part of the effect, and the first steps
+#: give it back (an RC filter behind friction: 0.043 after 3, 0.00105 after 5)
+AS_IS_STEPS = 2 * SCREEN_STEPS
 
 
 class StopRequestedError(Exception):
@@ -87,7 +91,10 @@ class TableModel:
     multistart
         An effect whose parameters start from the best of a few values across their
         bounds, with the start's base loop and the nominal one (threshold effects, and
-        effects a refitted base loop had absorbed, need it).
+        effects a refitted base loop had absorbed, need it); and from the effect at its
+        defaults with the base as fitted and with every parameter
+        at its prior's centre, each given `AS_IS_STEPS` steps in every parameter (an
+        earlier fit's base that absorbed part of the effect gives it back only so).
     stop
         A `threading.Event`; when set, the fit ends at its next simulation
         (`StopRequestedError`).
@@ -96,7 +103,8 @@ class TableModel:
     baseline
         The training cost (sum of squared residuals and priors) of the model without the
         `multistart` effect: when `SCREEN_STEPS` least-squares iterations from the best
-        start do not lower it by `SCREEN` (a relative 1 %), the fit stops there and
+        grid start (`AS_IS_STEPS` from the effect at its defaults with the base as
+        fitted) do not lower it by `SCREEN` (a relative 1 %), the fit stops there and
         `screened_` is set (the diagnosis's screening of candidates: such a fit cannot
         clear the selection margin).
     seed
@@ -272,9 +280,25 @@ class TableModel:
             eff[idx] = True
             starts = [self._refine(x, eff, lo, hi, start, lay, campaign) for _, x in starts]
             c_min = min(c for c, _ in starts)
-            rivals = [x for c, x in sorted(starts, key=lambda s: s[0]) if c <= RIVAL * c_min]
-            if self.baseline is not None:  # a screened (costly) candidate: the best start
-                rivals = rivals[:1]
+            rivals = [(x, SCREEN_STEPS) for c, x in sorted(starts, key=lambda s: s[0])
+                      if c <= RIVAL * c_min]
+            if self.baseline is not None:  # a screened (costly) candidate: the best start,
+                # and the effect at its defaults with the base as fitted (below)
+                rivals = [*rivals[:1], (x0.copy(), AS_IS_STEPS)]
+            else:
+                # and the effect as it starts (its defaults, the prior's centre), with the
+                # base as fitted and with every parameter at the prior's centre (the base
+                # as declared, every effect at its default): where
+                # an earlier fit's base absorbed part of the effect (a free loop taking up
+                # an RC filter or entrained air), the effect refined with the base held
+                # slides off towards "absent", and only steps in every parameter find it;
+                # these are rivals whatever their cost before those steps
+                centre = np.array([math.log(p.declared) if p.log else p.declared
+                                   for p in lay])
+                for base_x in (x0[base], centre[base]):
+                    x_as_is = x0.copy()
+                    x_as_is[base] = base_x
+                    rivals.append((x_as_is, AS_IS_STEPS))
             x0 = min(starts, key=lambda s: s[0])[1]
         else:
             rivals = []
@@ -286,7 +310,7 @@ class TableModel:
                 diff_step=1e-4, xtol=1e-6, ftol=1e-8, max_nfev=nfev)
 
         if len(rivals) > 1:  # a few steps from each rival; the best goes on
-            sol = min((solve(x, SCREEN_STEPS) for x in rivals),
+            sol = min((solve(x, n) for x, n in rivals),
                       key=lambda s: float(np.sum(s.fun**2)))
             if self.baseline is not None and \
                     float(np.sum(sol.fun**2)) >= self.baseline * (1 - SCREEN):

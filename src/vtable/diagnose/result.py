@@ -205,8 +205,9 @@ class Diagnosis:
                                             for r in d["rounds"] if r["added"]]))
         out += base_lines(d["base"])
         for b in d["base_at_bounds"]:
-            out.append(f"at its bound ({b['model']} model): {b['parameter']} (declared "
-                       f"{b['declared']:.4g}, "
+            where = ("beyond its bound (the final model refitted with it widened)"
+                     if b["model"] == "widened" else f"at its bound ({b['model']} model)")
+            out.append(f"{where}: {b['parameter']} (declared {b['declared']:.4g}, "
                        f"fitted {b['fitted']:.4g}, {b['side']} bound {b['bound']:.4g}); "
                        + (f"--calibrate {b['calibrate']} lets it move" if b["calibrate"]
                           else "its bound is at its widest"))
@@ -299,7 +300,8 @@ def localise(d: Diagnosis) -> str:
 
 
 def base_at_bounds(base: dict[str, dict[str, Any]], calibration: Calibration,
-                   start: dict[str, dict[str, Any]] | None = None) -> list[dict[str, Any]]:
+                   start: dict[str, dict[str, Any]] | None = None,
+                   pushed: list[dict[str, Any]] = ()) -> list[dict[str, Any]]:
     """The declared values the calibrated base ends at a bound of: within `AT_BOUND` of its
     range from the bound, on the fitted scale (the logarithm for a factor bound), and bounded
     by a `--calibrate` setting. `base` is the final model's (`TableModel.base_table`),
@@ -307,8 +309,10 @@ def base_at_bounds(base: dict[str, dict[str, Any]], calibration: Calibration,
     final model but still in the quarter of its range next to that bound there, is listed
     too (`model` "start": the effects added may stand in for a wrong declaration; a value
     the final model brings back towards its declaration was pushed by the missing effect,
-    not by the declaration). Each: {parameter, model, declared, fitted, bound, side, unit,
-    calibrate},
+    not by the declaration). `pushed`: the entries (`model` "widened") of the declarations
+    the final model leans on that a refit with their bounds widened moved beyond them
+    (`Diagnoser._pushed_beyond`). Each: {parameter, model, declared, fitted, bound, side,
+    unit, calibrate},
     `calibrate` the --calibrate text of the calibration with this bound widened
     (`Calibration.widened`; the settings already given kept)."""
     out = _at_bounds(base, "final")
@@ -316,6 +320,7 @@ def base_at_bounds(base: dict[str, dict[str, Any]], calibration: Calibration,
     out += [b for b in _at_bounds(start or {}, "start") if b["parameter"] not in final
             and b["parameter"] in base
             and _position(b["parameter"], base[b["parameter"]], b["side"]) <= LEANS]
+    out += [dict(b) for b in pushed if b["parameter"] not in {a["parameter"] for a in out}]
     for b in out:
         name = bounding_setting(b["parameter"], b["side"])
         wider = getattr(calibration.widened([name]), name)
@@ -326,6 +331,17 @@ def base_at_bounds(base: dict[str, dict[str, Any]], calibration: Calibration,
 
 #: a final value within this fraction of its range from a bound still leans on it
 LEANS = 0.25
+
+
+def leaning(base: dict[str, dict[str, Any]]) -> list[tuple[str, str]]:
+    """(parameter, side) of the base parameters within `LEANS` of a bound a --calibrate
+    setting sets (the servo loop's fixed bounds excluded)."""
+    out = []
+    for key, v in base.items():
+        for side in ("lower", "upper"):
+            if bounding_setting(key, side) is not None and _position(key, v, side) <= LEANS:
+                out.append((key, side))
+    return out
 
 
 def _position(key: str, v: dict[str, Any], side: str) -> float:
@@ -370,8 +386,17 @@ def bounds_verdict(at_bounds: list[dict[str, Any]], calibration: Calibration) ->
         return (f"{b['parameter']} (declared {b['declared']:.4g}{u}, fitted "
                 f"{b['fitted']:.4g}{u} at its {b['side']} bound, {moved:+.1%})")
 
+    def pushed(b: dict[str, Any]) -> str:
+        u = "" if b["unit"] == "1" else f" {b['unit']}"
+        moved = b["fitted"] / b["declared"] - 1 if b["declared"] else float("nan")
+        return (f"{b['parameter']} (declared {b['declared']:.4g}{u}, moves to "
+                f"{b['fitted']:.4g}{u}, {moved:+.1%}, beyond its {b['side']} bound "
+                f"{b['bound']:.4g}{u}; held-out error {b['error_before']:.2%} -> "
+                f"{b['error_after']:.2%}, {b['z']:.1f} standard errors of the noise)")
+
     parts = []
     final = [named(b) for b in at_bounds if b["model"] == "final"]
+    widened = [pushed(b) for b in at_bounds if b["model"] == "widened"]
     start = [named(b) for b in at_bounds if b["model"] == "start"]
     if final:
         parts.append("the calibrated base ends at its bounds: " + ", ".join(final))
@@ -379,6 +404,9 @@ def bounds_verdict(at_bounds: list[dict[str, Any]], calibration: Calibration) ->
         parts.append("the calibrated starting model (no effect added) ended at its bounds: "
                      + ", ".join(start) + "; an effect added may stand in for a wrong "
                      "declaration")
+    if widened:
+        parts.append("the final model leans on its bounds; refitted with them widened: "
+                     + ", ".join(widened))
     wider = calibration.widened([bounding_setting(b["parameter"], b["side"])
                                  for b in at_bounds])
     one = len(at_bounds) == 1

@@ -4,6 +4,8 @@ configuration's modes, margins and x_t/x_c, and the SDOF frame under El Centro).
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -14,10 +16,12 @@ from vtable import display, units
 from vtable.analytic import configs
 from vtable.display import table_family
 from vtable.effects.registry import parse_spec
+from vtable.errors import VtableError
 from vtable.mjcf.export import export_mjcf as export
 from vtable.params.virtual import virtual_table_for
 from vtable.results import Demo, DemoSimulation, SimulationSummary, Written
 from vtable.runs import write_run
+from vtable.runs.model import with_noise
 from vtable.signals import make_command
 from vtable.sim.experiment import load_specimen, load_table, run_experiment
 from vtable.studies import response_spectrum
@@ -124,7 +128,8 @@ def simulate(specimen: str | None = None, kind: str = "random", *,
              peak: float | None = None, freq: float = 2.0, seed: int = 0,
              record: str | None = None, valve: str = "linear",
              effects: Sequence[str] = (), out: str | None = None, rerun: str | None = None,
-             exaggerate: float = 50.0, table: str = "eerc") -> SimulationSummary:
+             exaggerate: float = 50.0, table: str = "eerc",
+             noise: float = 0.0) -> SimulationSummary:
     """Run a command on the multibody virtual table of `table` (a preset name, or a TOML
     file with a [table] in the run format's keys; `effects`: 'name[:p=v,...]' added to the
     standard table); the peak table, limits and files written.
@@ -133,7 +138,13 @@ def simulate(specimen: str | None = None, kind: str = "random", *,
     bare table when the table's payload cannot carry it (`default_specimen`); `band` None
     is 0-25 Hz cut to the table's band; `peak` None is the kind's default peak scaled to
     the table's stroke, velocity and acceleration (`fit_peak`). Each choice is one line of
-    the report. A value given explicitly is never changed: beyond a limit it is refused."""
+    the report. A value given explicitly is never changed: beyond a limit it is refused.
+    `noise`: white Gaussian sensor noise, that fraction of each measured channel's RMS
+    (`vtable.runs.with_noise`; the command channels clean, seeded by `seed`), added to
+    the run written and said in its title — a campaign that looks like a lab's."""
+    if not (math.isfinite(noise) and 0.0 <= noise <= 1.0):
+        raise VtableError(f"--noise: expected a fraction of each channel's RMS from 0 to 1, "
+                          f"got {noise!r}")
     eff = dict(parse_spec(e) for e in effects)
     lab = load_table(table)
     fam = table_family(lab)
@@ -158,6 +169,13 @@ def simulate(specimen: str | None = None, kind: str = "random", *,
         cmd = make(peak)
     exp = run_experiment(spec, cmd, vt=vt, valve=valve, effects=eff)
     exp.run.units = display.file_units(exp.run.units, fam)  # a metric table's: mm, g, kN
+    if noise > 0:
+        noisy = with_noise(exp.run, noise, seed=seed)
+        exp.run = dataclasses.replace(noisy, meta={
+            **noisy.meta, "title": f"{noisy.meta.get('title', '')}, {noise:.3g} x RMS white "
+                                   f"sensor noise (seed {seed})"})
+        exp.notes.append(f"sensor noise added: {noise:.3g} x each measured channel's RMS, "
+                         f"seed {seed}")
     if out is not None:
         exp.run.name = str(out)
         exp.files += list(write_run(exp.run, out))
