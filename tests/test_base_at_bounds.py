@@ -8,8 +8,8 @@ from __future__ import annotations
 import pytest
 import scorecard as sc
 
+from vtable.diagnose.bounds import base_at_bounds, bounds_verdict, leaning
 from vtable.diagnose.calibration import Calibration
-from vtable.diagnose.result import base_at_bounds, bounds_verdict, leaning
 
 #: LNEC's platen (1975.1 kg, Table 1 of the real run's README) with the default ±10 %
 M0 = 1975.1

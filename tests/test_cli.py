@@ -82,6 +82,27 @@ def test_simulate_noise_is_the_fraction_asked_of_each_measured_channel(capsys, t
     assert code == 2 and err.count("\n") == 1 and "--noise: expected a fraction" in err
 
 
+def test_simulate_writes_the_same_columns_whatever_the_effect(capsys, tmp_path):
+    """Issue 19: a run's columns do not give its hidden effect away; `--states` adds the
+    model's internal states, which do depend on it."""
+    from vtable.effects.registry import BUILT_IN
+
+    def header(stem, *extra):
+        code, _, err = run(capsys, "simulate", "--command", "random", "--peak", "0.1",
+                           "--duration", "1", "--out", str(tmp_path / stem), *extra)
+        assert code == 0, err
+        return (tmp_path / f"{stem}.csv").read_text().split("\n", 1)[0].split(",")
+
+    bare = header("bare")
+    assert not [c for c in bare if c.startswith("state_")]
+    for name in BUILT_IN:
+        assert header(name, "--effect", name) == bare, name
+    friction = header("friction_states", "--effect", "actuator_friction", "--states")
+    extra = set(friction) - set(bare)
+    assert set(bare) <= set(friction) and "state_q_x" in extra
+    assert all(c.startswith("state_") for c in extra)
+
+
 @pytest.mark.parametrize("args, msg", [
     (["--command", "sine", "--freq", "5", "--peak", "2"], "velocity reaches 62.8 in/s"),
     (["--command", "sine", "--freq", "1", "--peak", "7"], "x command reaches 7.00 in"),

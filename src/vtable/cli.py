@@ -94,7 +94,8 @@ def cmd_simulate(a: argparse.Namespace) -> Result:
     return verbs.simulate(a.specimen, a.kind, duration=a.duration, band=band,
                           peak=a.peak, freq=a.freq, seed=a.seed, record=a.record,
                           valve=a.valve, effects=a.effect, out=a.out, rerun=a.rerun,
-                          exaggerate=a.exaggerate, table=a.table, noise=a.noise)
+                          exaggerate=a.exaggerate, table=a.table, noise=a.noise,
+                          states=a.states)
 
 
 def cmd_export(a: argparse.Namespace) -> Result:

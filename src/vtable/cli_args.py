@@ -108,6 +108,9 @@ def parser() -> argparse.ArgumentParser:
     sim.add_argument("--controller-from", action="append", default=[], metavar="FILE",
                      help=_CONTROLLER_FROM)
     sim.add_argument("--out", default=None, help="run file stem (writes STEM.csv, STEM.toml)")
+    sim.add_argument("--states", action="store_true",
+                     help="also write the model's internal states (state_* columns, which "
+                          "depend on the effects in it) [off: the run format's channels only]")
     sim.add_argument("--rerun", default=None, help="write a Rerun recording (.rrd)")
     sim.add_argument("--exaggerate", type=_number, default=50.0,
                      help="pitch/roll exaggeration in the 3D view [50]")

@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from vtable.diagnose.bounds import base_at_bounds, bounds_verdict, pushed_beyond
 from vtable.diagnose.calibration import Calibration, bounding_setting
 from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import compare
@@ -64,10 +65,7 @@ from vtable.diagnose.result import (
     DiagnosisInterrupted,
     Round,
     Stage,
-    base_at_bounds,
-    bounds_verdict,
     evidence,
-    leaning,
     localise,
 )
 from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE, failing
@@ -99,7 +97,7 @@ class _State:
     result: Diagnosis | None = None
     error: BaseException | None = None
     #: declarations the final model leans on that a widened refit moves beyond their
-    #: bounds (`Diagnoser._pushed_beyond`)
+    #: bounds (`bounds.pushed_beyond`)
     pushed: list[dict[str, Any]] = field(default_factory=list)
 
 
@@ -172,50 +170,10 @@ class Diagnoser:
         return wider, [b["parameter"] for b in lean], self.predict(refit.physics_)
 
     def _pushed_beyond(self, st: _State) -> list[dict[str, Any]]:
-        """The declarations the final model leans on (`leaning`: within a quarter of their
-        range from a bound a --calibrate setting sets, short of `AT_BOUND`) that the data
-        push beyond it: the final model refitted with those bounds widened moves each beyond
-        its old bound, and the gain of that refit over the final model passes `SELECTION`'s
-        statistical criteria (a wrong declaration, e.g. a platen mass 20 % off, whose error
-        the free servo loop half absorbs, so the fit stops short of the bound against the
-        prior). Each as a `base_at_bounds` entry with `model` "widened", the refit's
-        value as `fitted` and the gain's figures."""
-        current = st.current
-        if current is None or not self.calibration.enabled:
+        """`bounds.pushed_beyond` of the final model."""
+        if st.current is None or not self.calibration.enabled:
             return []
-        base = self.base_table(current)
-        lean = [(k, side) for k, side in leaning(base)
-                if k not in {b["parameter"] for b in base_at_bounds(base, self.calibration)}]
-        names = [bounding_setting(k, side) for k, side in lean]
-        wider = self.calibration.widened([n for n in names if n is not None])
-        if not lean or wider == self.calibration:
-            return []
-        refit = TableModel(start=current, stop=self._stop, calibration=wider).fit(self.campaign)
-        pred = self.predict(refit.physics_)
-        gain = held_out_gain(st.stages[-1].predictions, pred, self.runs, self.campaign.noise)
-        wide = TableModel(stop=self._stop, calibration=wider)
-        wide.vt, wide.declared = self.vt, self.campaign.specimen
-        moved = wide.base_table(refit.physics_)
-        err = compare(pred, self.runs, scored="held", floor=self.floor).error
-        fails = failing(gain)
-        out = []
-        for k, side in lean:
-            lo, hi = base[k]["bounds"]
-            v = moved[k]["fitted"]
-            beyond = v < lo if side == "lower" else v > hi
-            self.notes.append(
-                f"the final model leans on the {side} bound of {k} ({base[k]['fitted']:.4g} "
-                f"{base[k]['unit']}); refitted with --calibrate {wider.text()} it moves to "
-                f"{v:.4g} {base[k]['unit']}, held-out error {st.err:.2%} -> {err:.2%} ("
-                + ("the data push it beyond its bound" if beyond and not fails else
-                   "; ".join(fails) if beyond else "within its bound") + ")")
-            if beyond and not fails:
-                out.append({"parameter": k, "model": "widened",
-                            "declared": base[k]["declared"], "fitted": v,
-                            "bound": lo if side == "lower" else hi, "side": side,
-                            "unit": base[k]["unit"], "error_before": st.err,
-                            "error_after": err, "z": gain.z})
-        return out
+        return pushed_beyond(self, st.current, st.err, st.stages[-1].predictions)
 
     def _inapplicable(self, ph: Physics) -> str:
         """Why a model cannot be built for this campaign's table (an effect needing a

@@ -29,7 +29,7 @@ candidate is added only if its gain e²_current - e²_candidate, so charged,
    (`vtable.diagnose.resolution`: the base's and each present effect's measured agreement
    with the virtual table): the most a patch of the model-form difference can remove;
 
-(6) when the calibrated starting model leans on a bound (`result.base_at_bounds`), its gain
+(6) when the calibrated starting model leans on a bound (`bounds.base_at_bounds`), its gain
 over the starting model refitted with those bounds widened (`Calibration.widened`) passes
 (1)-(4) too: an effect that only stands in for a wrong declaration is not added, and the
 verdict names the declaration (`engine`);

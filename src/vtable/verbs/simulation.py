@@ -123,13 +123,21 @@ def fit_peak(lab, kind: str, make, fam: str) -> tuple[Any, str]:
                  f"(--peak sets it, in inches)")
 
 
+def without_states(run):
+    """The run without its internal `state_*` channels (which effects add and name)."""
+    keep = [k for k in run.channels if not k.startswith("state_")]
+    return dataclasses.replace(run, channels={k: run.channels[k] for k in keep},
+                               units={k: u for k, u in run.units.items()
+                                      if not k.startswith("state_")})
+
+
 def simulate(specimen: str | None = None, kind: str = "random", *,
              duration: float | None = None, band: tuple[float, float] | None = None,
              peak: float | None = None, freq: float = 2.0, seed: int = 0,
              record: str | None = None, valve: str = "linear",
              effects: Sequence[str] = (), out: str | None = None, rerun: str | None = None,
              exaggerate: float = 50.0, table: str = "eerc",
-             noise: float = 0.0) -> SimulationSummary:
+             noise: float = 0.0, states: bool = False) -> SimulationSummary:
     """Run a command on the multibody virtual table of `table` (a preset name, or a TOML
     file with a [table] in the run format's keys; `effects`: 'name[:p=v,...]' added to the
     standard table); the peak table, limits and files written.
@@ -141,7 +149,9 @@ def simulate(specimen: str | None = None, kind: str = "random", *,
     the report. A value given explicitly is never changed: beyond a limit it is refused.
     `noise`: white Gaussian sensor noise, that fraction of each measured channel's RMS
     (`vtable.runs.with_noise`; the command channels clean, seeded by `seed`), added to
-    the run written and said in its title — a campaign that looks like a lab's."""
+    the run written and said in its title — a campaign that looks like a lab's. The run
+    file holds the run format's channels only, the same whatever the effects; `states`
+    adds the model's internal states (`state_*` columns, which depend on them)."""
     if not (math.isfinite(noise) and 0.0 <= noise <= 1.0):
         raise VtableError(f"--noise: expected a fraction of each channel's RMS from 0 to 1, "
                           f"got {noise!r}")
@@ -178,7 +188,7 @@ def simulate(specimen: str | None = None, kind: str = "random", *,
                          f"seed {seed}")
     if out is not None:
         exp.run.name = str(out)
-        exp.files += list(write_run(exp.run, out))
+        exp.files += list(write_run(exp.run if states else without_states(exp.run), out))
     if rerun is not None:
         exp.files.append(log_run(exp.run, rerun, exaggeration=exaggerate))
     summary = simulation_summary(exp, fam)
