@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import functools
 import json
+import re
 import sys
 import tempfile
 from pathlib import Path
@@ -113,6 +114,11 @@ def test_a_vtable_simulate_campaign_adds_only_the_virtual_tables_physics(tmp_pat
         d["verdict"]
     assert d["noise_floor"] == pytest.approx(0.005)
     assert any("below what the reduced model resolves" in n for n in d["notes"])
+    # noise-free: no gain is printed as a figure beyond 10^6 standard errors (issue 19)
+    texts = [c["evidence"] for r in d["rounds"] for c in r["ranking"]] + [d["verdict"]]
+    assert not [t for t in texts if re.search(r"\d{7,}(\.\d*)? standard errors", t)]
+    assert any("more than +10^6 standard errors of the noise (the runs are nearly "
+               "noise-free" in t for t in texts)
     assert d["unexplained"] is None and d["final_error"] < 0.01, d["verdict"]
     rc = d["final_params"]["force_feedback_filter"]["rc"]
     assert rc == pytest.approx(0.01, rel=0.1)  # Table B.5's RC

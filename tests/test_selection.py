@@ -110,3 +110,16 @@ def test_identical_predictions_gain_nothing():
     # the model is the truth: what is left is the noise alone
     assert g.e2_current == pytest.approx(g.f2, rel=0.1)
     assert g.systematic < 0.1 * g.f2
+
+
+def test_a_gain_beyond_a_million_standard_errors_is_said_not_printed():
+    """Issue 19: on nearly noise-free runs z reaches 10^18; the text says so instead."""
+    from vtable.diagnose.statistics import Gain, standard_errors
+
+    assert standard_errors(4.66) == "4.7 standard errors of the noise"
+    assert standard_errors(-1e6) == "-1000000.0 standard errors of the noise"
+    big = standard_errors(1.9e18)
+    assert big.startswith("more than +10^6 standard errors") and "noise-free" in big
+    assert standard_errors(-2.9e9).startswith("less than -10^6 standard errors")
+    g = Gain(e2_current=0.02, e2_candidate=0.01, f2=1e-12, se=1e-14)
+    assert g.z == pytest.approx(1e12) and g.z_text == big

@@ -14,7 +14,7 @@ from vtable.diagnose.calibration import WIDEN, Calibration, bounding_setting
 from vtable.diagnose.compare import compare
 from vtable.diagnose.model import AT_BOUND, TableModel
 from vtable.diagnose.selection import failing
-from vtable.diagnose.statistics import held_out_gain
+from vtable.diagnose.statistics import held_out_gain, standard_errors
 
 
 def base_at_bounds(base: dict[str, dict[str, Any]], calibration: Calibration,
@@ -110,7 +110,7 @@ def bounds_verdict(at_bounds: list[dict[str, Any]], calibration: Calibration) ->
         return (f"{b['parameter']} (declared {b['declared']:.4g}{u}, moves to "
                 f"{b['fitted']:.4g}{u}, {moved:+.1%}, beyond its {b['side']} bound "
                 f"{b['bound']:.4g}{u}; held-out error {b['error_before']:.2%} -> "
-                f"{b['error_after']:.2%}, {b['z']:.1f} standard errors of the noise)")
+                f"{b['error_after']:.2%}, {standard_errors(b['z'])})")
 
     parts = []
     final = [named(b) for b in at_bounds if b["model"] == "final"]

@@ -274,7 +274,7 @@ def evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
     band = cmp.worst_band(worst[0][0]) if worst else None
     g = c.gain
     removed = f"{max(g.share, 0.0):.0%}" if g is not None and np.isfinite(g.share) else "all"
-    z = f", {g.z:.1f} standard errors of the noise" if g is not None else ""
+    z = f", {g.z_text}" if g is not None else ""
     params = params_text(c.effect, c.params, cmp.display, ".3g")
     return (f"residual concentrated in {where}" + (f" at {band[0]}" if band else "")
             + f"; adding {c.effect} removes {removed} of its systematic part (held-out error "

@@ -99,13 +99,14 @@ def implausibility(name: str, values: dict[str, float], table=None) -> list[tupl
             continue
         v = float(values[q.name])
         d = q.default if table is None else q.default_on(table)
+        u = "" if q.unit == "1" else f" {q.unit}"  # a ratio is printed bare
         if q.log and v > 0 and d > 0:
             z = math.log(v / d) / math.log(PLAUSIBLE)
-            what = (f"{q.name} {v:.3g} {q.unit} is {max(v / d, d / v):.3g} x its default "
-                    f"{d:.3g} {q.unit}")
+            what = (f"{q.name} {v:.3g}{u} is {max(v / d, d / v):.3g} x its default "
+                    f"{d:.3g}{u}")
         else:
             z = (v - d) / (0.25 * (q.upper - q.lower))
-            what = f"{q.name} {v:.3g} {q.unit} against its default {d:.3g}"
+            what = f"{q.name} {v:.3g}{u} against its default {d:.3g}"
         out.append((f"{what} ({q.source or 'no source'})", z))
     return out
 
@@ -143,7 +144,7 @@ def failing(g: Gain | None, model: Physics | None = None, name: str | None = Non
     net = replace(g, e2_candidate=g.e2_candidate + cost)
     out = []
     if not net.z > Z_NOISE:
-        out.append(f"its gain is {net.z:.1f} standard errors of the noise (needs {Z_NOISE:g})")
+        out.append(f"its gain is {net.z_text} (needs {Z_NOISE:g})")
     if not net.gain >= MIN_SHARE * net.systematic:
         out.append(f"it removes {max(net.share, 0):.0%} of the systematic residual (needs "
                    f"{MIN_SHARE:.0%})")

@@ -68,6 +68,13 @@ class Gain:
         return self.gain / self.se if self.se > 0 else (np.inf if self.gain > 0 else 0.0)
 
     @property
+    def z_text(self) -> str:
+        """`z` in words: '4.7 standard errors of the noise'; beyond ±`Z_SAID` the runs are
+        nearly noise-free and the figure means nothing a reader could check, so it says so
+        (the selection rule's resolution criterion decides there)."""
+        return standard_errors(self.z)
+
+    @property
     def systematic(self) -> float:
         """The current model's systematic residual, e² - floor² (≥ 0)."""
         return max(self.e2_current - self.f2, 0.0)
@@ -114,3 +121,14 @@ def held_out_gain(current: dict[str, dict[str, np.ndarray]],
     return Gain(float(np.sum(e_cur)) / k, float(np.sum(e_cand)) / k, float(np.sum(f2)) / k,
                 float(np.sqrt(var)) / k)
 
+
+#: |z| beyond which `standard_errors` no longer prints the figure
+Z_SAID = 1e6
+
+
+def standard_errors(z: float) -> str:
+    """A z statistic in words (`Gain.z_text`)."""
+    if abs(z) <= Z_SAID:
+        return f"{z:.1f} standard errors of the noise"
+    return (f"{'more' if z > 0 else 'less'} than {'+' if z > 0 else '-'}10^6 standard errors "
+            "of the noise (the runs are nearly noise-free: the model's resolution decides)")
