@@ -101,20 +101,16 @@ def bounds_verdict(at_bounds: list[dict[str, Any]], calibration: Calibration) ->
     def named(b: dict[str, Any]) -> str:
         u = "" if b["unit"] == "1" else f" {b['unit']}"
         moved = b["fitted"] / b["declared"] - 1 if b["declared"] else float("nan")
-        return (f"{b['parameter']} (declared {b['declared']:.4g}{u}, fitted "
-                f"{b['fitted']:.4g}{u} at its {b['side']} bound, {moved:+.1%})")
-
-    def pushed(b: dict[str, Any]) -> str:
-        u = "" if b["unit"] == "1" else f" {b['unit']}"
-        moved = b["fitted"] / b["declared"] - 1 if b["declared"] else float("nan")
-        return (f"{b['parameter']} (declared {b['declared']:.4g}{u}, moves to "
-                f"{b['fitted']:.4g}{u}, {moved:+.1%}, beyond its {b['side']} bound "
-                f"{b['bound']:.4g}{u}; held-out error {b['error_before']:.2%} -> "
+        head = f"{b['parameter']} (declared {b['declared']:.4g}{u}, "
+        if b["model"] != "widened":
+            return head + f"fitted {b['fitted']:.4g}{u} at its {b['side']} bound, {moved:+.1%})"
+        return (head + f"moves to {b['fitted']:.4g}{u}, {moved:+.1%}, beyond its {b['side']} "
+                f"bound {b['bound']:.4g}{u}; held-out error {b['error_before']:.2%} -> "
                 f"{b['error_after']:.2%}, {standard_errors(b['z'])})")
 
     parts = []
     final = [named(b) for b in at_bounds if b["model"] == "final"]
-    widened = [pushed(b) for b in at_bounds if b["model"] == "widened"]
+    widened = [named(b) for b in at_bounds if b["model"] == "widened"]
     start = [named(b) for b in at_bounds if b["model"] == "start"]
     if final:
         parts.append("the calibrated base ends at its bounds: " + ", ".join(final))
@@ -157,9 +153,7 @@ def pushed_beyond(dg, current, err: float, predictions) -> list[dict[str, Any]]:
     refit = TableModel(start=current, stop=dg._stop, calibration=wider).fit(dg.campaign)
     pred = dg.predict(refit.physics_)
     gain = held_out_gain(predictions, pred, dg.runs, dg.campaign.noise)
-    wide = TableModel(stop=dg._stop, calibration=wider)
-    wide.vt, wide.declared = dg.vt, dg.campaign.specimen
-    moved = wide.base_table(refit.physics_)
+    moved = dg._model(wider).base_table(refit.physics_)
     after = compare(pred, dg.runs, scored="held", floor=dg.floor).error
     fails = failing(gain)
     out = []

@@ -190,8 +190,10 @@ class Diagnoser:
         except VtableError:
             return False
 
-    def _model(self) -> TableModel:
-        m = TableModel(stop=self._stop, calibration=self.calibration)
+    def _model(self, calibration: Calibration | None = None) -> TableModel:
+        """An unfitted estimator on this campaign's table and declaration (for its tables
+        of the base: `calibration`'s bounds, default this diagnosis's)."""
+        m = TableModel(stop=self._stop, calibration=calibration or self.calibration)
         m.vt, m.declared = self.vt, self.campaign.specimen
         return m
 

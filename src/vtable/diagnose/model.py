@@ -293,9 +293,7 @@ class TableModel:
                 # an RC filter or entrained air), the effect refined with the base held
                 # slides off towards "absent", and only steps in every parameter find it;
                 # these are rivals whatever their cost before those steps
-                centre = np.array([math.log(p.declared) if p.log else p.declared
-                                   for p in lay])
-                for base_x in (x0[base], centre[base]):
+                for base_x in (x0[base], declared):  # `declared`: the base's prior centre
                     x_as_is = x0.copy()
                     x_as_is[base] = base_x
                     rivals.append((x_as_is, AS_IS_STEPS))
