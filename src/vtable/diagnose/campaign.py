@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vtable.diagnose.compare import (
+    NOISE_FACTOR,
     analysis_run,
     campaign_notes,
     group_noise,
@@ -19,6 +20,7 @@ from vtable.diagnose.compare import (
     segments,
 )
 from vtable.diagnose.sensors import sensor_check
+from vtable.diagnose.stationarity import stationarity_check
 from vtable.errors import VtableError
 from vtable.params.lab import run_table
 from vtable.params.virtual import virtual_table_for
@@ -100,6 +102,9 @@ class Campaign:
         notes, floor = campaign_notes(a), noise_floor(a)
         sensors = [c for c in map(sensor_check, a) if c is not None and not c.agree]
         notes += [c.text() for c in sensors]
+        for c in map(stationarity_check, a):  # a notch that moves: the specimen changes
+            if c is not None and c.notch is not None:
+                notes.append(c.text(floor, NOISE_FACTOR))
         if floor < MODEL_RESOLUTION:
             notes.append(f"the runs' sensor noise ({floor:.2%} of the signals) is below what "
                          f"the reduced model resolves ({MODEL_RESOLUTION:.1%}, its agreement "

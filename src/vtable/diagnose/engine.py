@@ -5,9 +5,9 @@ pitch inertia when the effect lets it pitch: `vtable.diagnose.calibration`) and 
 already in the model on the training segments of the campaign, score on the held-out
 segments, rank by held-out gain, add the best that passes the selection rule, repeat.
 Each candidate starts from the best of a grid across its parameters' ranges and from its
-defaults (with the base as fitted, and with everything at its prior's
-centre: a free loop that absorbed part of the effect gives it back only when every
-parameter moves together; `TableModel`'s `multistart`). Nonlinear candidates (an order of
+defaults with the base as fitted, and from its best grid start with the loop as declared
+(a free loop that absorbed part of the effect gives it back only when every parameter
+moves together; `TableModel`'s `multistart`). Nonlinear candidates (an order of
 magnitude costlier to simulate) are screened: if a few least-squares steps from their best
 starts do not lower the training cost by 1 %, their fit stops there (`TableModel`'s
 `baseline`).
@@ -69,6 +69,7 @@ from vtable.diagnose.result import (
     localise,
 )
 from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE, failing
+from vtable.diagnose.stationarity import stationarity_check
 from vtable.diagnose.statistics import Comparison, held_out_gain
 from vtable.effects.registry import get as effect
 from vtable.effects.registry import names as registered
@@ -462,6 +463,13 @@ class Diagnoser:
                              f" it lives in {unexp['where']}")
                 for c in self.campaign.sensors:  # what no effect on the platen can fit
                     parts.append(c.text())
+                if st.stages:  # what no time-invariant model of the command can fit
+                    preds = st.stages[-1].predictions
+                    for r in self.runs:
+                        c = stationarity_check(r, preds.get(r.name))
+                        text = "" if c is None else c.text(floor, NOISE_FACTOR)
+                        if text:
+                            parts.append(text)
         base = self.base_table(current)
         start = getattr(self, "start_fitted", None)
         at_bounds = [] if err is None else base_at_bounds(
