@@ -3,7 +3,7 @@ against truths made here with scipy alone: a table whose x_t/x_c has a specimen'
 (the zero of eq 7.9's numerator, derived in `_table`, not vtable's), driven by band-limited noise,
 its output with known white sensor noise: time-invariant, with the specimen's frequency
 falling from 3.2 to 2.9 Hz halfway (the state carried across), and with the table's gain
-swinging ±10 % over 20 s."""
+swinging ±10 % over 20 s; and LNEC's measured run."""
 
 from __future__ import annotations
 
@@ -11,9 +11,18 @@ import math
 
 import numpy as np
 import pytest
+import real_data
 import scipy.signal as sg
 
-from vtable.diagnose.stationarity import coherent_split, moved_notch, stable_split
+from vtable.diagnose.campaign import Campaign
+from vtable.diagnose.sampling import analysis_run
+from vtable.diagnose.stationarity import (
+    coherent_split,
+    moved_notch,
+    stable_split,
+    stationarity_check,
+)
+from vtable.runs import read_run
 
 FS = 200.0
 T = 150.0  # s: 10 s frames, more than 8 averages
@@ -92,3 +101,15 @@ def test_a_table_whose_gain_changes_leaves_a_residual_no_time_invariant_model_fi
     share = np.std(r) / np.std(m)  # 7.2 %
     assert incoherent == pytest.approx(share, rel=0.1) and incoherent > 5 * 0.01  # 6.9 %
     assert coherent < 0.5 * incoherent
+
+
+@real_data.NEEDED
+def test_lnecs_measured_specimen_softens_and_the_campaign_says_so(tmp_path):
+    run = analysis_run(read_run(real_data.copy_run(tmp_path)))
+    c = stationarity_check(run)
+    assert c is not None and c.notch is not None
+    first, last, _ = c.notch
+    assert 3.1 < first < 3.3 and 2.95 < last < 3.12 and last < first - 0.1  # 3.21 -> 3.05
+    text = c.text(0.0178, 2.0)
+    assert "3.21 Hz" in text and "stiffness -10%" in text
+    assert text in Campaign.of([run]).notes
