@@ -35,6 +35,8 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "structure acceleration": ("acc_n_ne", "acc_n_nw"),
     "structure displacement": ("pot_n_sw", "pot_n_se"),
 }
+#: the groups of a specimen's top mass (none for a rigid block or a bare table)
+STRUCTURE = ("structure acceleration", "structure displacement")
 _FLOOR_CHANNEL = re.compile(r"floor([1-9][0-9]*)_(acc|disp)")
 _FLOOR_GROUP = re.compile(r"floor ([1-9][0-9]*) (acceleration|displacement)")
 
@@ -84,6 +86,9 @@ def run_groups(run: Run) -> dict[str, tuple[str, ...]]:
     if n:
         groups["structure acceleration"] += (f"floor{n}_acc",)
         groups["structure displacement"] += (f"floor{n}_disp",)
+    else:  # a rigid block or a bare table: the model predicts no structure motion
+        for g in STRUCTURE:
+            del groups[g]
     for k in range(1, n):
         groups[f"floor {k} acceleration"] = (f"floor{k}_acc",)
         groups[f"floor {k} displacement"] = (f"floor{k}_disp",)
@@ -114,11 +119,13 @@ def unscored_channels(run: Run) -> list[str]:
     grouped = {c for chans in run_groups(run).values() for c in chans}
     rest = [c for c in run.channels if c not in grouped and c != "h_span"]
     n = storeys(run)
-    floors = [c for c in rest if _FLOOR_CHANNEL.fullmatch(c)]
+    structure = {c for g in STRUCTURE for c in GROUPS[g]}
+    floors = [c for c in rest if _FLOOR_CHANNEL.fullmatch(c) or c in structure]
     others = [c for c in rest if c not in floors]
     out = []
     if floors:
-        why = ("the [specimen] has no storeys; the model predicts no floors" if n == 0 else
+        why = ("the [specimen] has no storeys; the model predicts no structure motion"
+               if n == 0 else
                "the [specimen] declares 1 storey; the model predicts floor 1 only" if n == 1
                else f"the [specimen] declares {n} storeys; the model predicts floors 1-{n}")
         out.append(f"{run.name}: left out: {', '.join(floors)} ({why})")

@@ -33,6 +33,8 @@ HELD_OUT = 0.4  # the last 40 % of every run is held out from fitting ...
 TRAIN_MAX_S = 30.0
 ANALYSIS_FS = 200.0  # Hz: faster runs are anti-alias filtered and resampled to this rate
 MIN_FS = 100.0  # Hz: slower runs cannot resolve the bands and the noise floor
+#: Hz: the fastest run resampled (by a ratio of denominator at most 1000: 200 Hz from 200 kHz)
+MAX_FS = 1000 * ANALYSIS_FS
 
 
 def analysis_run(run: Run) -> Run:
@@ -43,6 +45,11 @@ def analysis_run(run: Run) -> Run:
         raise VtableError(f"{run.name}: sampled at {fs:.4g} Hz; compare and diagnose need at "
                           f"least {MIN_FS:g} Hz (the analysis bands reach {BANDS[-1][1]:g} Hz "
                           "and the noise floor is read above 50 Hz)")
+    if fs > MAX_FS:
+        raise VtableError(f"{run.name}: sampled at {fs:.4g} Hz (column 'time' steps "
+                          f"{1 / fs:.3g} s); compare and diagnose resample runs to "
+                          f"{ANALYSIS_FS:g} Hz from at most {MAX_FS:g} Hz: is 'time' in "
+                          "seconds?")
     ratio = Fraction(ANALYSIS_FS / fs).limit_denominator(1000)
     up, down = ratio.numerator, ratio.denominator
     if up >= down:

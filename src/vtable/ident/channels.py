@@ -24,6 +24,9 @@ def channel_problem(run: Run, name: str) -> str | None:
         return f"{name} is zero throughout"
     if np.ptp(x) == 0:
         return f"{name} is constant ({x[0]:.4g} SI) throughout"
+    if float(np.mean(np.square(x - x.mean()))) < np.finfo(float).tiny:
+        return (f"{name} drives nothing: it varies by {np.ptp(x):.3g} SI, too little for its "
+                "power to be a number (a spectrum over it would be infinite)")
     return None
 
 

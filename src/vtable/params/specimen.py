@@ -51,11 +51,20 @@ class RigidBlock(Params):
     height: float = quantity("in", "height_in", minimum=0, exclusive=False,
                              doc="centre of gravity above the actuator line")
     size: tuple[float, ...] | None = quantity("in", "size_in", default=None, vector=True,
-                                              doc="W x H x L of one block")
+                                              minimum=0, doc="W x H x L of one block")
     count: int = plain(default=1)
     kind: str = plain(default="rigid")
     title: str = plain(default="rigid block")
     source: str = plain(default="")
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if isinstance(self.count, bool) or not isinstance(self.count, int) or self.count < 1:
+            raise VtableError(f"count: expected a whole number of blocks >= 1, got "
+                              f"{self.count!r}")
+        if self.size is not None and len(self.size) != 3:
+            raise VtableError(f"size_in: expected 3 numbers (W x H x L of one block), got "
+                              f"{len(self.size)}")
 
     @property
     def mass(self) -> float:

@@ -22,6 +22,9 @@ from vtable.runs.meta import check_meta
 from vtable.runs.model import Run
 from vtable.runs.write import check_writable, file_meta
 
+#: the attributes of a run file (the metadata, the channel order)
+ATTRIBUTES = ("toml", "order")
+
 
 def write_hdf5(run: Run, path: str | Path) -> Path:
     """The same content in one HDF5 file: /time (s), /channels/<name> (file units), the
@@ -68,6 +71,7 @@ def read_hdf5(path: str | Path) -> Run:
                 raise VtableError(f"{p}: needs the datasets /time and /channels/<name>")
             group = f["channels"]
             order = [str(x) for x in f.attrs.get("order", [])]
+            extra = sorted(set(f.attrs) - set(ATTRIBUTES))
             members = list(group.keys())
             if sorted(order) != sorted(members) or "time" in order:
                 raise VtableError(f"{p}: attribute 'order' does not list the datasets of "
@@ -92,7 +96,10 @@ def read_hdf5(path: str | Path) -> Run:
         raise VtableError(f"{p}: needs at least two samples, got {n}")
     decl = dataclasses.replace(decl, units=override, meta=meta)
     file_units = {**units, **{h: units.get(h, "1") for h in order}}
-    return assemble(str(_stem_h5(p)), ["time", *order], data, decl, list(decl.notes), str(p),
+    notes = [*decl.notes, *(f"{p}: attribute {a!r} not read (a run file's attributes are "
+                            f"{' and '.join(map(repr, ATTRIBUTES))}; its units are the "
+                            "[units] table in 'toml')" for a in extra)]
+    return assemble(str(_stem_h5(p)), ["time", *order], data, decl, notes, str(p),
                     p, p, 0, "sample", file_units=file_units)
 
 

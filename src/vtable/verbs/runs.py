@@ -23,6 +23,11 @@ def is_run(path: str) -> bool:
     p = Path(path)
     if p.suffix in (".h5", ".hdf5"):
         return True
+    if p.suffix.lower() == ".csv":  # a run's data: read through its run file
+        if p.with_suffix(".toml").is_file():
+            return True
+        raise VtableError(f"{p}: a run's data (CSV); its run file {p.with_suffix('.toml')}, "
+                          "which declares its table, units and specimen, is not beside it")
     if p.suffix != ".toml" or not p.is_file():
         return False
     return "format" in read_toml(p)  # model files have no format key

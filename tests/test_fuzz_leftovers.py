@@ -1,0 +1,150 @@
+"""Issue 19's fuzz leftovers, each answered in one line with exit code 2 (or, for an
+attribute nobody reads, a note): a run whose time step is 1e-9 s, a rigid specimen of
+negative count or size, a command of 1e-300 in, a CSV given where its run file is wanted,
+an HDF5 run with an attribute the format does not have; and a rigid specimen on a run that
+measured a structure (its structure channels are not scored, said so, not a traceback).
+The base run comes from the independent truth simulator (tests/truth)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import h5py
+import pytest
+import truth
+from test_fuzz import run_cli
+
+from vtable.runs import read_run
+from vtable.runs.hdf5 import read_hdf5, write_hdf5
+
+
+@pytest.fixture(scope="module")
+def base(tmp_path_factory) -> Path:
+    """A 4 s truth run (SDOF frame, 200 Hz, 1 % noise): its TOML path."""
+    stem = tmp_path_factory.mktemp("leftovers") / "base"
+    spec = truth.sdof(weight_kip=68.4, height_in=219.0, f_hz=2.87, xi=0.01)
+    cmd = truth.random_command(4.05, (0.0, 20.0), peak_in=0.2, seed=3)
+    res = truth.simulate(truth.eerc_table(pitch="hybrid"), spec, cmd, fs=200.0)
+    truth.write_run(stem, res, spec, noise=0.01, seed=2)
+    return stem.with_suffix(".toml")
+
+
+def _variant(base: Path, name: str, toml=None, csv=None) -> str:
+    """A copy of the base run with its TOML and CSV texts changed by the functions given."""
+    t, c = base.read_text(), base.with_suffix(".csv").read_text()
+    p = base.parent / f"{name}.toml"
+    p.write_text(toml(t) if toml else t)
+    p.with_suffix(".csv").write_text(csv(c) if csv else c)
+    return str(p)
+
+
+def _one_line_error(code: int, err: str, *names: str) -> None:
+    assert code == 2, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    for n in names:
+        assert n in err, (n, err)
+
+
+def _column(csv: str, k: int, f) -> str:
+    """The CSV with column `k` of every data row mapped by f(row index, value)."""
+    lines = csv.splitlines()
+    out = [lines[0]]
+    for i, row in enumerate(lines[1:]):
+        v = row.split(",")
+        v[k] = repr(f(i, float(v[k])))
+        out.append(",".join(v))
+    return "\n".join(out) + "\n"
+
+
+def _rigid(extra: str):
+    return lambda t: re.sub(r"\[specimen\]\n(?:[^\[\n].*\n|\n)*",
+                            f'[specimen]\nkind = "rigid"\nweight_kip = 20\nheight_in = 40\n'
+                            f"{extra}\n", t, count=1)
+
+
+@pytest.mark.parametrize("verb", ["compare", "diagnose"])
+def test_a_nanosecond_time_step_is_refused_with_a_hint(base, verb):
+    p = _variant(base, "tiny_dt", csv=lambda c: _column(c, 0, lambda i, _: i * 1e-9))
+    code, _, err = run_cli([verb, p])
+    _one_line_error(code, err, "tiny_dt", "'time'", "1e+09 Hz", "seconds")
+
+
+@pytest.mark.parametrize("extra, names", [("count = -2", ("count", "-2")),
+                                          ("count = 0", ("count", "0")),
+                                          ("size_in = [-10, 20, 30]", ("size_in", "-10")),
+                                          ("size_in = [10, 20]", ("size_in", "3 numbers"))])
+def test_a_rigid_specimen_of_no_blocks_or_negative_size_is_refused(base, extra, names):
+    code, _, err = run_cli(["compare", _variant(base, "rigid_bad", toml=_rigid(extra))])
+    _one_line_error(code, err, "rigid_bad.toml", "[specimen]", *names)
+
+
+def test_a_rigid_specimen_on_a_measured_structure_leaves_its_channels_unscored(base):
+    code, out, err = run_cli(["compare", _variant(base, "rigid_ok", toml=_rigid(""))])
+    assert code == 0, err
+    assert "predicts no structure motion" in out and "acc_n_ne" in out, out
+
+
+def test_a_command_of_1e_300_drives_nothing(base):
+    k = base.with_suffix(".csv").read_text().splitlines()[0].split(",").index("h_span")
+    p = _variant(base, "tiny_cmd", csv=lambda c: _column(c, k, lambda _, v: v * 1e-300))
+    code, out, err = run_cli(["tf", p, "--in", "h_span", "--out", "avg_hdisp"])
+    _one_line_error(code, err, "h_span", "drives nothing")
+    assert "inf" not in out
+
+
+def test_the_csv_given_for_the_run_file(base):
+    code, out, err = run_cli(["tf", str(base.with_suffix(".csv"))])
+    assert code == 0 and "H1" in out, err  # read through the TOML beside it
+    lone = base.parent / "lone.csv"
+    lone.write_text(base.with_suffix(".csv").read_text())
+    code, _, err = run_cli(["tf", str(lone)])
+    _one_line_error(code, err, "lone.csv", "lone.toml", "not beside it")
+
+
+def test_an_hdf5_attribute_the_format_does_not_have_is_said(base, tmp_path):
+    h5 = tmp_path / "run.h5"
+    write_hdf5(read_run(base), h5)
+    assert not [n for n in read_hdf5(h5).reports if "attribute" in n]
+    with h5py.File(h5, "r+") as f:
+        f.attrs["units"] = 5
+    notes = [n for n in read_hdf5(h5).reports if "attribute 'units' not read" in n]
+    assert len(notes) == 1 and "[units] table in 'toml'" in notes[0]
+
+
+@pytest.fixture(scope="module")
+def long_campaign(tmp_path_factory) -> list[str]:
+    """Three 20 s truth runs: a diagnosis of them takes well over 10 s."""
+    folder = tmp_path_factory.mktemp("sigint")
+    spec = truth.sdof(weight_kip=68.4, height_in=219.0, f_hz=2.87, xi=0.01)
+    paths = []
+    for k, peak in enumerate((0.1, 0.2, 0.3)):
+        cmd = truth.random_command(20.05, (0.0, 20.0), peak_in=peak, seed=10 + k)
+        table = truth.eerc_table(pitch="hybrid", effects={"actuator_friction": {"friction": 2}})
+        res = truth.simulate(table, spec, cmd, fs=200.0)
+        truth.write_run(folder / f"r{k}", res, spec, noise=0.01, seed=20 + k)
+        paths.append(str(folder / f"r{k}.toml"))
+    return paths
+
+
+@pytest.mark.parametrize("after", [1.0, 3.0, 10.0])
+def test_ctrl_c_into_diagnose_is_one_line_and_exit_130(long_campaign, after):
+    """At 1 s the workers are starting, at 3 s fitting the start, at 10 s in round 1:
+    Ctrl-C used to print two 48-line worker tracebacks (multiprocessing/spawn.py)."""
+    import signal
+    import subprocess
+    import time
+
+    from test_cli_robustness import _exe
+
+    p = subprocess.Popen([*_exe(), "diagnose", *long_campaign], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    time.sleep(after)
+    assert p.poll() is None, "the diagnosis ended before the interrupt"
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    lines = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith("[")]
+    assert p.returncode == 130, err
+    assert "Traceback" not in err and len(lines) == 1, err
+    assert lines[0].startswith("vtable: interrupted"), err
