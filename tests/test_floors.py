@@ -151,5 +151,5 @@ def test_an_sdof_frames_floor_is_its_top_mass_and_a_rigid_block_has_none():
                                       "floor1_acc": np.zeros(n), "pitch_disp": np.zeros(n)})
     assert unscored_channels(r) == [
         f"{r.name}: left out: floor1_acc (the [specimen] has no storeys; the model predicts "
-        "no floors)",
+        "no structure motion)",
         f"{r.name}: left out: pitch_disp (not scored: no channel group holds them)"]
