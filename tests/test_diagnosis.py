@@ -108,6 +108,20 @@ def test_cli_diagnose_writes_json_rrd_and_report(tmp_path, capsys):
             assert f"{v['origin']}/{part}" in rrd, (g, part)
     hist = [v for v in views if v.get("time_ranges") == ["round"]]
     assert len(hist) == 1 and hist[0]["origin"] == "/diagnosis"
+
+    # each model stage in its own colour, its residual a lighter tint of it, the measured
+    # trace black: issue 19 ("every model is the same blue")
+    def color(path):
+        for rb in rrd[path]:
+            if "SeriesLines:colors" in rb.schema.names:
+                return rb.column("SeriesLines:colors").to_pylist()[-1][0]
+        raise AssertionError(f"no colour logged for {path}")
+
+    base = ts["table displacement (in)"]["origin"]
+    shades = {p: color(f"{base}/{p}") for p in ("measured", "model_start", "residual_start",
+                                                  "model_1_pitch_flexibility",
+                                                  "residual_1_pitch_flexibility")}
+    assert len(set(shades.values())) == 5, shades
     assert any(v.get("class") == "BarChart" for v in views)
     bars = rrd["/history"][0].column("BarChart:values").to_pylist()[0][0]["buffer"]
     assert bars == pytest.approx([100 * j["start_error"], 100 * j["final_error"]])

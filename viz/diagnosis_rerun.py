@@ -3,7 +3,8 @@ added effect (bulk, columnar), in the run format's units, and the error history.
 
 Layout (blueprint): one tab per run holding one TimeSeriesView per channel group, named
 with its unit ("table displacement (in)", "structure acceleration (g)", ...), each showing
-the measured signal, the model of every stage and its residual; beside it the error
+the measured signal (black, wider), the model of every stage (a colour each) and its
+residual (the same hue, lighter), legends in the top right corner; beside it the error
 history and a text with the verdict, what remains unexplained and the notes.
 
 Timelines: the channels are on "time" (s from the run's start, at the analysis rate), the
@@ -33,9 +34,21 @@ from vtable.diagnose.groups import (
 )
 from vtable.viz.recording import rrd_file
 
+#: legends in the top right corner: the first seconds, where a run starts, stay visible
+LEGEND = rrb.PlotLegend(corner=rrb.Corner2D.RightTop, visible=True)
 #: how a unit is written in view and series names
 PRETTY = {"rad/s2": "rad/s²", "in/s2": "in/s²", "m/s2": "m/s²"}
-COLORS = {"measured": [20, 20, 20], "model": [40, 110, 230], "residual": [220, 50, 40]}
+#: the measured trace in black; each model stage in its own colour (Okabe-Ito, readable by
+#: colour-blind eyes), its residual in the same hue, lighter
+MEASURED = [20, 20, 20]
+STAGE_COLORS = ([0, 114, 178], [230, 159, 0], [0, 158, 115], [204, 121, 167],
+                [213, 94, 0], [86, 180, 233], [240, 228, 66])
+
+
+def stage_color(k: int, residual: bool = False) -> list[int]:
+    """Stage k's colour (its residual's: halfway to white)."""
+    c = STAGE_COLORS[k % len(STAGE_COLORS)]
+    return [round(v + (255 - v) * 0.5) for v in c] if residual else list(c)
 
 
 def group_key(group: str) -> str:
@@ -43,10 +56,10 @@ def group_key(group: str) -> str:
 
 
 def _series(rec: rr.RecordingStream, path: str, times, values: np.ndarray, label: str,
-            kind: str) -> None:
+            color: list[int], width: float = 1.0) -> None:
     rr.send_columns(path, indexes=times, columns=rr.Scalars.columns(scalars=values),
                     recording=rec)
-    rec.log(path, rr.SeriesLines(names=label, colors=[COLORS[kind]]), static=True)
+    rec.log(path, rr.SeriesLines(names=label, colors=[color], widths=[width]), static=True)
 
 
 def _text(d) -> str:
@@ -82,18 +95,19 @@ def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis")
                 shown = PRETTY.get(unit, unit)
                 base = f"runs/{name}/{group_key(g)}"
                 _series(rec, f"{base}/measured", times, units.from_si(y, unit),
-                        f"measured ({shown})", "measured")
-                for stage, pred in preds:
+                        f"measured ({shown})", MEASURED, 2.0)
+                for k, (stage, pred) in enumerate(preds):
                     yhat = group_prediction(pred[run.name], run, g)
                     if yhat is None:
                         continue
                     label = stage.replace("_", " ", 1)
                     _series(rec, f"{base}/model_{stage}", times, units.from_si(yhat, unit),
-                            f"model {label} ({shown})", "model")
+                            f"model {label} ({shown})", stage_color(k))
                     _series(rec, f"{base}/residual_{stage}", times,
                             units.from_si(yhat - y, unit), f"residual {label} ({shown})",
-                            "residual")
-                views.append(rrb.TimeSeriesView(name=f"{g} ({shown})", origin=base))
+                            stage_color(k, residual=True))
+                views.append(rrb.TimeSeriesView(name=f"{g} ({shown})", origin=base,
+                                                plot_legend=LEGEND))
             if views:
                 tabs.append(rrb.Vertical(*views, name=name))
         hist = d.history()
@@ -102,12 +116,13 @@ def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis")
             idx = [rr.TimeColumn("round", sequence=np.arange(len(hist)))]
             rr.send_columns("diagnosis/error", indexes=idx, recording=rec,
                             columns=rr.Scalars.columns(scalars=[e for _, e in hist]))
-            rec.log("diagnosis/error", rr.SeriesLines(names="held-out error (NRMS, 1 = 100 %)"),
+            rec.log("diagnosis/error", rr.SeriesLines(names="held-out error (NRMS, 1 = 100 %)",
+                                                      colors=[stage_color(0)], widths=[2.0]),
                     static=True)
             rr.send_columns("diagnosis/noise_floor", indexes=idx, recording=rec,
                             columns=rr.Scalars.columns(scalars=[d.noise_floor] * len(hist)))
-            rec.log("diagnosis/noise_floor", rr.SeriesLines(names="noise floor (NRMS)"),
-                    static=True)
+            rec.log("diagnosis/noise_floor", rr.SeriesLines(names="noise floor (NRMS)",
+                                                            colors=[MEASURED]), static=True)
             rec.log("history", rr.BarChart(errs), static=True)
         rec.log("diagnosis/verdict", rr.TextDocument(_text(d), media_type="text/markdown"),
                 static=True)
@@ -115,8 +130,8 @@ def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis")
         side = rrb.Vertical(
             rrb.BarChartView(name=f"held-out error (%) by round: {labels}", origin="history"),
             rrb.TimeSeriesView(name="error history (NRMS) on the 'round' timeline",
-                               origin="diagnosis", contents=["diagnosis/error",
-                                                             "diagnosis/noise_floor"],
+                               origin="diagnosis", plot_legend=LEGEND,
+                               contents=["diagnosis/error", "diagnosis/noise_floor"],
                                time_ranges=rrb.VisibleTimeRange(
                                    "round", start=rrb.TimeRangeBoundary.infinite(),
                                    end=rrb.TimeRangeBoundary.infinite())),
