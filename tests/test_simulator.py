@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 import tomllib
 
 import numpy as np
@@ -117,6 +118,15 @@ def test_rerun_recording_reads_back(vt, tmp_path):
     quats = np.array(tr.column("Transform3D:quaternion").to_pylist())[:, 0, :]
     pitch = 2 * np.arcsin(np.clip(quats[:, 1], -1, 1))  # small roll/twist
     np.testing.assert_allclose(pitch, 100.0 * exp.result.joint("pitch"), atol=1e-6)
+    # one quantity per view, its unit in its name: θ (rad) and θ̈ (rad/s²) apart (issue 19:
+    # on one axis the pitch looked flat)
+    from vtable.viz.diagnosis_rerun import read_blueprint_views
+
+    views = {v["name"]: v for v in read_blueprint_views(tmp_path / "s.rrd")
+             if v.get("class") == "TimeSeries"}
+    assert {"pitch (rad)", "pitch acceleration (rad/s²)", "table motion (in)",
+            "forces (kip)"} <= set(views), sorted(views)
+    assert all(re.search(r"\((in|rad|rad/s²|kip|g)\)$", n) for n in views), sorted(views)
 
 
 def test_nonlinear_valve_matches_linear_small_and_loses_gain_large(vt):

@@ -123,12 +123,14 @@ def _log_simulation(rec: rr.RecordingStream, res, channels, exaggeration: float,
 
 
 def blueprint(channel_names: list[str]) -> rrb.Blueprint:
-    """3D view beside the table-motion, pitch, force and specimen time series."""
+    """3D view beside the table-motion, pitch, pitch-acceleration, force and specimen time
+    series: one quantity per view, its unit in its name."""
     groups = {
         "table motion (in)": ["h_span", "avg_hdisp"],
-        "pitch": ["pitch_acc", "pitch_disp"],
+        "pitch (rad)": ["pitch_disp"],  # one quantity per axis: θ and θ̈ apart
+        "pitch acceleration (rad/s²)": ["pitch_acc"],
         "forces (kip)": [c for c in channel_names if c.endswith(("_force", "_stab"))],
-        "specimen (g)": ["acc_n_ne", "acc_n_nw", "acc_cmd"],
+        "specimen and commanded acceleration (g)": ["acc_n_ne", "acc_n_nw", "acc_cmd"],
     }
     views = [rrb.TimeSeriesView(name=title, origin="channels",
                                 contents=[f"channels/{c}" for c in names if c in channel_names])
