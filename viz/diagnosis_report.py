@@ -1,7 +1,10 @@
 """The HTML report of a diagnosis: verdict, what remains unexplained, the notes, the base
-calibration, ranking tables with evidence and fit flags, the error waterfall and
-transfer-function overlays (matplotlib, embedded PNGs). Every axis names its unit; transfer
-functions are shown in the run format's units per inch of command. It renders the stages
+calibration, ranking tables with evidence and fit flags, the error waterfall, Bode plots
+of every run (dB on a log frequency axis with the measured ±1σ band, unwrapped phase,
+coherence beneath, the start and final models overlaid) and held-out time histories with
+the final model's fit % per channel group and the residual (matplotlib, embedded PNGs).
+Every axis names its unit; transfer functions are shown in the run format's units per inch
+of command. It renders the stages
 the diagnosis kept (models, predictions, comparisons) and simulates nothing; `d` is a
 `vtable.diagnose.result.Diagnosis`, which draws itself through this module (`plot`)."""
 
@@ -54,32 +57,125 @@ def waterfall(d: Any):
     return fig
 
 
-def tf_overlay(d: Any, group: str):
-    run = max(d.runs, key=lambda r: len(r.time))
+#: the frames of the report's transfer functions: the finest resolution at or above
+#: `BODE_RESOLUTION_HZ` that still averages `BODE_AVERAGES` half-overlapping frames
+BODE_RESOLUTION_HZ = 0.05
+BODE_AVERAGES = 8
+#: the start and final models' colours (the measured trace is black, drawn on top)
+MODEL_COLORS = {"start model": "tab:orange", "final model": "tab:blue"}
+
+
+def bode_frames(n: int, fs: float) -> int:
+    """Samples per frame: the longest power of two with at least `BODE_AVERAGES`
+    half-overlapping frames in `n` samples, at most fs / `BODE_RESOLUTION_HZ`."""
+    nper = 1 << int(np.log2(fs / BODE_RESOLUTION_HZ))
+    while nper > 64 and 2 * n // nper - 1 < BODE_AVERAGES:
+        nper //= 2
+    return nper
+
+
+def magnitude_band(H: np.ndarray, coherence: np.ndarray, averages: int) -> np.ndarray:
+    """The normalised random error of |H1|, sqrt(1 − γ²)/(|γ| sqrt(2 n_d)) (Bendat &
+    Piersol, *Random Data*, eq 9.90): the measured magnitude's ±1 standard deviation is
+    |H|(1 ± ε)."""
+    g = np.sqrt(np.clip(coherence, 1e-6, 1.0))
+    return np.sqrt(1 - g**2) / (g * np.sqrt(2 * averages))
+
+
+def tf_overlay(d: Any, group: str, run=None):
+    """A Bode plot of `group` over the command h_span for `run` (default: the longest):
+    magnitude in dB on a log frequency axis with the measured ±1σ band, unwrapped phase,
+    coherence beneath; the start and final models overlaid, the measured trace on top."""
+    run = run if run is not None else max(d.runs, key=lambda r: len(r.time))
     x = run.channel("h_span")
     y = group_signal(run, group)
     if y is None:
         return None
-    n = min(1024, 2 ** int(np.log2(len(x) / 2)))
+    n = bode_frames(len(x), run.fs)
     unit, per = (display.unit_for(u, display.run_family(run), run.units.values())
                  for u in (GROUP_UNITS[group], "in"))  # the run's own units
     scale = display.from_si(1.0, unit) / display.from_si(1.0, per)  # SI ratio -> unit/per
-    fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(6.5, 4.5))
+    fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(7, 6.4),
+                                     gridspec_kw={"height_ratios": [3, 2, 1.2]})
     tm = transfer_function(x, y, run.fs, n)
-    sel = (tm.f > 0.2) & (tm.f <= 30)
-    a1.plot(tm.f[sel], scale * np.abs(tm.H[sel]), "k-", lw=1.5, label="measured")
-    a2.plot(tm.f[sel], np.degrees(np.angle(tm.H[sel])), "k-", lw=1.5)
-    for label, stage, style in (("start model", d.stages[0], "tab:red"),
-                                ("final model", d.stages[-1], "tab:blue")):
+    sel = (tm.f >= 2 * tm.resolution_hz) & (tm.f <= min(30.0, 0.4 * run.fs))
+    f = tm.f[sel]
+
+    def db(H):
+        return 20 * np.log10(np.maximum(scale * np.abs(H), 1e-300))
+
+    def phase(H):
+        return np.degrees(np.unwrap(np.angle(H)))
+
+    for label, stage in (("start model", d.stages[0]), ("final model", d.stages[-1])):
         yhat = group_prediction(stage.predictions[run.name], run, group)
+        if yhat is None:
+            continue
         tp = transfer_function(x, yhat, run.fs, n)
-        a1.plot(tp.f[sel], scale * np.abs(tp.H[sel]), color=style, ls="--", label=label)
-        a2.plot(tp.f[sel], np.degrees(np.angle(tp.H[sel])), color=style, ls="--")
-    a1.set_ylabel(f"amplitude ({PRETTY.get(unit, unit)}/{per})")
-    a2.set_ylabel("phase (deg)")
-    a2.set_xlabel("frequency (Hz)")
+        a1.semilogx(f, db(tp.H[sel]), color=MODEL_COLORS[label], lw=1.3, label=label)
+        a2.semilogx(f, phase(tp.H[sel]), color=MODEL_COLORS[label], lw=1.3)
+    eps = magnitude_band(tm.H[sel], tm.coherence[sel], tm.averages)
+    mag = scale * np.abs(tm.H[sel])
+    a1.fill_between(f, 20 * np.log10(np.maximum(mag * (1 - np.minimum(eps, 0.99)), 1e-300)),
+                    20 * np.log10(mag * (1 + eps)), color="0.75", lw=0,
+                    label="measured ±1σ", zorder=3)
+    a1.semilogx(f, db(tm.H[sel]), "k-", lw=1.0, label="measured (H1)", zorder=4)
+    a2.semilogx(f, phase(tm.H[sel]), "k-", lw=1.0, zorder=4)
+    a3.semilogx(f, tm.coherence[sel], "k-", lw=1.0)
+    a1.set_ylabel(f"magnitude (dB re 1 {PRETTY.get(unit, unit)}/{per})")
+    a2.set_ylabel("phase (deg, unwrapped)")
+    a3.set_ylabel("coherence γ²")
+    a3.set_ylim(0, 1.05)
+    a3.set_xlabel(f"frequency (Hz); {tm.averages} averages of {n}-point frames, "
+                  f"Δf {tm.resolution_hz:.3g} Hz")
+    for a in (a1, a2, a3):
+        a.grid(alpha=0.3, which="both")
     a1.set_title(f"{group} / command h_span, {short(run.name)}")
-    a1.legend()
+    a1.legend(fontsize=8, loc="best")
+    fig.tight_layout()
+    return fig
+
+
+def fit_percent(y: np.ndarray, yhat: np.ndarray) -> float:
+    """MATLAB `compare`'s fit: 100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖), in %."""
+    den = float(np.linalg.norm(y - np.mean(y)))
+    return float("nan") if den == 0 else 100.0 * (1.0 - np.linalg.norm(y - yhat) / den)
+
+
+def time_histories(d: Any, run, groups=("table displacement", "table acceleration",
+                                        "structure acceleration")):
+    """Measured against the final model on the held-out segment of `run`, one panel per
+    channel group with its fit % in the legend, and the residual beneath each."""
+    from vtable.diagnose.sampling import segments
+
+    held = segments(run)[1]
+    rows = []
+    for g in groups:
+        y = group_signal(run, g)
+        yhat = group_prediction(d.stages[-1].predictions[run.name], run, g) if d.stages \
+            else None
+        if y is not None and yhat is not None:
+            rows.append((g, y[held], yhat[held]))
+    if not rows:
+        return None
+    t = run.time[held] - run.time[0]
+    fig, ax = plt.subplots(2 * len(rows), 1, sharex=True, figsize=(7, 2.0 * len(rows) + 1.6),
+                           gridspec_kw={"height_ratios": [2, 1] * len(rows)})
+    for k, (g, y, yhat) in enumerate(rows):
+        unit = display.unit_for(GROUP_UNITS[g], display.run_family(run), run.units.values())
+        shown = PRETTY.get(unit, unit)
+        ym, yh = display.from_si(y, unit), display.from_si(yhat, unit)
+        a, r = ax[2 * k], ax[2 * k + 1]
+        a.plot(t, ym, "k-", lw=1.0, label="measured")
+        a.plot(t, yh, color=MODEL_COLORS["final model"], lw=0.9,
+               label=f"final model: fit {fit_percent(y, yhat):.1f} %")
+        a.set_ylabel(f"{g}\n({shown})", fontsize=8)
+        a.legend(fontsize=7, loc="upper right")
+        r.plot(t, yh - ym, color="tab:red", lw=0.8)
+        r.set_ylabel(f"residual\n({shown})", fontsize=8)
+        for x in (a, r):
+            x.grid(alpha=0.3)
+    ax[-1].set_xlabel(f"time from the run's start (s); held-out segment of {short(run.name)}")
     fig.tight_layout()
     return fig
 
@@ -129,8 +225,14 @@ def write_report(d: Any, path: str | Path) -> Path:
         parts.append("</table>")
     if d.stages and d.comparison_start is not None and d.comparison_final is not None:
         parts.append("<h2>Transfer functions: measured, start and final models</h2>")
-        for g in ("table displacement", "pitch", "structure acceleration"):
-            fig = tf_overlay(d, g)
+        for run in d.runs:
+            for g in ("table displacement", "pitch", "structure acceleration"):
+                fig = tf_overlay(d, g, run)
+                if fig is not None:
+                    parts.append(f"<img src='data:image/png;base64,{_png(fig)}'>")
+        parts.append("<h2>Time histories: measured and final model (held out)</h2>")
+        for run in d.runs:
+            fig = time_histories(d, run)
             if fig is not None:
                 parts.append(f"<img src='data:image/png;base64,{_png(fig)}'>")
         parts.append("<h2>Error per channel group (held out, NRMS)</h2><table><tr><th>run</th>"
