@@ -400,10 +400,12 @@ def test_report_axes_have_units():
 
     _, _diag, d = effect_diagnosis(("pitch_flexibility",))
     fig = tf_overlay(d, "structure acceleration")
-    a1, a2 = fig.axes
-    assert a1.get_ylabel() == "amplitude (g/in)" and a2.get_ylabel() == "phase (deg)"
-    assert a2.get_xlabel() == "frequency (Hz)"
-    assert tf_overlay(d, "pitch").axes[0].get_ylabel() == "amplitude (rad/s²/in)"
+    a1, a2, a3 = fig.axes
+    assert a1.get_ylabel() == "magnitude (dB re 1 g/in)"
+    assert a2.get_ylabel() == "phase (deg, unwrapped)" and a3.get_ylabel() == "coherence γ²"
+    assert a3.get_xlabel().startswith("frequency (Hz); ") and "averages" in a3.get_xlabel()
+    assert a1.get_xscale() == "log"
+    assert tf_overlay(d, "pitch").axes[0].get_ylabel() == "magnitude (dB re 1 rad/s²/in)"
     ax = waterfall(d).axes[0]
     assert "%" in ax.get_ylabel() and ax.get_xlabel()
 

@@ -211,12 +211,12 @@ def test_lnecs_measured_run_is_shown_in_its_units(tmp_path, capsys):
 
 
 def test_the_diagnosis_reports_axes_follow_the_runs_units(tmp_path, capsys):
-    """The HTML report's x_t/x_c overlays: a metric run written by `simulate` (mm, g, kN)
-    per mm in its own units; the amplitude scale is the SI ratio in those units."""
+    """The HTML report's Bode plots: a metric run written by `simulate` (mm, g, kN) per mm
+    in its own units; the magnitude is 20 log10 of the SI ratio in those units."""
     from types import SimpleNamespace
 
     from vtable.ident.tf import transfer_function
-    from vtable.viz.diagnosis_report import tf_overlay
+    from vtable.viz.diagnosis_report import bode_frames, tf_overlay
 
     _cli(capsys, "simulate", "--table", "lnec-st1d", "--duration", "4", "--out", tmp_path / "m")
     run = read_run(tmp_path / "m.toml")
@@ -226,11 +226,12 @@ def test_the_diagnosis_reports_axes_follow_the_runs_units(tmp_path, capsys):
                                 ("actuator force", "kN/mm", 1e-3 / 1000),
                                 ("table displacement", "mm/mm", 1.0)):
         fig = tf_overlay(d, group)
-        assert fig.axes[0].get_ylabel() == f"amplitude ({label})"
+        assert fig.axes[0].get_ylabel() == f"magnitude (dB re 1 {label})"
         y = {"table acceleration": "avg_hacc", "actuator force": "h1_force",
              "table displacement": "avg_hdisp"}[group]
-        line = fig.axes[0].get_lines()[0]
-        n = min(1024, 2 ** int(np.log2(len(run.time) / 2)))
+        line = fig.axes[0].get_lines()[-1]  # the measured trace, drawn last
+        n = bode_frames(len(run.time), run.fs)
         tm = transfer_function(run.channel("h_span"), run.channel(y), run.fs, n)
-        sel = (tm.f > 0.2) & (tm.f <= 30)
-        np.testing.assert_allclose(line.get_ydata(), scale * np.abs(tm.H[sel]), rtol=1e-12)
+        sel = (tm.f >= 2 * tm.resolution_hz) & (tm.f <= min(30.0, 0.4 * run.fs))
+        np.testing.assert_allclose(line.get_ydata(), 20 * np.log10(scale * np.abs(tm.H[sel])),
+                                   rtol=1e-12)

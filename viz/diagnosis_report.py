@@ -21,6 +21,7 @@ import numpy as np
 
 from vtable import display
 from vtable.diagnose.groups import GROUP_UNITS, group_prediction, group_signal, short
+from vtable.diagnose.sampling import segments
 from vtable.fileio import write_text
 from vtable.ident.tf import transfer_function
 
@@ -146,8 +147,6 @@ def time_histories(d: Any, run, groups=("table displacement", "table acceleratio
                                         "structure acceleration")):
     """Measured against the final model on the held-out segment of `run`, one panel per
     channel group with its fit % in the legend, and the residual beneath each."""
-    from vtable.diagnose.sampling import segments
-
     held = segments(run)[1]
     rows = []
     for g in groups:
