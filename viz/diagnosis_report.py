@@ -23,6 +23,7 @@ from vtable import display
 from vtable.diagnose.groups import GROUP_UNITS, group_prediction, group_signal, short
 from vtable.diagnose.sampling import segments
 from vtable.fileio import write_text
+from vtable.ident.frames import SHORTEST, frame_for_averages
 from vtable.ident.tf import transfer_function
 
 plt.switch_backend("Agg")  # figures are embedded as PNG: no window, whatever the default
@@ -68,11 +69,10 @@ MODEL_COLORS = {"start model": "tab:orange", "final model": "tab:blue"}
 
 def bode_frames(n: int, fs: float) -> int:
     """Samples per frame: the longest power of two with at least `BODE_AVERAGES`
-    half-overlapping frames in `n` samples, at most fs / `BODE_RESOLUTION_HZ`."""
-    nper = 1 << int(np.log2(fs / BODE_RESOLUTION_HZ))
-    while nper > 64 and 2 * n // nper - 1 < BODE_AVERAGES:
-        nper //= 2
-    return nper
+    half-overlapping frames in `n` samples, at most fs / `BODE_RESOLUTION_HZ`
+    (`vtable.ident.frames.frame_for_averages`; its shortest frame when none gives them)."""
+    longest = 1 << int(np.log2(fs / BODE_RESOLUTION_HZ))
+    return frame_for_averages(n, BODE_AVERAGES, longest) or SHORTEST
 
 
 def magnitude_band(H: np.ndarray, coherence: np.ndarray, averages: int) -> np.ndarray:
