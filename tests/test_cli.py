@@ -127,6 +127,24 @@ def test_export_mjcf(capsys, tmp_path):
     assert (tmp_path / "braced_frame.stl").is_file()
 
 
+def test_export_mjcf_takes_the_table(capsys, tmp_path):
+    """`export-mjcf --table` writes that table's platen (issue 19): LNEC's 1975.1 kg
+    platen (lnec_st1d.toml) against the EERC slab's 100 kip = 45 359 kg."""
+    import mujoco
+
+    masses = {}
+    for table in ("lnec-st1d", "eerc"):
+        code, _, err = run(capsys, "export-mjcf", "--table", table, "--out",
+                           str(tmp_path / table))
+        assert code == 0, err
+        m = mujoco.MjModel.from_xml_path(str(tmp_path / table / "model.xml"))
+        masses[table] = m.body("slab").mass[0]
+    assert masses["lnec-st1d"] == pytest.approx(1975.1, rel=1e-4)
+    assert masses["eerc"] == pytest.approx(45359.2, rel=1e-4)
+    code, _, err = run(capsys, "export-mjcf", "--table", "nowhere", "--out", str(tmp_path))
+    assert code == 2 and "nowhere" in err and err.count("\n") == 1
+
+
 def test_modes_and_margins_json(capsys):
     code, out, _ = run(capsys, "modes", "table9.3", "--json")
     assert code == 0
@@ -250,3 +268,83 @@ def test_a_verb_returns_a_typed_result_the_cli_only_formats(capsys, tmp_path):
     assert t.to_json()["png"] == str(tmp_path / "h.png")
     assert abs(t.to_json()["phase_deg"][0]) == pytest.approx(180.0, abs=1e-6)
     assert t.report().endswith(f"  wrote {tmp_path / 'h.png'}")
+
+
+@pytest.mark.parametrize("argv, hint", [
+    (["modes", "eerc-sdfo"], "(did you mean 'eerc-sdof'?)"),
+    (["simulate", "--effect", "actuator_frition"], "(did you mean 'actuator_friction'?)"),
+    (["simulate", "--effect", "actuator_friction:frction=2"], "(did you mean 'friction'?)"),
+    (["simulate", "--specimen", "sdof_fram"], "(did you mean 'sdof_frame'?)"),
+    (["simulate", "--specimen", "zzz"], None),  # nothing near: no guess
+])
+def test_typos_get_a_did_you_mean(capsys, argv, hint):
+    code, _, err = run(capsys, *argv)
+    assert code == 2 and err.count("\n") == 1, err
+    if hint is None:
+        assert "did you mean" not in err
+    else:
+        assert hint in err, err
+
+
+def test_a_typo_in_a_run_file_key_is_reported_with_its_likely_name(capsys, tmp_path):
+    from vtable.runs import read_run
+
+    code, _, err = run(capsys, "simulate", "--duration", "1", "--out", str(tmp_path / "r"))
+    assert code == 0, err
+    toml = tmp_path / "r.toml"
+    toml.write_text('titel = "a typo"\n' + toml.read_text())
+    notes = read_run(toml).reports
+    assert [n for n in notes if "unknown key 'titel'" in n and "did you mean 'title'?" in n], notes
+
+
+def test_a_damping_ratio_of_one_is_questioned(capsys, tmp_path):
+    """`damping = 1` is legal (critical) but likely 1 %: the run's notes say so (issue 19);
+    0.01 passes without a word."""
+    from vtable.runs import read_run
+
+    code, _, err = run(capsys, "simulate", "--duration", "1", "--out", str(tmp_path / "r"))
+    assert code == 0, err
+    toml = tmp_path / "r.toml"
+    text = toml.read_text()
+    assert "damping = 0.01" in text
+    assert not [n for n in read_run(toml).reports if "of critical" in n]
+    toml.write_text(text.replace("damping = 0.01", "damping = 1"))
+    hints = [n for n in read_run(toml).reports if "of critical" in n]
+    assert len(hints) == 1 and "damping = 1 is 100% of critical" in hints[0], hints
+    assert "write 0.01" in hints[0]
+
+
+def test_a_displacement_in_the_wrong_unit_gets_a_hint(capsys, tmp_path):
+    """avg_hdisp written in inches but declared mm: the loop fit fails (R² < 0.5) and the
+    notes name the unit that brings x_t to x_c's scale (issue 19); declared right, no hint."""
+    code, _, err = run(capsys, "simulate", "--duration", "11", "--out", str(tmp_path / "r"))
+    assert code == 0, err
+    toml = tmp_path / "r.toml"
+    code, out, err = run(capsys, "identify", str(toml))
+    assert code == 0 and "is it in" not in out, out
+    toml.write_text(toml.read_text() + '\n[units]\navg_hdisp = "mm"\n')
+    code, out, err = run(capsys, "identify", str(toml), "--json")
+    assert code == 0, err
+    notes = [n for n in json.loads(out)["runs"][0]["notes"] if "is it in" in n]
+    assert len(notes) == 1 and "avg_hdisp is declared mm" in notes[0], notes
+    assert 'is it in inches? ([units] avg_hdisp = "in")' in notes[0]
+
+
+def test_identify_on_a_table_that_cannot_pitch(capsys, tmp_path):
+    """LNEC's uniaxial table with a light SDOF frame (issue 19): vtable's own run carries
+    no channel that is zero by construction (no lateral accelerometers on a planar
+    table), and Table 3.1's coupled row is named for the translation it holds."""
+    spec = tmp_path / "light.toml"
+    spec.write_text('[specimen]\nkind = "sdof"\nweight_kip = 5.0\nheight_in = 60.0\n'
+                    'frequency_hz = 4.0\ndamping = 0.02\n')
+    code, _, err = run(capsys, "simulate", "--table", "lnec-st1d", "--specimen", str(spec),
+                       "--duration", "20", "--out", str(tmp_path / "l"))
+    assert code == 0, err
+    code, out, err = run(capsys, "identify", str(tmp_path / "l.toml"), "--json")
+    assert code == 0, err
+    d = json.loads(out)["runs"][0]
+    assert not [n for n in d["reports"] + d["notes"] if "is constant" in n], d["reports"]
+    cases = [r["case"] for r in d["table_3_1"]]
+    assert cases == ["fixed base", "translational coupling"], cases
+    assert "does not pitch" in d["skipped"]["table 3.1: base rotation coupling"]
+    assert d["table_3_1"][1]["f_hz"] < d["table_3_1"][0]["f_hz"] < 4.2

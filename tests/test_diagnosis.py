@@ -88,26 +88,29 @@ def test_cli_diagnose_writes_json_rrd_and_report(tmp_path, capsys):
     assert j["final_effects"] == ["pitch_flexibility"]
     assert j["final_error"] < j["start_error"] / 10
     html = (tmp_path / "d.html").read_text()
-    assert "<h2>Error waterfall</h2>" in html and "<h2>Round 1: added pitch_flexibility" in html
+    assert "<h2 id='waterfall'>Error waterfall</h2>" in html
+    assert "<h2>Round 1: added pitch_flexibility" in html
     assert html.count("data:image/png;base64,") >= 3  # waterfall + transfer functions
     rrd = read_rrd(tmp_path / "d.rrd")
     assert "/diagnosis/error" in rrd
     assert any(k.endswith("/pitch/measured") for k in rrd)
-    assert any("model_1_pitch_flexibility" in k for k in rrd)
+    assert any("model/1_pitch_flexibility" in k for k in rrd)
     errs = [v[0] for v in rrd["/diagnosis/error"][0].column("Scalars:scalars").to_pylist()]
     assert errs == pytest.approx([j["start_error"], j["final_error"]])
     # the blueprint: one time-series view per channel group, its unit in its name, holding
-    # measured, model and residual; the error history on the 'round' timeline and as bars
+    # measured, model and residual; the error history as bars, which every timeline shows
     views = read_blueprint_views(tmp_path / "d.rrd")
     ts = {v["name"]: v for v in views if v.get("class") == "TimeSeries"}
     for g in ("table displacement (in)", "table velocity (in/s)", "table acceleration (g)",
               "actuator force (kip)", "pitch (rad/s²)", "structure acceleration (g)",
               "structure displacement (in)"):
         v = ts[g]
-        for part in ("measured", "model_start", "residual_start", "model_1_pitch_flexibility"):
+        for part in ("measured", "model/0_start", "residual/0_start", "model/1_pitch_flexibility"):
             assert f"{v['origin']}/{part}" in rrd, (g, part)
-    hist = [v for v in views if v.get("time_ranges") == ["round"]]
-    assert len(hist) == 1 and hist[0]["origin"] == "/diagnosis"
+        assert f"{g.split(' (')[0]}: model − measured ({g.split(' (')[1]}" in {
+            w["name"] for w in views}
+    # no view that opens empty: nothing is tied to the 'round' timeline (issue 19)
+    assert not [v for v in views if "round" in v.get("time_ranges", [])]
 
     # each model stage in its own colour, its residual a lighter tint of it, the measured
     # trace black: issue 19 ("every model is the same blue")
@@ -118,11 +121,12 @@ def test_cli_diagnose_writes_json_rrd_and_report(tmp_path, capsys):
         raise AssertionError(f"no colour logged for {path}")
 
     base = ts["table displacement (in)"]["origin"]
-    shades = {p: color(f"{base}/{p}") for p in ("measured", "model_start", "residual_start",
-                                                  "model_1_pitch_flexibility",
-                                                  "residual_1_pitch_flexibility")}
+    shades = {p: color(f"{base}/{p}") for p in ("measured", "model/0_start", "residual/0_start",
+                                                  "model/1_pitch_flexibility",
+                                                  "residual/1_pitch_flexibility")}
     assert len(set(shades.values())) == 5, shades
-    assert any(v.get("class") == "BarChart" for v in views)
+    (bar,) = [v for v in views if v.get("class") == "BarChart"]
+    assert bar["origin"] == "/history" and f"{100 * j['final_error']:.2f} %" in bar["name"]
     bars = rrd["/history"][0].column("BarChart:values").to_pylist()[0][0]["buffer"]
     assert bars == pytest.approx([100 * j["start_error"], 100 * j["final_error"]])
     # the honest verdict and the notes are in the JSON and the report
@@ -462,3 +466,36 @@ def test_workers_run_a_script_without_a_main_guard(tmp_path):
     assert "found ['valve_dynamics'] True" in out.stdout, out.stdout
     here = Diagnoser(runs, catalog=["valve_dynamics", "force_feedback_filter"], workers=1)
     assert here.diagnose().final_effects == ["valve_dynamics"]
+
+
+def test_cli_compare_writes_report_and_rrd(tmp_path, capsys):
+    """`compare --report --rerun` (issue 19): the one model fitted, drawn as a diagnosis
+    draws it: Bode plots with coherence and held-out time histories with fit % per run in
+    the HTML, measured/model/residual per channel group in the .rrd."""
+    from vtable.cli import main
+    from vtable.viz.diagnosis_rerun import read_blueprint_views
+    from vtable.viz.rerun_scene import read_rrd
+
+    _, runs = effect_campaign(("pitch_flexibility",))
+    paths = []
+    for i, r in enumerate(runs):
+        write_run(r, tmp_path / f"run{i}")
+        paths.append(str(tmp_path / f"run{i}.toml"))
+    code = main(["compare", *paths, "--with", "pitch_flexibility", "--rerun",
+                 str(tmp_path / "c.rrd"), "--report", str(tmp_path / "c.html"), "--json",
+                 str(tmp_path / "c.json")])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert f"wrote {tmp_path / 'c.rrd'}" in out and f"wrote {tmp_path / 'c.html'}" in out
+    j = json.loads((tmp_path / "c.json").read_text())
+    html = (tmp_path / "c.html").read_text()
+    assert "<h1>vtable compare</h1>" in html and "<h2 id='tf'>" in html
+    # a Bode figure per run and channel group drawn, and a time-history figure per run
+    assert html.count("data:image/png;base64,") >= 2 * len(runs)
+    rrd = read_rrd(tmp_path / "c.rrd")
+    assert any(k.endswith("/pitch/model/model") for k in rrd)
+    assert any(k.endswith("/pitch/residual/model") for k in rrd)
+    bars = rrd["/history"][0].column("BarChart:values").to_pylist()[0][0]["buffer"]
+    assert bars == pytest.approx([100 * j["error"]])
+    assert {v["name"] for v in read_blueprint_views(tmp_path / "c.rrd")} >= {
+        "table displacement (in)", "pitch (rad/s²)"}

@@ -421,9 +421,17 @@ def test_zero_pitch_channels_skip_the_pitch_sections(capsys, short_run):
         hysteresis(zero, zero, 0.005, 2.6)
 
 
-def test_tf_on_a_short_run_chooses_averages(capsys, short_run):
+def test_tf_on_a_short_run_chooses_frames(capsys, short_run):
+    # the run declares the SDOF frame (2.87 Hz, ξ 0.01): frames that hold the fit of its
+    # mode (4 lines within ±15 %: Δf <= 0.215 Hz -> 1024 points at 200 Hz, 3 averages of
+    # 2200 samples), not the 0.78 Hz lines of 8 averages that hide its peak and notch
     code, out, err = _cli(capsys, "tf", str(short_run.source), "--json")
     assert code == 0, err
+    d = json.loads(out)
+    assert d["nperseg"] == 1024 and d["resolution_hz"] == pytest.approx(0.1953125)
+    assert d["averages"] == 3 and "declared specimen's lowest mode (2.87 Hz" in d["frame"]
+    assert d["warnings"] and "--nperseg 256 gives 16" in d["warnings"][0]
+    code, out, err = _cli(capsys, "tf", str(short_run.source), "--nperseg", "256", "--json")
     d = json.loads(out)
     assert d["averages"] >= 8 and d["nperseg"] == 256 and d["warnings"] == []
     n = len(short_run.time)

@@ -21,3 +21,13 @@ def test_readme_opens_with_the_two_commands():
     assert 'python -m pip install -e ".[test]" && python -m pytest -q' in head
     ci = (Path(__file__).resolve().parents[1] / ".ci" / "run").read_text()
     assert 'python -m pip install -q -e ".[test]" && python -m pytest -q' in ci
+
+
+def test_the_demo_prints_what_the_readme_shows():
+    from vtable.verbs.simulation import demo
+
+    block = README.split("## What `vtable demo` shows")[1].split("```\n")[1]
+    out = demo(simulate_too=False).report()
+    for line in block.splitlines():
+        assert line in out.splitlines(), line
+    assert "Table 9.2: 2.5391 Hz, 0.0401" in out

@@ -25,6 +25,7 @@ from vtable.diagnose.sampling import segments
 from vtable.fileio import write_text
 from vtable.ident.frames import SHORTEST, frame_for_averages
 from vtable.ident.tf import transfer_function
+from vtable.viz.figures import bode_figure, magnitude_band  # noqa: F401 (re-exported)
 
 plt.switch_backend("Agg")  # figures are embedded as PNG: no window, whatever the default
 
@@ -64,7 +65,15 @@ def waterfall(d: Any):
 BODE_RESOLUTION_HZ = 0.05
 BODE_AVERAGES = 8
 #: the start and final models' colours (the measured trace is black, drawn on top)
-MODEL_COLORS = {"start model": "tab:orange", "final model": "tab:blue"}
+MODEL_COLORS = {"start model": "tab:orange", "final model": "tab:blue", "model": "tab:blue"}
+
+
+def model_stages(d: Any) -> list[tuple[str, Any]]:
+    """The stages drawn: the start and final models of a diagnosis, or the one model of a
+    comparison (`vtable compare --report`)."""
+    if len(d.stages) > 1:
+        return [("start model", d.stages[0]), ("final model", d.stages[-1])]
+    return [("model", s) for s in d.stages]
 
 
 def bode_frames(n: int, fs: float) -> int:
@@ -73,14 +82,6 @@ def bode_frames(n: int, fs: float) -> int:
     (`vtable.ident.frames.frame_for_averages`; its shortest frame when none gives them)."""
     longest = 1 << int(np.log2(fs / BODE_RESOLUTION_HZ))
     return frame_for_averages(n, BODE_AVERAGES, longest) or SHORTEST
-
-
-def magnitude_band(H: np.ndarray, coherence: np.ndarray, averages: int) -> np.ndarray:
-    """The normalised random error of |H1|, sqrt(1 − γ²)/(|γ| sqrt(2 n_d)) (Bendat &
-    Piersol, *Random Data*, eq 9.90): the measured magnitude's ±1 standard deviation is
-    |H|(1 ± ε)."""
-    g = np.sqrt(np.clip(coherence, 1e-6, 1.0))
-    return np.sqrt(1 - g**2) / (g * np.sqrt(2 * averages))
 
 
 def tf_overlay(d: Any, group: str, run=None):
@@ -96,45 +97,20 @@ def tf_overlay(d: Any, group: str, run=None):
     unit, per = (display.unit_for(u, display.run_family(run), run.units.values())
                  for u in (GROUP_UNITS[group], "in"))  # the run's own units
     scale = display.from_si(1.0, unit) / display.from_si(1.0, per)  # SI ratio -> unit/per
-    fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(7, 6.4),
-                                     gridspec_kw={"height_ratios": [3, 2, 1.2]})
     tm = transfer_function(x, y, run.fs, n)
     sel = (tm.f >= 2 * tm.resolution_hz) & (tm.f <= min(30.0, 0.4 * run.fs))
-    f = tm.f[sel]
-
-    def db(H):
-        return 20 * np.log10(np.maximum(scale * np.abs(H), 1e-300))
-
-    def phase(H):
-        return np.degrees(np.unwrap(np.angle(H)))
-
-    for label, stage in (("start model", d.stages[0]), ("final model", d.stages[-1])):
+    models = []
+    for label, stage in model_stages(d):
         yhat = group_prediction(stage.predictions[run.name], run, group)
-        if yhat is None:
-            continue
-        tp = transfer_function(x, yhat, run.fs, n)
-        a1.semilogx(f, db(tp.H[sel]), color=MODEL_COLORS[label], lw=1.3, label=label)
-        a2.semilogx(f, phase(tp.H[sel]), color=MODEL_COLORS[label], lw=1.3)
-    eps = magnitude_band(tm.H[sel], tm.coherence[sel], tm.averages)
-    mag = scale * np.abs(tm.H[sel])
-    a1.fill_between(f, 20 * np.log10(np.maximum(mag * (1 - np.minimum(eps, 0.99)), 1e-300)),
-                    20 * np.log10(mag * (1 + eps)), color="0.75", lw=0,
-                    label="measured ±1σ", zorder=3)
-    a1.semilogx(f, db(tm.H[sel]), "k-", lw=1.0, label="measured (H1)", zorder=4)
-    a2.semilogx(f, phase(tm.H[sel]), "k-", lw=1.0, zorder=4)
-    a3.semilogx(f, tm.coherence[sel], "k-", lw=1.0)
-    a1.set_ylabel(f"magnitude (dB re 1 {PRETTY.get(unit, unit)}/{per})")
-    a2.set_ylabel("phase (deg, unwrapped)")
-    a3.set_ylabel("coherence γ²")
-    a3.set_ylim(0, 1.05)
-    a3.set_xlabel(f"frequency (Hz); {tm.averages} averages of {n}-point frames, "
-                  f"Δf {tm.resolution_hz:.3g} Hz")
-    for a in (a1, a2, a3):
-        a.grid(alpha=0.3, which="both")
-    a1.set_title(f"{group} / command h_span, {short(run.name)}")
-    a1.legend(fontsize=8, loc="best")
-    fig.tight_layout()
-    return fig
+        if yhat is not None:
+            tp = transfer_function(x, yhat, run.fs, n)
+            models.append((label, scale * tp.H[sel], MODEL_COLORS[label]))
+    return bode_figure(
+        tm.f[sel], scale * tm.H[sel], tm.coherence[sel], tm.averages, models,
+        magnitude_label=f"magnitude (dB re 1 {PRETTY.get(unit, unit)}/{per})",
+        title=f"{group} / command h_span, {short(run.name)}",
+        xlabel=f"frequency (Hz); {tm.averages} averages of {n}-point frames, "
+               f"Δf {tm.resolution_hz:.3g} Hz")
 
 
 def fit_percent(y: np.ndarray, yhat: np.ndarray) -> float:
@@ -148,6 +124,7 @@ def time_histories(d: Any, run, groups=("table displacement", "table acceleratio
     """Measured against the final model on the held-out segment of `run`, one panel per
     channel group with its fit % in the legend, and the residual beneath each."""
     held = segments(run)[1]
+    final = model_stages(d)[-1][0] if d.stages else "final model"
     rows = []
     for g in groups:
         y = group_signal(run, g)
@@ -166,8 +143,8 @@ def time_histories(d: Any, run, groups=("table displacement", "table acceleratio
         ym, yh = display.from_si(y, unit), display.from_si(yhat, unit)
         a, r = ax[2 * k], ax[2 * k + 1]
         a.plot(t, ym, "k-", lw=1.0, label="measured")
-        a.plot(t, yh, color=MODEL_COLORS["final model"], lw=0.9,
-               label=f"final model: fit {fit_percent(y, yhat):.1f} %")
+        a.plot(t, yh, color=MODEL_COLORS[final], lw=0.9,
+               label=f"{final}: fit {fit_percent(y, yhat):.1f} %")
         a.set_ylabel(f"{g}\n({shown})", fontsize=8)
         a.legend(fontsize=7, loc="upper right")
         r.plot(t, yh - ym, color="tab:red", lw=0.8)
@@ -189,10 +166,11 @@ def write_report(d: Any, path: str | Path) -> Path:
     start = "—" if d.start_error is None else f"{d.start_error:.2%}"
     final = "—" if d.final_error is None else f"{d.final_error:.2%}"
     u = d.unexplained
-    parts = ["<html><head><meta charset='utf-8'><title>vtable diagnosis</title>"
+    title = html.escape(d.title)
+    parts = [f"<html><head><meta charset='utf-8'><title>{title}</title>"
              "<style>body{font-family:sans-serif;max-width:60em;margin:auto}"
              "td,th{padding:2px 8px;border-bottom:1px solid #ddd}</style></head><body>",
-             "<h1>vtable diagnosis</h1>", f"<p><b>Verdict:</b> {e(d.verdict)}</p>",
+             f"<h1>{title}</h1>", f"<p><b>Verdict:</b> {e(d.verdict)}</p>",
              "<p><b>Unexplained:</b> " + (e("none: the final error is consistent with the "
                                              "noise floor") if u is None else
                                            e(f"the final error is {u['ratio_to_floor']:.1f} x "
@@ -212,7 +190,7 @@ def write_report(d: Any, path: str | Path) -> Path:
                          f"{v['bounds'][1]:g}</td><td>{e(v.get('unit', ''))}</td></tr>")
         parts.append("</table>")
     if d.history():
-        parts += ["<h2>Error waterfall</h2>",
+        parts += ["<h2 id='waterfall'>Error waterfall</h2>",
                   f"<img src='data:image/png;base64,{_png(waterfall(d))}'>"]
     for i, r in enumerate(d.rounds, 1):
         parts.append(f"<h2>Round {i}: {'added ' + e(r.added) if r.added else 'nothing added'}"
@@ -223,13 +201,13 @@ def write_report(d: Any, path: str | Path) -> Path:
                          f"<td>{e(c.evidence)}</td><td>{e('; '.join(c.flags))}</td></tr>")
         parts.append("</table>")
     if d.stages and d.comparison_start is not None and d.comparison_final is not None:
-        parts.append("<h2>Transfer functions: measured, start and final models</h2>")
+        parts.append("<h2 id='tf'>Transfer functions: measured, start and final models</h2>")
         for run in d.runs:
             for g in ("table displacement", "pitch", "structure acceleration"):
                 fig = tf_overlay(d, g, run)
                 if fig is not None:
                     parts.append(f"<img src='data:image/png;base64,{_png(fig)}'>")
-        parts.append("<h2>Time histories: measured and final model (held out)</h2>")
+        parts.append("<h2 id='time'>Time histories: measured and final model (held out)</h2>")
         for run in d.runs:
             fig = time_histories(d, run)
             if fig is not None:

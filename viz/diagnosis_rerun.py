@@ -1,17 +1,22 @@
 """A diagnosis in Rerun: measured and model channels and residuals before and after each
 added effect (bulk, columnar), in the run format's units, and the error history.
 
-Layout (blueprint): one tab per run holding one TimeSeriesView per channel group, named
-with its unit ("table displacement (in)", "structure acceleration (g)", ...), each showing
-the measured signal (black, wider), the model of every stage (a colour each) and its
-residual (the same hue, lighter), legends in the top right corner; beside it the error
-history and a text with the verdict, what remains unexplained and the notes.
+Layout (blueprint): one tab per run, and in it two tabs of 2-column grids with one
+TimeSeriesView per channel group, named with its unit ("table displacement (in)",
+"structure acceleration (g)", ...): "measured & models" shows the measured signal (black,
+wider) and the model of every stage (a colour each, Okabe-Ito), its y range leaving room
+above the data for the legend in the top right corner, so the legend covers no data;
+"residuals" shows each stage's model − measured (the stage's hue, lighter). Beside them,
+the error history and a text with the verdict, what remains unexplained and the notes.
+Entities: runs/<run>/<group>/measured, .../model/<k_stage>, .../residual/<k_stage>
+(0_start, 1_<effect>, ...).
 
 Timelines: the channels are on "time" (s from the run's start, at the analysis rate), the
 error history on "round" (0 = the fitted starting model, k = after the k-th added effect).
 A Rerun 0.41 view plots the timeline selected in the time panel (a view cannot choose its
-own), so the history is also logged as a static bar chart, which every timeline shows;
-the time panel starts on "time".
+own), so the view of the history is a static bar chart, which every timeline shows (its
+name lists each round's error); the time panel starts on "time". The side panels open
+collapsed so the plots have the width.
 """
 
 from __future__ import annotations
@@ -51,6 +56,20 @@ def stage_color(k: int, residual: bool = False) -> list[int]:
     return [round(v + (255 - v) * 0.5) for v in c] if residual else list(c)
 
 
+def headroom(lo: float, span: float, n_entries: int) -> tuple[float, float]:
+    """The y range of a view whose data spans [lo, lo + span]: room above the data for a
+    legend of `n_entries` lines in the top corner (each line ~ 9 % of a view's height,
+    the views of a 2-column grid), so that the legend covers no data."""
+    top = min(0.12 + 0.09 * n_entries, 0.6)  # the fraction of the height the legend takes
+    return lo - 0.05 * span, lo + span + span * (top + 0.05) / (1 - top)
+
+
+def stage_key(k: int, stage: str) -> str:
+    """A stage's entity name, numbered so that views and legends list the stages in their
+    order: "0_start", "1_pitch_flexibility", ... (a comparison's one model: "model")."""
+    return stage if stage == "model" or stage[:1].isdigit() else f"{k}_{stage}"
+
+
 def group_key(group: str) -> str:
     return group.replace(" ", "_")
 
@@ -85,7 +104,7 @@ def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis")
         for run in d.runs:
             name = short(run.name)
             times = [rr.TimeColumn("time", duration=run.time - run.time[0])]
-            views = []
+            signals, residuals = [], []
             for g in run_groups(run):
                 y = group_signal(run, g)
                 if y is None:
@@ -94,24 +113,35 @@ def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis")
                                         run.units.values())  # the run's own units
                 shown = PRETTY.get(unit, unit)
                 base = f"runs/{name}/{group_key(g)}"
-                _series(rec, f"{base}/measured", times, units.from_si(y, unit),
-                        f"measured ({shown})", MEASURED, 2.0)
+                ym = units.from_si(y, unit)
+                _series(rec, f"{base}/measured", times, ym, f"measured ({shown})", MEASURED, 2.0)
+                lo, hi = float(np.min(ym)), float(np.max(ym))
                 for k, (stage, pred) in enumerate(preds):
                     yhat = group_prediction(pred[run.name], run, g)
                     if yhat is None:
                         continue
-                    label = stage.replace("_", " ", 1)
-                    _series(rec, f"{base}/model_{stage}", times, units.from_si(yhat, unit),
-                            f"model {label} ({shown})", stage_color(k))
-                    _series(rec, f"{base}/residual_{stage}", times,
-                            units.from_si(yhat - y, unit), f"residual {label} ({shown})",
-                            stage_color(k, residual=True))
-                views.append(rrb.TimeSeriesView(name=f"{g} ({shown})", origin=base,
-                                                plot_legend=LEGEND))
-            if views:
-                tabs.append(rrb.Vertical(*views, name=name))
+                    key = stage_key(k, stage)
+                    label = "" if stage == "model" else " " + key.replace("_", " ", 1)
+                    yh = units.from_si(yhat, unit)
+                    lo, hi = min(lo, float(np.min(yh))), max(hi, float(np.max(yh)))
+                    _series(rec, f"{base}/model/{key}", times, yh,
+                            f"model{label} ({shown})", stage_color(k))
+                    _series(rec, f"{base}/residual/{key}", times, yh - ym,
+                            f"residual{label} ({shown})", stage_color(k, residual=True))
+                span = (hi - lo) or 1.0
+                n_entries = 1 + len(preds)
+                signals.append(rrb.TimeSeriesView(
+                    name=f"{g} ({shown})", origin=base,
+                    contents=["$origin/measured", "$origin/model/**"], plot_legend=LEGEND,
+                    axis_y=rrb.ScalarAxis(range=headroom(lo, span, n_entries))))
+                residuals.append(rrb.TimeSeriesView(
+                    name=f"{g}: model − measured ({shown})", origin=f"{base}/residual",
+                    plot_legend=LEGEND))
+            if signals:
+                tabs.append(rrb.Tabs(rrb.Grid(*signals, grid_columns=2, name="measured & models"),
+                                     rrb.Grid(*residuals, grid_columns=2, name="residuals"),
+                                     name=name))
         hist = d.history()
-        errs = [100 * e for _, e in hist]
         if hist:
             idx = [rr.TimeColumn("round", sequence=np.arange(len(hist)))]
             rr.send_columns("diagnosis/error", indexes=idx, recording=rec,
@@ -123,22 +153,22 @@ def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis")
                             columns=rr.Scalars.columns(scalars=[d.noise_floor] * len(hist)))
             rec.log("diagnosis/noise_floor", rr.SeriesLines(names="noise floor (NRMS)",
                                                             colors=[MEASURED]), static=True)
-            rec.log("history", rr.BarChart(errs), static=True)
+            rec.log("history", rr.BarChart([100 * e for _, e in hist],
+                                           abscissa=np.arange(len(hist)),
+                                           color=stage_color(len(hist) - 1)), static=True)
         rec.log("diagnosis/verdict", rr.TextDocument(_text(d), media_type="text/markdown"),
                 static=True)
-        labels = " | ".join(f"{k}: {lab}" for k, (lab, _) in enumerate(hist))
+        rounds = " | ".join(f"{k}: {lab} {100 * e:.2f} %" for k, (lab, e) in enumerate(hist))
         side = rrb.Vertical(
-            rrb.BarChartView(name=f"held-out error (%) by round: {labels}", origin="history"),
-            rrb.TimeSeriesView(name="error history (NRMS) on the 'round' timeline",
-                               origin="diagnosis", plot_legend=LEGEND,
-                               contents=["diagnosis/error", "diagnosis/noise_floor"],
-                               time_ranges=rrb.VisibleTimeRange(
-                                   "round", start=rrb.TimeRangeBoundary.infinite(),
-                                   end=rrb.TimeRangeBoundary.infinite())),
-            rrb.TextDocumentView(name="verdict and notes", origin="diagnosis/verdict"))
+            rrb.BarChartView(name=f"held-out error (%) by round (noise floor "
+                                  f"{100 * d.noise_floor:.2f} %): {rounds}", origin="history",
+                             plot_legend=rrb.PlotLegend(visible=False)),
+            rrb.TextDocumentView(name="verdict and notes", origin="diagnosis/verdict"),
+            row_shares=[2, 3])
         main = rrb.Tabs(*tabs) if tabs else rrb.TextDocumentView(origin="diagnosis/verdict")
         rec.send_blueprint(rrb.Blueprint(rrb.Horizontal(main, side, column_shares=[3, 2]),
-                                         rrb.TimePanel(timeline="time")))
+                                         rrb.TimePanel(timeline="time", state="collapsed"),
+                                         collapse_panels=True))
     return path
 
 

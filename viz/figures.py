@@ -13,27 +13,77 @@ from vtable.fileio import atomic_path
 plt.switch_backend("Agg")  # figures are written to files: no window, whatever the default
 
 
-def transfer_function_png(path: str | Path, f, H, coherence=None, title: str = "",
-                          f_max: float | None = None) -> Path:
-    """Amplitude, phase and coherence against frequency, as in the report's figures."""
+def magnitude_band(H: np.ndarray, coherence: np.ndarray, averages: int) -> np.ndarray:
+    """The normalised random error of |H1|, sqrt(1 − γ²)/(|γ| sqrt(2 n_d)) (Bendat &
+    Piersol, *Random Data*, eq 9.90): the measured magnitude's ±1 standard deviation is
+    |H|(1 ± ε)."""
+    g = np.sqrt(np.clip(coherence, 1e-6, 1.0))
+    return np.sqrt(1 - g**2) / (g * np.sqrt(2 * averages))
+
+
+def bode_figure(f, H, coherence=None, averages: int | None = None, models=(),
+                magnitude_label: str = "magnitude (dB)", title: str = "",
+                xlabel: str = "frequency (Hz)", measured_label: str = "measured (H1)"):
+    """A Bode plot, the one figure of every transfer function vtable draws (`tf --png`,
+    the diagnosis and comparison reports): magnitude in dB on a log frequency axis,
+    unwrapped phase, coherence beneath when given; with `averages`, the measured ±1σ
+    band (`magnitude_band`); `models` (label, H, colour) drawn under the measured trace
+    (black, on top). Frequencies at or below 0 are left out (log axis)."""
     f, H = np.asarray(f), np.asarray(H)
-    sel = f > 0 if f_max is None else (f > 0) & (f <= f_max)
+    sel = f > 0
+    f = f[sel]
     rows = 3 if coherence is not None else 2
-    fig, ax = plt.subplots(rows, 1, sharex=True, figsize=(7, 2.2 * rows + 0.6))
-    ax[0].plot(f[sel], np.abs(H[sel]), "k-", lw=1)
-    ax[0].set_ylabel("amplitude")
-    ax[1].plot(f[sel], np.degrees(np.angle(H[sel])), "k-", lw=1)
-    ax[1].set_ylabel("phase (deg)")
-    ax[1].set_yticks([-180, -90, 0, 90, 180])
+    fig, ax = plt.subplots(rows, 1, sharex=True, figsize=(7, 6.4 if rows == 3 else 5.0),
+                           gridspec_kw={"height_ratios": [3, 2, 1.2][:rows]})
+
+    def db(h):
+        return 20 * np.log10(np.maximum(np.abs(h), 1e-300))
+
+    def phase(h):
+        return np.degrees(np.unwrap(np.angle(h)))
+
+    for label, Hm, color in models:
+        Hm = np.asarray(Hm)[sel]
+        ax[0].semilogx(f, db(Hm), color=color, lw=1.3, label=label)
+        ax[1].semilogx(f, phase(Hm), color=color, lw=1.3)
+    Hs = H[sel]
+    if coherence is not None and averages:
+        eps = magnitude_band(Hs, np.asarray(coherence)[sel], averages)
+        mag = np.abs(Hs)
+        ax[0].fill_between(f, db(mag * (1 - np.minimum(eps, 0.99))), db(mag * (1 + eps)),
+                           color="0.75", lw=0, label="measured ±1σ", zorder=3)
+    ax[0].semilogx(f, db(Hs), "k-", lw=1.0, label=measured_label, zorder=4)
+    ax[1].semilogx(f, phase(Hs), "k-", lw=1.0, zorder=4)
+    ax[0].set_ylabel(magnitude_label)
+    ax[1].set_ylabel("phase (deg, unwrapped)")
     if coherence is not None:
-        ax[2].plot(f[sel], np.asarray(coherence)[sel], "k-", lw=1)
-        ax[2].set_ylabel("coherence")
+        ax[2].semilogx(f, np.asarray(coherence)[sel], "k-", lw=1.0)
+        ax[2].set_ylabel("coherence γ²")
         ax[2].set_ylim(0, 1.05)
-    ax[-1].set_xlabel("frequency (Hz)")
+    ax[-1].set_xlabel(xlabel)
     for a in ax:
-        a.grid(alpha=0.3)
-    fig.suptitle(title)
-    return _save(fig, path)
+        a.grid(alpha=0.3, which="both")
+    if title:
+        ax[0].set_title(title, fontsize=10)
+    if models or (coherence is not None and averages):
+        ax[0].legend(fontsize=8, loc="best")
+    fig.tight_layout()
+    return fig
+
+
+def transfer_function_png(path: str | Path, f, H, coherence=None, title: str = "",
+                          f_max: float | None = None, averages: int | None = None,
+                          magnitude_label: str = "magnitude (dB)") -> Path:
+    """`bode_figure` of H (a model's, or a run's with its coherence and averages) up to
+    `f_max`, to a PNG file."""
+    f, H = np.asarray(f), np.asarray(H)
+    sel = np.ones(f.shape, bool) if f_max is None else f <= f_max
+    coh = None if coherence is None else np.asarray(coherence)[sel]
+    xlabel = "frequency (Hz)"
+    if averages:
+        xlabel += f"; {averages} averages, Δf {f[1] - f[0]:.3g} Hz" if f.size > 1 else ""
+    return _save(bode_figure(f[sel], H[sel], coh, averages, magnitude_label=magnitude_label,
+                             title=title, xlabel=xlabel), path)
 
 
 def _save(fig, path: str | Path) -> Path:

@@ -64,7 +64,7 @@ def cmd_identify(a: argparse.Namespace) -> Result:
 def cmd_compare(a: argparse.Namespace) -> Result:
     verbs.load_controllers(a.controller_from)
     verbs.load_effects(a.effects_from)
-    return verbs.compare(a.runs, verbs.effect_names(a.with_), a.calibrate)
+    return verbs.compare(a.runs, verbs.effect_names(a.with_), a.calibrate, a.rerun, a.report)
 
 
 def cmd_diagnose(a: argparse.Namespace) -> Result:
@@ -99,7 +99,7 @@ def cmd_simulate(a: argparse.Namespace) -> Result:
 
 
 def cmd_export(a: argparse.Namespace) -> Result:
-    return verbs.export_mjcf(a.specimen, a.out)
+    return verbs.export_mjcf(a.specimen, a.out, a.table)
 
 
 def cmd_demo(a: argparse.Namespace) -> Result:

@@ -116,7 +116,11 @@ def parser() -> argparse.ArgumentParser:
                      help="pitch/roll exaggeration in the 3D view [50]")
     _add_json(sim)
     ex = sub.add_parser("export-mjcf", help="write the virtual table as MJCF + meshes")
-    ex.add_argument("--specimen", default="none")
+    ex.add_argument("--specimen", default="none",
+                    help="a specimen preset or a TOML file with a [specimen] table [none]")
+    ex.add_argument("--table", default="eerc",
+                    help="the table: a preset (eerc, lnec-st1d) or a TOML file with a [table] "
+                         "in the run format's keys [eerc]")
     ex.add_argument("--out", required=True, help="folder")
     _add_json(ex)
     config_cmd("modes", "eigen-modes: frequency, damping and real roots (eqs 9.1-9.4)")
@@ -160,6 +164,8 @@ def parser() -> argparse.ArgumentParser:
     cp.add_argument("--controller-from", action="append", default=[], metavar="FILE",
                     help=_CONTROLLER_FROM)
     _add_json(cp)
+    cp.add_argument("--rerun", default=None, help="write a Rerun recording (.rrd)")
+    cp.add_argument("--report", default=None, help="write an HTML report")
     ident = sub.add_parser("identify", help="identify the report's parameters from runs")
     ident.add_argument("runs", nargs="+", help="RUN.toml (or .h5) files of one configuration")
     ident.add_argument("--controller-from", action="append", default=[], metavar="FILE",

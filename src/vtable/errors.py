@@ -19,3 +19,12 @@ def _fmt_root(z: complex) -> str:
     if abs(z.imag) < 1e-12 * max(1.0, abs(z)):
         return f"{z.real:.4g}"
     return f"{z.real:.4g}{z.imag:+.4g}j"
+
+
+def did_you_mean(name: object, candidates) -> str:
+    """" (did you mean 'x'?)" when `name` is a near miss of one of `candidates` (difflib's
+    ratio ≥ 0.6, the closest), else ""."""
+    import difflib
+
+    close = difflib.get_close_matches(str(name), [str(c) for c in candidates], n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""

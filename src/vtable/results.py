@@ -47,16 +47,27 @@ class Modes:
     modes: list[dict[str, float]]
     real_roots_per_s: list[float]
     files: list[Path] = field(default_factory=list)
+    #: the published modes to print beside these: (source, ((f Hz, damping), ...))
+    reference: tuple[str, Any] | None = None
 
     def to_json(self) -> dict[str, Any]:
-        return jsonable({"model": self.model, "stable": self.stable, "modes": self.modes,
-                         "real_roots_per_s": self.real_roots_per_s})
+        d = {"model": self.model, "stable": self.stable, "modes": self.modes,
+             "real_roots_per_s": self.real_roots_per_s}
+        if self.reference is not None:
+            src, modes = self.reference
+            d["reference"] = {"source": src,
+                              "modes": [{"f_hz": f, "damping": z} for f, z in modes]}
+        return jsonable(d)
 
     def report(self) -> str:
         out = [f"{self.model}: {'stable' if self.stable else 'UNSTABLE'}",
                f"  {'mode':>4}  {'f (Hz)':>9}  {'damping':>8}"]
+        ref = dict(enumerate(self.reference[1], 1)) if self.reference else {}
         for i, m in enumerate(self.modes, 1):
-            out.append(f"  {i:>4}  {m['f_hz']:9.4f}  {m['damping']:8.4f}")
+            line = f"  {i:>4}  {m['f_hz']:9.4f}  {m['damping']:8.4f}"
+            if i in ref:
+                line += f"        {self.reference[0]}: {ref[i][0]:.4f} Hz, {ref[i][1]:.4f}"
+            out.append(line)
         if self.real_roots_per_s:
             out.append("  real roots (1/s): "
                        + ", ".join(f"{r:.2f}" for r in self.real_roots_per_s))
@@ -131,14 +142,17 @@ class FrequencyResponse:
         return jsonable(d)
 
     def plot(self, png: str | Path) -> Path:
-        """Amplitude and phase (and a run's meaningful coherence) to a PNG file."""
+        """The Bode plot (`vtable.viz.figures.bode_figure`: dB on log frequency,
+        unwrapped phase; a run's meaningful coherence beneath and its ±1σ band from the
+        averages) to a PNG file."""
         # on use, for start-up: matplotlib takes ~0.9 s, and every verb imports this
         # module for its results' to_json() and report() (`vtable presets` too)
         from vtable.viz.figures import transfer_function_png
 
-        transfer_function_png(png, self.f_hz, self.H,
-                              self.coherence if self.of_run and self.coherence_meaningful
-                              else None, self.title)
+        run = self.of_run and self.coherence_meaningful
+        transfer_function_png(png, self.f_hz, self.H, self.coherence if run else None,
+                              self.title, averages=self.averages if run else None,
+                              magnitude_label=f"|{self.output}/{self.input}| (dB)")
         self.png = str(png)
         self.files.append(Path(png))
         return Path(png)
@@ -332,6 +346,9 @@ class Demo:
     def from_dict(cls, d: dict[str, Any]) -> Demo:
         """From the dictionary `to_json` gives (before JSON)."""
         modes = Modes(**{k: d[k] for k in ("model", "stable", "modes", "real_roots_per_s")})
+        if "reference" in d:
+            r = d["reference"]
+            modes.reference = (r["source"], [(m["f_hz"], m["damping"]) for m in r["modes"]])
         return cls(d["configuration"], modes, Margins(**d["margins"]), d["x_t/x_c"],
                    d["x_eff/x_c notch_hz"], d["theta_h/x_c peak_hz"], d.get("simulation"))
 

@@ -37,7 +37,7 @@ from vtable.analytic.pitch import HybridModel, TwoDirectionalTable
 from vtable.analytic.rcfilter import RCFilterServo
 from vtable.analytic.sdof import TableSDOF
 from vtable.analytic.servo import ServoLoop
-from vtable.errors import UnstableError, VtableError
+from vtable.errors import UnstableError, VtableError, did_you_mean
 from vtable.params import presets
 from vtable.params.base import Params, check_number, read_toml
 from vtable.params.loops import (
@@ -53,6 +53,8 @@ from vtable.params.table import ServoConstants
 
 #: the built-in EERC configuration: the SDOF frame on the table, hybrid model (Table 9.1)
 DEFAULT = "eerc-sdof"
+#: the report's coupled modes of that configuration, (f Hz, damping ratio) per mode: Table 9.2
+DEFAULT_REFERENCE = ("Table 9.2", ((2.5391, 0.0401), (8.1906, 0.2590)))
 SDOF_HEIGHT = presets.specimen("table8_1").height  # Table 8.1 structural height
 
 
@@ -93,7 +95,8 @@ def load(name_or_path: str) -> LinearModel:
         return from_file(name_or_path)
     named = _named()
     if name_or_path not in named:
-        raise VtableError(f"unknown configuration {name_or_path!r}; expected a .toml file or "
+        raise VtableError(f"unknown configuration {name_or_path!r}"
+                          f"{did_you_mean(name_or_path, named)}; expected a .toml file or "
                           f"one of: {', '.join(named)}")
     return named[name_or_path]()
 
@@ -129,7 +132,8 @@ def from_file(path: str | Path) -> LinearModel:
     where = str(path)
     unknown = sorted(set(d) - _TOP, key=str)
     if unknown:
-        raise VtableError(f"{where}: unknown key {unknown[0]!r}; "
+        raise VtableError(f"{where}: unknown key {unknown[0]!r}"
+                          f"{did_you_mean(unknown[0], _TOP)}; "
                           f"expected {', '.join(sorted(_TOP))}")
     kind = d.get("model")
     kinds = [*_KINDS, "mdof_hybrid"]

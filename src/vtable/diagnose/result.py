@@ -118,6 +118,8 @@ class Diagnosis:
     files: list[Path] = field(default_factory=list)
     #: declared values the calibrated base ends at a bound of (`base_at_bounds`)
     base_at_bounds: list[dict[str, Any]] = field(default_factory=list)
+    #: the figures' title (`vtable compare` draws its one model as a diagnosis)
+    title: str = "vtable diagnosis"
 
     @property
     def final_effects(self) -> list[str]:
@@ -338,16 +340,45 @@ class ModelComparison:
     bands: dict[str, dict[str, float]] = field(default_factory=dict)
     files: list[Path] = field(default_factory=list)
     display: str = "imperial"  # the runs' unit family (`vtable.display`), for the text
+    #: the fitted model, its predictions and comparison, for `plot` (not in the JSON)
+    model: TableModel | None = field(default=None, repr=False, compare=False)
+    predictions: dict | None = field(default=None, repr=False, compare=False)
+    comparison: Comparison | None = field(default=None, repr=False, compare=False)
 
     @classmethod
     def of(cls, m: TableModel) -> ModelComparison:
         """The comparison of a fitted `TableModel` (scored on the held-out segments)."""
-        c = m.comparison()
+        pred = m.predictions()
+        c = m.comparison(predictions=pred)
         ol = m.physics_.open_loop
         return cls(list(m.effects), m.physics_.effects,
                    {"f_o_hz": ol.f_o, "xi_o": ol.xi_o, "k_o_per_s": ol.k_o}, c.error,
                    c.noise_floor, c.per_run, localisation_text(c), unexplained(c),
-                   m.notes_, m.base_, m.flags_, c.bands, display=c.display)
+                   m.notes_, m.base_, m.flags_, c.bands, display=c.display, model=m,
+                   predictions=pred, comparison=c)
+
+    def as_diagnosis(self) -> Diagnosis:
+        """The comparison as a diagnosis of no rounds whose one stage is the fitted model,
+        for the figures a diagnosis draws (`plot`)."""
+        m = self.model
+        if m is None:
+            raise ValueError("a comparison read back from JSON has no model to plot")
+        d = Diagnosis(list(self.effects), self.error, self.noise_floor, [], m.physics_,
+                      self.error, f"compare: {self.localisation}", self.comparison,
+                      self.comparison, self.base_fit, self.unexplained, list(self.notes),
+                      stages=[Stage("model", m.physics_, self.predictions)],
+                      runs=list(m.campaign_.runs), title="vtable compare")
+        return d
+
+    def plot(self, report: str | Path | None = None, rerun: str | Path | None = None
+             ) -> list[Path]:
+        """Write the figures a diagnosis draws (`Diagnosis.plot`) for this one model:
+        `rerun` (.rrd: measured, model and residual of every channel group of every run)
+        and `report` (HTML: Bode plots with coherence, held-out time histories with fit %,
+        the error per channel group). Returns the files written (also added to `files`)."""
+        wrote = self.as_diagnosis().plot(report=report, rerun=rerun)
+        self.files += wrote
+        return wrote
 
     def to_json(self) -> dict[str, Any]:
         """The JSON `vtable compare --json` writes."""
@@ -381,4 +412,5 @@ class ModelComparison:
                                         if u is None else
                                         f"{u['ratio_to_floor']:.1f} x the noise floor, "
                                         f"{u['where']}"))
+        out += [f"wrote {f}" for f in self.files]
         return "\n".join(out)

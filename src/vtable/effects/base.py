@@ -23,7 +23,7 @@ from typing import Any, Protocol
 
 from vtable import units
 from vtable.effects.table import eerc
-from vtable.errors import VtableError
+from vtable.errors import VtableError, did_you_mean
 
 
 class Param:
@@ -195,7 +195,8 @@ class Effect:
         known = {q.name: q for q in self.params}
         for k in values:
             if k not in known:
-                raise VtableError(f"{where}: unknown parameter {k!r}; expected "
+                raise VtableError(f"{where}: unknown parameter {k!r}"
+                                  f"{did_you_mean(k, known)}; expected "
                                   f"{', '.join(known) or 'none'}")
         out = self.defaults() | dict(values)
         for k, v in out.items():

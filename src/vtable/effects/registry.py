@@ -8,7 +8,7 @@ from pathlib import Path
 
 from vtable.effects.base import Effect
 from vtable.effects.verbs import check_verbs
-from vtable.errors import VtableError
+from vtable.errors import VtableError, did_you_mean
 from vtable.userfile import run_user_file
 
 #: the catalog, in the spec's order (modules of vtable.effects)
@@ -91,7 +91,8 @@ def get(name: str) -> Effect:
     try:
         return _REGISTRY[name]
     except KeyError:
-        raise VtableError(f"unknown effect {name!r}; the registry has "
+        raise VtableError(f"unknown effect {name!r}{did_you_mean(name, _REGISTRY)}; "
+                          f"the registry has "
                           f"{', '.join(_REGISTRY)}") from None
 
 

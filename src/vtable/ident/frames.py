@@ -116,7 +116,8 @@ def frame_for_mode(n_samples: int, fs: float, f_n: float, xi_n: float,
     fits = [n for n in cands if 2 * FIT_HALF_WIDTH * f_n / (fs / n) >= FIT_LINES]
     avg8 = [n for n in fits if averages(n_samples, n) >= MIN_AVERAGES]
     need = record_needed(fs, f_n, xi_n)
-    short = (f"resolving 2ξf = {band:.3g} Hz with {MIN_AVERAGES} averages needs "
+    short = (f"resolving the half-power band of the mode it was chosen for ({f_n:.3g} Hz, "
+             f"ξ {xi_n:.3g}: 2ξf = {band:.3g} Hz) with {MIN_AVERAGES} averages needs "
              f"≥ {need:.0f} s")
     if avg8:
         return choice(max(avg8), f"the finest frame with {MIN_AVERAGES} averages; {short}")

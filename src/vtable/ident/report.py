@@ -53,6 +53,7 @@ from vtable.params.loops import OpenLoop
 from vtable.params.specimen import NoSpecimen, RigidBlock, SDOFSpecimen, ShearBuilding
 from vtable.runs.channels import FORMAT_UNITS
 from vtable.runs.model import Run
+from vtable.units import to_si
 
 #: the servo-loop fits use this band (the report's 0-25 Hz random tests), widened to 1.5
 #: times the described f_o (below 0.45 fs) for a table whose loop lies above it
@@ -128,6 +129,7 @@ def identify_run(run: Run) -> Identification:
     m_t = table.platen_mass
 
     _section(out, "servo loop fit", lambda: _servo_loop(run, spec, m_t, table, out))
+    notes.extend(unit_hints(run, out))
     rows: dict[str, ModalEstimate] = {}
     if isinstance(spec, SDOFSpecimen):
         out.table_3_1, out.table_3_1_methods = [], {}
@@ -145,9 +147,12 @@ def identify_run(run: Run) -> Identification:
                 out, rows, "rocking", rocking_coupled(run, *_after(rows, "fixed"))))
         else:
             out.skipped["table 3.1: base rotation coupling"] = _no_pitch(table)
-        _section(out, "table 3.1: transl. and rot. coupling", lambda: _row(
+        coupled = ("transl. and rot. coupling" if table.pitches
+                   else "translational coupling")  # the table cannot pitch
+        _section(out, f"table 3.1: {coupled}", lambda: _row(
             out, rows, "coupled", fully_coupled(
-                run, *_after(rows, "rocking" if "rocking" in rows else "fixed"))))
+                run, *_after(rows, "rocking" if "rocking" in rows else "fixed"),
+                name=coupled)))
         _section(out, "springs from frequencies", lambda: _springs(spec, rows, out))
     else:
         out.skipped["table 3.1"] = (
@@ -162,6 +167,41 @@ def identify_run(run: Run) -> Identification:
         out.skipped["rocking impedance"] = _no_pitch(table)
         out.skipped["hysteresis"] = _no_pitch(table) + ": no moment-rotation loop"
     return out
+
+
+# ---- plausibility of the declared units -------------------------------------------------
+#: a loop fit below this R² on a run whose displacement and command disagree in scale
+#: calls for a look at the declared units
+POOR_LOOP_R2 = 0.5
+LENGTHS = ("m", "cm", "mm", "in", "ft")
+LENGTH_NAMES = {"m": "metres", "cm": "centimetres", "mm": "millimetres", "in": "inches",
+                "ft": "feet"}
+
+
+def unit_hints(run: Run, out: Identification) -> list[str]:
+    """When the loop fit (eq 6.15 or 7.9) has R² < `POOR_LOOP_R2`, or could not be made,
+    and x_t's RMS is ≥ 5× or ≤ 1/5 of x_c's (a servo loop tracks its command within a
+    factor of ~2 in its band), name the length unit that would bring them together: a
+    displacement declared in mm but written in inches reads 25.4× small."""
+    fit = out.open_loop or out.table_sdof
+    if fit is not None and fit["r2"] >= POOR_LOOP_R2:
+        return []
+    if "h_span" not in run.channels or "avg_hdisp" not in run.channels:
+        return []
+    x_c, x_t = run.channels["h_span"], run.channels["avg_hdisp"]
+    rc, rt = float(np.std(x_c)), float(np.std(x_t))
+    if not (rc > 0 and rt > 0) or 0.2 < rt / rc < 5:
+        return []
+    declared = run.units.get("avg_hdisp", "in")
+    if declared not in LENGTHS:
+        return []
+    # if x_t were in unit v, its SI values would be ratio x factor(v)/factor(declared)
+    k = to_si(1.0, declared)
+    best = min(LENGTHS, key=lambda v: abs(np.log(rt / rc * to_si(1.0, v) / k)))
+    fit_text = "could not be made" if fit is None else f"fits with R² {fit['r2']:.2f}"
+    return [f"avg_hdisp is declared {declared}; its RMS is {rt / rc:.3g}× the command's "
+            f"(h_span, {run.units.get('h_span', 'in')}) and the loop {fit_text}: is it in "
+            f"{LENGTH_NAMES[best]}? ([units] avg_hdisp = \"{best}\")"]
 
 
 # ---- the servo loop -------------------------------------------------------------------

@@ -93,8 +93,13 @@ def _methods(out: list[str], m: dict[str, Any]) -> None:
                 m.get("primary") and fit["method"] == m["primary"]["method"]):
             continue
         p, fl = fit["params"], fit["flags"]
-        parts.append(f"{label} {_v(p['f_n'], '.3f')} Hz{_mark(fl, 'f_n')} "
-                     f"{_v(p['xi_n'], '.2f', 100)} %{_mark(fl, 'xi_n')}")
+        xi = p["xi_n"]
+        if xi is None or not np.isfinite(xi):  # a reason, not "— % ⚠ no value"
+            why = next((f["text"] for f in fl if f["param"] == "xi_n"), "no finite value")
+            xi_text = f"damping not identified ({why})"
+        else:
+            xi_text = f"{_v(xi, '.2f', 100)} %{_mark(fl, 'xi_n')}"
+        parts.append(f"{label} {_v(p['f_n'], '.3f')} Hz{_mark(fl, 'f_n')} {xi_text}")
     for label, why in m.get("skipped", {}).items():
         parts.append(f"{label} skipped ({why})")
     if parts:

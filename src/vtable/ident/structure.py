@@ -233,17 +233,18 @@ def rocking_coupled(run: Run, f_guess: float, xi_guess: float,
 
 
 def fully_coupled(run: Run, f_guess: float, xi_guess: float,
-                  nperseg: int | None = None) -> ModalEstimate:
+                  nperseg: int | None = None,
+                  name: str = "transl. and rot. coupling") -> ModalEstimate:
     """H_hr = x_s/x_c (eq 5.3), an H1 estimate with x_s = ẍ_s/(-ω²) (§3.4.1): the
-    acceleration ratio over ω⁴ has the D.2 form."""
+    acceleration ratio over ω⁴ has the D.2 form. On a table that cannot pitch the
+    coupling is translational only (`name` says so)."""
     (cmd,) = channels.require(run, "h_span", purpose="H_hr = x_s/x_c (eq 5.3)")
     a = accelerations(run)
 
     def make(n: int) -> TransferFunction:
         return transfer_function(cmd, a["relative"], run.fs, n)
 
-    return _estimate("transl. and rot. coupling", run, make, f_guess, xi_guess, 4, False,
-                     nperseg)
+    return _estimate(name, run, make, f_guess, xi_guess, 4, False, nperseg)
 
 
 def table_3_1(run: Run, nperseg: int | None = None) -> Table31:

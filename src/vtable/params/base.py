@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any, Self
 
 from vtable import units
-from vtable.errors import VtableError
+from vtable.errors import VtableError, did_you_mean
 
 _MISSING = dataclasses.MISSING
 
@@ -78,7 +78,9 @@ class Params:
         fields = {_key(f): f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
         unknown = sorted(set(d) - set(fields))
         if unknown:
-            raise VtableError(f"{where}: unknown key {unknown[0]!r}; expected {', '.join(fields)}")
+            raise VtableError(f"{where}: unknown key {unknown[0]!r}"
+                              f"{did_you_mean(unknown[0], fields)}; "
+                              f"expected {', '.join(fields)}")
         kwargs = {}
         for key, f in fields.items():
             if key not in d:

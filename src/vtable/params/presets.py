@@ -14,7 +14,7 @@ from typing import Any
 
 from vtable import units
 from vtable.analytic.closed_forms import pitch_loop_from_springs, stabilizer_rocking
-from vtable.errors import VtableError
+from vtable.errors import VtableError, did_you_mean
 from vtable.params.base import read_toml
 from vtable.params.loops import (
     HorizontalSpring,
@@ -81,7 +81,8 @@ def specimen(name: str) -> Specimen:
     """A specimen from data/specimens.toml: none, concrete_blocks, sdof_frame, ..."""
     d = data("specimens")
     if name not in d:
-        raise VtableError(f"unknown specimen preset {name!r}; expected one of {', '.join(d)}")
+        raise VtableError(f"unknown specimen preset {name!r}{did_you_mean(name, d)}; "
+                          f"expected one of {', '.join(d)}")
     return specimen_from_dict(d[name], f"specimens.toml [{name}]")
 
 

@@ -282,6 +282,28 @@ _BY_KIND: dict[str, type] = {"none": NoSpecimen, "rigid": RigidBlock, "sdof": SD
                              "shear_building": ShearBuilding}
 
 
+#: a structural damping ratio at or above this is legal but suspicious (structures on a
+#: table are at 0.005-0.10 of critical): said, with the likely slip (a percentage)
+SUSPICIOUS_DAMPING = 0.5
+
+
+def specimen_hints(specimen: Specimen, where: str = "specimen") -> list[str]:
+    """Plausibility hints on a legal specimen: a damping ratio ≥ `SUSPICIOUS_DAMPING`
+    (likely a percentage written as a number: 5 for 5 %, 1 for 1 %)."""
+    ratios = getattr(specimen, "damping", None)
+    if ratios is None:
+        return []
+    ratios = ratios if isinstance(ratios, tuple) else (ratios,)
+    out = []
+    for k, z in enumerate(ratios):
+        if z >= SUSPICIOUS_DAMPING:
+            key = "damping" if len(ratios) == 1 else f"damping[{k}]"
+            out.append(f"{where}.{key} = {z:g} is {z:.0%} of critical, taken as given; "
+                       f"structures on a table have 0.5-10 %: if {z:g} % is meant, write "
+                       f"{z / 100:g}")
+    return out
+
+
 def specimen_from_dict(d: dict[str, Any], where: str = "specimen") -> Specimen:
     """A specimen from a TOML table whose `kind` picks the class (run-format names)."""
     if not isinstance(d, dict):

@@ -10,7 +10,7 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any, Self
 
-from vtable.errors import VtableError
+from vtable.errors import VtableError, did_you_mean
 from vtable.params.base import Params, plain, quantity
 from vtable.units import G
 
@@ -264,7 +264,8 @@ class EERCTable:
                 raise VtableError(f"{where}: missing table [{k}]")
         extra = sorted(set(d) - set(need) - {"source", "preset", "multibody", "acquisition"})
         if extra:
-            raise VtableError(f"{where}: unknown key {extra[0]!r}; expected {', '.join(need)}")
+            raise VtableError(f"{where}: unknown key {extra[0]!r}"
+                              f"{did_you_mean(extra[0], need)}; expected {', '.join(need)}")
         return cls(
             geometry=TableGeometry.from_dict(d["geometry"], f"{where}.geometry"),
             specs=TableSpecs.from_dict(d["specs"], f"{where}.specs"),

@@ -13,7 +13,7 @@ import numpy as np
 
 from vtable import units
 from vtable.analytic.structure import building_matrices, fixed_base_modes
-from vtable.errors import VtableError
+from vtable.errors import VtableError, did_you_mean
 from vtable.params.base import check_number
 from vtable.params.table import DIRECTIONS, KNOBS
 
@@ -155,7 +155,8 @@ def command_from_dict(d: Any, where: str, folder: Path | None = None) -> Command
     folder of RUN.toml). Unknown keys are returned in `notes`."""
     if not isinstance(d, dict):
         raise VtableError(f"{where}: expected a table, got {type(d).__name__}")
-    notes = [f"{where}: unknown key {k!r} (kept, not used)" for k in d if k not in COMMAND_KEYS]
+    notes = [f"{where}: unknown key {k!r} (kept, not used){did_you_mean(k, COMMAND_KEYS)}"
+             for k in d if k not in COMMAND_KEYS]
     kind = _text(d, "kind", where)
     if kind is not None and kind not in COMMAND_KINDS:
         raise VtableError(f"{where}.kind: expected one of {', '.join(COMMAND_KINDS)}, got "

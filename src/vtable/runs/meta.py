@@ -15,8 +15,8 @@ from typing import Any
 
 from vtable import units
 from vtable.analytic.structure import specimen_frequencies
-from vtable.errors import VtableError
-from vtable.params.specimen import Specimen, specimen_from_dict
+from vtable.errors import VtableError, did_you_mean
+from vtable.params.specimen import Specimen, specimen_from_dict, specimen_hints
 from vtable.runs.channels import channel_dimension
 from vtable.runs.format import FORMAT, CommandDescription, check_control, command_from_dict
 from vtable.runs.table import TableDescription, table_from_dict
@@ -70,6 +70,7 @@ def declare(meta: dict[str, Any], where: str, folder: Path | None = None) -> Dec
     specimen = None
     if "specimen" in meta:
         specimen = specimen_from_dict(meta["specimen"], f"{where} [specimen]")
+        notes += specimen_hints(specimen, f"{where} [specimen]")
     else:
         notes.append(f"{where}: no [specimen]: treated as a bare table")
     command = None
@@ -92,7 +93,8 @@ def check_meta(meta: dict[str, Any], where: str, folder: Path | None) -> Declara
                           f"{meta.get('format')!r:.60}")
     if "title" in meta and not isinstance(meta["title"], str):
         raise VtableError(f"{where}: key 'title' must be a string, got {meta['title']!r:.60}")
-    unknown = [f"{where}: unknown key {k!r} (kept, not used)" for k in meta if k not in TOP_KEYS]
+    unknown = [f"{where}: unknown key {k!r} (kept, not used){did_you_mean(k, TOP_KEYS)}"
+               for k in meta if k not in TOP_KEYS]
     d = declare(meta, where, folder)
     return replace(d, notes=(*unknown, *d.notes))
 

@@ -24,7 +24,7 @@ from typing import Any
 
 from vtable import units
 from vtable.controllers import kinds
-from vtable.errors import VtableError
+from vtable.errors import VtableError, did_you_mean
 from vtable.params import presets
 from vtable.params.base import check_number
 
@@ -68,8 +68,8 @@ def _level(d: Any, schema: tuple[_Key, ...], where: str, notes: list[str],
             continue
         if k not in by_key:
             known = sorted(by_key) + sorted(subtables) + sorted(plain)
-            raise VtableError(f"{where}: unknown key {k!r}; expected one of "
-                              f"{', '.join(known)}")
+            raise VtableError(f"{where}: unknown key {k!r}{did_you_mean(k, known)}; "
+                              f"expected one of {', '.join(known)}")
         q, unit = by_key[k]
         if q.attr in given:
             raise VtableError(f"{where}: {given[q.attr]!r} and {k!r} give the same quantity; "
@@ -346,8 +346,9 @@ def _notches(v: Any, where: str) -> tuple[Notch, ...]:
         w = f"{where}[{k}]"
         unknown = set(n) - set(NOTCH_KEYS)
         if unknown:
-            raise VtableError(f"{w}: unknown key {sorted(unknown)[0]!r}; expected one of "
-                              f"{', '.join(NOTCH_KEYS)}")
+            k0 = sorted(unknown)[0]
+            raise VtableError(f"{w}: unknown key {k0!r}{did_you_mean(k0, NOTCH_KEYS)}; "
+                              f"expected one of {', '.join(NOTCH_KEYS)}")
         for key in ("frequency_hz", "width_hz"):
             if key not in n:
                 raise VtableError(f"{w}: missing key {key!r}")

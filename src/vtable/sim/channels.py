@@ -55,8 +55,9 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
     if b.structure_joints:
         si["acc_n_ne"] = res.sensor("top_ne_acc")[:, 0]
         si["acc_n_nw"] = res.sensor("top_nw_acc")[:, 0]
-        si["acc_w_nw"] = res.sensor("top_nw_acc")[:, 1]
-        si["acc_w_sw"] = res.sensor("top_sw_acc")[:, 1]
+        if {"roll", "twist"} & set(dofs):  # lateral (west) motion: none on a planar table
+            si["acc_w_nw"] = res.sensor("top_nw_acc")[:, 1]
+            si["acc_w_sw"] = res.sensor("top_sw_acc")[:, 1]
         for site in ("sw", "se"):
             x = res.sensor(f"top_{site}_pos")[:, 0]
             si[f"pot_n_{site}"] = x - x[0] if len(x) else x

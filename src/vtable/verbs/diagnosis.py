@@ -16,13 +16,16 @@ from vtable.runs import campaign
 __all__ = ["DiagnosisInterrupted", "compare", "diagnose"]
 
 
-def compare(paths: Sequence[str], effects: Sequence[str] = (),
-            calibrate: str = "") -> ModelComparison:
+def compare(paths: Sequence[str], effects: Sequence[str] = (), calibrate: str = "",
+            rerun: str | None = None, report: str | None = None) -> ModelComparison:
     """How the model with `effects` fits the runs (fitted on the training segments,
     scored on the held-out ones; the base calibrated as `calibrate` says, see
-    `vtable.diagnose.calibration.Calibration.parse`)."""
-    return ModelComparison.of(TableModel(effects, calibration=Calibration.parse(calibrate))
-                              .fit([align(r) for r in campaign(paths)]))
+    `vtable.diagnose.calibration.Calibration.parse`); writes the Rerun recording
+    (`rerun`) and HTML report (`report`) asked for (`ModelComparison.plot`)."""
+    c = ModelComparison.of(TableModel(effects, calibration=Calibration.parse(calibrate))
+                           .fit([align(r) for r in campaign(paths)]))
+    c.plot(report=report, rerun=rerun)
+    return c
 
 
 def diagnose(paths: Sequence[str], with_: Sequence[str] = (), catalog: Sequence[str] = (),

@@ -6,12 +6,20 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from vtable.analytic.structure import modal_damping, specimen_frequencies
 from vtable.errors import VtableError
 from vtable.ident import channels, transfer_function
 from vtable.ident.drive import align
-from vtable.ident.frames import FEWEST_AVERAGES, MIN_AVERAGES, averages, frame_for_averages
+from vtable.ident.frames import (
+    FEWEST_AVERAGES,
+    MIN_AVERAGES,
+    averages,
+    frame_for_averages,
+    frame_for_mode,
+)
 from vtable.ident.report import identify_run
 from vtable.params.base import read_toml
+from vtable.params.specimen import SDOFSpecimen, ShearBuilding
 from vtable.results import CampaignIdentification, FrequencyResponse
 from vtable.runs import campaign, read_any
 from vtable.verbs.analytic import config_tf
@@ -46,8 +54,10 @@ def tf(config: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5, fmax:
 def run_tf(path: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5,
            fmax: float = 20.0, nperseg: int | None = None,
            png: str | None = None) -> FrequencyResponse:
-    """H1 with coherence between two channels of a run, on frames giving >= 8 averages
-    (vtable.ident.frames) unless `nperseg` says otherwise; too few averages are warned."""
+    """H1 with coherence between two channels of a run. The frames (unless `nperseg` says
+    otherwise) resolve the declared specimen's lowest fixed-base mode
+    (`vtable.ident.frames.frame_for_mode`: the peak and notch the report is about), else
+    give >= 8 averages; too few averages are warned."""
     run = align(read_any(path))
     out = "avg_hdisp" if out == "x_t" else out
     inp = "h_span" if inp == "x_c" else inp
@@ -65,6 +75,11 @@ def run_tf(path: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5,
             raise VtableError(f"--nperseg must be between 16 and the run's {n_samples} samples, "
                               f"got {nperseg}")
         n, why = nperseg, "given --nperseg"
+    elif (mode := _lowest_declared_mode(run)) is not None:
+        f_n, xi_n = mode
+        choice = frame_for_mode(n_samples, run.fs, f_n, xi_n, "the declared specimen's mode")
+        n, why = choice.nperseg, (f"the declared specimen's lowest mode ({f_n:.3g} Hz, "
+                                  f"ξ {xi_n:.3g}): {choice.why}")
     elif n8 is not None:
         n, why = n8, f"the longest power-of-two frame giving >= {MIN_AVERAGES} averages"
     else:
@@ -89,6 +104,18 @@ def run_tf(path: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5,
     if png:
         r.plot(png)
     return r
+
+
+def _lowest_declared_mode(run) -> tuple[float, float] | None:
+    """(f Hz, ξ) of the lowest fixed-base mode of the run's declared specimen, or None (no
+    specimen declared, or one without modes)."""
+    spec = run.declared.specimen
+    if isinstance(spec, SDOFSpecimen):
+        return spec.frequency, max(spec.damping, 1e-3)
+    if isinstance(spec, ShearBuilding):
+        f = specimen_frequencies(spec)
+        return min(f), max(float(modal_damping(spec)[0]), 1e-3)
+    return None
 
 
 def identify(paths: Sequence[str]) -> CampaignIdentification:

@@ -198,9 +198,12 @@ def simulate(specimen: str | None = None, kind: str = "random", *,
     return SimulationSummary(**summary)
 
 
-def export_mjcf(specimen: str, out: str) -> Written:
-    """The virtual table with `specimen` written to the folder `out` as MJCF and meshes."""
-    return Written([Path(f) for f in export(load_specimen(specimen), out)])
+def export_mjcf(specimen: str, out: str, table: str | None = None) -> Written:
+    """The virtual table `table` (a preset or a TOML file, as `simulate --table` takes it;
+    the EERC table when None) with `specimen` written to the folder `out` as MJCF and
+    meshes."""
+    vt = virtual_table_for(load_table(table))
+    return Written([Path(f) for f in export(load_specimen(specimen), out, vt)])
 
 
 def demo(out: str = "vtable-demo", simulate_too: bool = True) -> Demo:
@@ -212,7 +215,9 @@ def demo(out: str = "vtable-demo", simulate_too: bool = True) -> Demo:
     xt, xe = np.abs(model.freqresp(f, "x_t", "x_c")), np.abs(model.freqresp(f, "x_eff", "x_c"))
     th = np.abs(model.freqresp(f, "theta_h", "x_c"))
     near = f < 5.0
+    src, ref = configs.DEFAULT_REFERENCE
     d = {"configuration": configs.DEFAULT, **modes_dict(model),
+         "reference": {"source": src, "modes": [{"f_hz": f, "damping": z} for f, z in ref]},
          "margins": margins_dict(model, "x_t", "x_c"),
          "x_t/x_c": {"peak": float(xt[near].max()),
                      "f_peak_hz": float(f[near][xt[near].argmax()]),
