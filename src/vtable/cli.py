@@ -67,6 +67,13 @@ def cmd_compare(a: argparse.Namespace) -> Result:
     return verbs.compare(a.runs, verbs.effect_names(a.with_), a.calibrate, a.rerun, a.report)
 
 
+def cmd_drive(a: argparse.Namespace) -> Result:
+    verbs.load_effects(a.effects_from)
+    return verbs.drive(a.runs, a.target, a.out, a.target_unit, a.objective,
+                       verbs.effect_names(a.with_), a.from_, a.calibrate, a.regularisation,
+                       a.cap, a.update, a.fmt, a.png, a.target_peak)
+
+
 def cmd_diagnose(a: argparse.Namespace) -> Result:
     diagnose, interrupted = verbs.diagnose, verbs.DiagnosisInterrupted  # loads the diagnosis
     verbs.load_controllers(a.controller_from)
@@ -118,7 +125,7 @@ def cmd_study(a: argparse.Namespace) -> Result:
 _COMMANDS = {"demo": cmd_demo, "modes": cmd_modes, "margins": cmd_margins, "tf": cmd_tf,
              "presets": cmd_presets, "simulate": cmd_simulate, "export-mjcf": cmd_export,
              "identify": cmd_identify, "diagnose": cmd_diagnose, "compare": cmd_compare,
-             "assess": cmd_assess, "study": cmd_study}
+             "assess": cmd_assess, "study": cmd_study, "drive": cmd_drive}
 
 
 def _interrupted(e: BaseException) -> bool:

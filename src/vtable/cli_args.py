@@ -166,6 +166,39 @@ def parser() -> argparse.ArgumentParser:
     _add_json(cp)
     cp.add_argument("--rerun", default=None, help="write a Rerun recording (.rrd)")
     cp.add_argument("--report", default=None, help="write an HTML report")
+    dr = sub.add_parser("drive", help="the drive that makes the specimen feel a target "
+                                      "motion, from a model calibrated on the runs (§10.2)")
+    dr.add_argument("runs", nargs="+", help="RUN.toml (or .h5) files of one configuration")
+    dr.add_argument("--target", required=True,
+                    help="a CSV of time (s) and displacement, or a record as simulate "
+                         "--record takes it (processed the same way)")
+    dr.add_argument("--target-unit", default="in", help="the target CSV's displacement unit "
+                                                        "[in]")
+    dr.add_argument("--target-peak", type=_number, default=None,
+                    help="scale the target to this peak displacement, in --target-unit "
+                         "[a record: 4 in; a CSV: as written]")
+    dr.add_argument("--objective", default="effective", choices=["effective", "table"],
+                    help="effective: x_t + θh at the specimen (§4.2.2); table: x_t "
+                         "[effective]")
+    dr.add_argument("--with", dest="with_", default="",
+                    help="effects in the model, comma separated")
+    dr.add_argument("--from", dest="from_", default=None, metavar="DIAG.json",
+                    help="the model's effects from a diagnosis (vtable diagnose --json)")
+    dr.add_argument("--calibrate", default="", metavar="SPEC", help=_CALIBRATE)
+    dr.add_argument("--regularisation", type=_number, default=0.05,
+                    help="λ of the regularised inverse, relative to max |H| [0.05]")
+    dr.add_argument("--cap", type=_number, default=4.0,
+                    help="the largest amplification of the target at any frequency [4]")
+    dr.add_argument("--update", action="append", default=[], metavar="RUN.toml",
+                    help="a run measured with the previous drive: recalibrate with it and "
+                         "correct the drive from its measured error; repeatable")
+    dr.add_argument("--out", required=True, help="STEM: writes STEM.csv + STEM.toml")
+    dr.add_argument("--format", dest="fmt", default="csv", choices=["csv", "txt"],
+                    help="txt: also STEM.txt, two plain columns (time s, drive in) [csv]")
+    dr.add_argument("--png", default=None, help="a figure: target, prediction, spectra")
+    dr.add_argument("--effects-from", action="append", default=[], metavar="FILE",
+                    help=_EFFECTS_FROM)
+    _add_json(dr)
     ident = sub.add_parser("identify", help="identify the report's parameters from runs")
     ident.add_argument("runs", nargs="+", help="RUN.toml (or .h5) files of one configuration")
     ident.add_argument("--controller-from", action="append", default=[], metavar="FILE",

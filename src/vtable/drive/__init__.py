@@ -1,0 +1,14 @@
+"""Drive compensation: the drive that makes the specimen feel the target (report §10.2)."""
+
+from vtable.drive.compensate import (
+    CAP,
+    OBJECTIVES,
+    REGULARISATION,
+    DrivePlant,
+    DriveResult,
+    compensate,
+)
+from vtable.drive.target import DRIVE_FS, Target, read_target
+
+__all__ = ["CAP", "DRIVE_FS", "OBJECTIVES", "REGULARISATION", "DrivePlant", "DriveResult",
+           "Target", "compensate", "read_target"]
