@@ -215,6 +215,7 @@ def test_the_diagnosis_reports_axes_follow_the_runs_units(tmp_path, capsys):
     in its own units; the magnitude is 20 log10 of the SI ratio in those units."""
     from types import SimpleNamespace
 
+    from vtable.ident.structure import lowest_declared_mode
     from vtable.ident.tf import transfer_function
     from vtable.viz.diagnosis_report import bode_frames, tf_overlay
 
@@ -230,7 +231,7 @@ def test_the_diagnosis_reports_axes_follow_the_runs_units(tmp_path, capsys):
         y = {"table acceleration": "avg_hacc", "actuator force": "h1_force",
              "table displacement": "avg_hdisp"}[group]
         line = fig.axes[0].get_lines()[-1]  # the measured trace, drawn last
-        n = bode_frames(len(run.time), run.fs)
+        n = bode_frames(len(run.time), run.fs, lowest_declared_mode(run))
         tm = transfer_function(run.channel("h_span"), run.channel(y), run.fs, n)
         sel = (tm.f >= 2 * tm.resolution_hz) & (tm.f <= min(30.0, 0.4 * run.fs))
         np.testing.assert_allclose(line.get_ydata(), 20 * np.log10(scale * np.abs(tm.H[sel])),

@@ -66,7 +66,7 @@ def test_the_readme_names_the_commands_it_shows():
     cmds = readme_commands()
     verbs = {shlex.split(c)[1] for c in cmds}
     assert {"simulate", "export-mjcf", "presets", "modes", "margins", "tf", "identify",
-            "diagnose", "compare"} <= verbs, verbs
+            "diagnose", "compare", "drive"} <= verbs, verbs
 
 
 def test_every_readme_command_runs(tmp_path, monkeypatch, capsys):
@@ -77,7 +77,16 @@ def test_every_readme_command_runs(tmp_path, monkeypatch, capsys):
     write_at2(tmp_path / "my_record.AT2")
     model = re.search(r"```toml\n(model = \"hybrid\".*?)```", README, re.S).group(1)
     (tmp_path / "my_model.toml").write_text(model)
+    t = np.arange(0, 6, 0.005)  # my_motion.csv: a 2 Hz burst, 1 in peak
+    x = np.sin(2 * np.pi * 2 * t) * np.sin(np.pi * t / 6) ** 2
+    np.savetxt(tmp_path / "my_motion.csv", np.column_stack([t, x]), delimiter=",",
+               header="time,displacement", comments="", fmt="%.6f")
     for line in readme_commands():
+        if "lab/run_with_drive.toml" in line:  # the lab's run of the first drive: here the
+            (tmp_path / "lab").mkdir(exist_ok=True)  # drive's own run file stands for it
+            for ext in (".toml", ".csv"):
+                shutil.copy(tmp_path / f"drive/elcentro{ext}",
+                            tmp_path / f"lab/run_with_drive{ext}")
         argv = shlex.split(line)[1:]
         argv = [a for pat in argv for a in (sorted(glob.glob(pat)) if "*" in pat else [pat])]
         code = main(fast(argv))

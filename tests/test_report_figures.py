@@ -38,3 +38,13 @@ def test_the_magnitude_band_is_the_spread_of_h1_over_repeated_records():
 def test_frames_are_the_finest_with_eight_averages(n, fs, want):
     nper = bode_frames(n, fs)
     assert nper == want and 2 * n // nper - 1 >= 8
+
+
+def test_frames_resolve_the_declared_mode():
+    """The README's 11 s run at 200 Hz declaring the SDOF frame (2.87 Hz, ξ 0.01): 1024-
+    point frames (0.195 Hz, 3 averages) that hold the fit of its mode, not the 0.78 Hz
+    lines of 8 averages that hide the peak and notch (issue 19); a run too short to hold
+    it falls back to the averages' rule."""
+    assert bode_frames(11 * 200, 200.0, (2.87, 0.01)) == 1024
+    assert bode_frames(11 * 200, 200.0, None) == 256
+    assert bode_frames(400, 200.0, (0.3, 0.01)) == bode_frames(400, 200.0)

@@ -22,8 +22,10 @@ import numpy as np
 from vtable import display
 from vtable.diagnose.groups import GROUP_UNITS, group_prediction, group_signal, short
 from vtable.diagnose.sampling import segments
+from vtable.errors import VtableError
 from vtable.fileio import write_text
-from vtable.ident.frames import SHORTEST, frame_for_averages
+from vtable.ident.frames import SHORTEST, frame_for_averages, frame_for_mode
+from vtable.ident.structure import lowest_declared_mode
 from vtable.ident.tf import transfer_function
 from vtable.viz.figures import bode_figure, magnitude_band  # noqa: F401 (re-exported)
 
@@ -76,10 +78,17 @@ def model_stages(d: Any) -> list[tuple[str, Any]]:
     return [("model", s) for s in d.stages]
 
 
-def bode_frames(n: int, fs: float) -> int:
-    """Samples per frame: the longest power of two with at least `BODE_AVERAGES`
-    half-overlapping frames in `n` samples, at most fs / `BODE_RESOLUTION_HZ`
-    (`vtable.ident.frames.frame_for_averages`; its shortest frame when none gives them)."""
+def bode_frames(n: int, fs: float, mode: tuple[float, float] | None = None) -> int:
+    """Samples per frame: with the declared specimen's lowest mode (f, ξ), the frames
+    that resolve it (`vtable.ident.frames.frame_for_mode`: its peak and notch shown, the
+    averages warned in the axis label); else the longest power of two with at least
+    `BODE_AVERAGES` half-overlapping frames in `n` samples, at most fs /
+    `BODE_RESOLUTION_HZ` (`frame_for_averages`; its shortest frame when none gives them)."""
+    if mode is not None:
+        try:
+            return frame_for_mode(n, fs, *mode).nperseg
+        except VtableError:  # too short to hold a fit of the mode: the averages' rule
+            pass
     longest = 1 << int(np.log2(fs / BODE_RESOLUTION_HZ))
     return frame_for_averages(n, BODE_AVERAGES, longest) or SHORTEST
 
@@ -93,7 +102,7 @@ def tf_overlay(d: Any, group: str, run=None):
     y = group_signal(run, group)
     if y is None:
         return None
-    n = bode_frames(len(x), run.fs)
+    n = bode_frames(len(x), run.fs, lowest_declared_mode(run))
     unit, per = (display.unit_for(u, display.run_family(run), run.units.values())
                  for u in (GROUP_UNITS[group], "in"))  # the run's own units
     scale = display.from_si(1.0, unit) / display.from_si(1.0, per)  # SI ratio -> unit/per
@@ -102,7 +111,7 @@ def tf_overlay(d: Any, group: str, run=None):
     models = []
     for label, stage in model_stages(d):
         yhat = group_prediction(stage.predictions[run.name], run, group)
-        if yhat is not None:
+        if yhat is not None and np.any(yhat):  # a model without this motion: not drawn
             tp = transfer_function(x, yhat, run.fs, n)
             models.append((label, scale * tp.H[sel], MODEL_COLORS[label]))
     return bode_figure(

@@ -54,6 +54,10 @@ def bode_figure(f, H, coherence=None, averages: int | None = None, models=(),
                            color="0.75", lw=0, label="measured ±1σ", zorder=3)
     ax[0].semilogx(f, db(Hs), "k-", lw=1.0, label=measured_label, zorder=4)
     ax[1].semilogx(f, phase(Hs), "k-", lw=1.0, zorder=4)
+    meas = db(Hs)[np.isfinite(db(Hs))]
+    if meas.size:  # a model far below the measurement does not crush its axis
+        lo, hi = ax[0].get_ylim()
+        ax[0].set_ylim(max(lo, float(meas.min()) - 40.0), hi)
     ax[0].set_ylabel(magnitude_label)
     ax[1].set_ylabel("phase (deg, unwrapped)")
     if coherence is not None:

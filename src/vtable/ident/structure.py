@@ -12,7 +12,7 @@ import scipy.linalg
 
 from vtable import units
 from vtable.analytic import closed_forms
-from vtable.analytic.structure import modal_damping
+from vtable.analytic.structure import modal_damping, specimen_frequencies
 from vtable.errors import VtableError
 from vtable.ident import channels
 from vtable.ident.fits import Fit, amplitude_fit, circle_fit, fit_mode
@@ -39,6 +39,19 @@ def effective_height(run: Run) -> float:
     if isinstance(spec, ShearBuilding):
         return closed_forms.effective_height_first_mode(spec.masses, spec.heights)
     raise VtableError(f"{run.name}: a bare table has no effective height")
+
+
+def lowest_declared_mode(run: Run) -> tuple[float, float] | None:
+    """(f Hz, ξ) of the lowest fixed-base mode of the run's declared specimen (ξ at least
+    0.001), or None: no specimen declared, or one without modes. What frames must resolve
+    to show the peak and notch the report is about (`vtable tf`, the report's Bode
+    plots)."""
+    spec = run.declared.specimen
+    if isinstance(spec, SDOFSpecimen):
+        return spec.frequency, max(spec.damping, 1e-3)
+    if isinstance(spec, ShearBuilding):
+        return min(specimen_frequencies(spec)), max(float(modal_damping(spec)[0]), 1e-3)
+    return None
 
 
 def accelerations(run: Run) -> dict[str, np.ndarray]:

@@ -6,7 +6,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from vtable.analytic.structure import modal_damping, specimen_frequencies
 from vtable.errors import VtableError
 from vtable.ident import channels, transfer_function
 from vtable.ident.drive import align
@@ -18,8 +17,8 @@ from vtable.ident.frames import (
     frame_for_mode,
 )
 from vtable.ident.report import identify_run
+from vtable.ident.structure import lowest_declared_mode
 from vtable.params.base import read_toml
-from vtable.params.specimen import SDOFSpecimen, ShearBuilding
 from vtable.results import CampaignIdentification, FrequencyResponse
 from vtable.runs import campaign, read_any
 from vtable.verbs.analytic import config_tf
@@ -75,7 +74,7 @@ def run_tf(path: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5,
             raise VtableError(f"--nperseg must be between 16 and the run's {n_samples} samples, "
                               f"got {nperseg}")
         n, why = nperseg, "given --nperseg"
-    elif (mode := _lowest_declared_mode(run)) is not None:
+    elif (mode := lowest_declared_mode(run)) is not None:
         f_n, xi_n = mode
         choice = frame_for_mode(n_samples, run.fs, f_n, xi_n, "the declared specimen's mode")
         n, why = choice.nperseg, (f"the declared specimen's lowest mode ({f_n:.3g} Hz, "
@@ -104,18 +103,6 @@ def run_tf(path: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5,
     if png:
         r.plot(png)
     return r
-
-
-def _lowest_declared_mode(run) -> tuple[float, float] | None:
-    """(f Hz, ξ) of the lowest fixed-base mode of the run's declared specimen, or None (no
-    specimen declared, or one without modes)."""
-    spec = run.declared.specimen
-    if isinstance(spec, SDOFSpecimen):
-        return spec.frequency, max(spec.damping, 1e-3)
-    if isinstance(spec, ShearBuilding):
-        f = specimen_frequencies(spec)
-        return min(f), max(float(modal_damping(spec)[0]), 1e-3)
-    return None
 
 
 def identify(paths: Sequence[str]) -> CampaignIdentification:
