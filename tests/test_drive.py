@@ -210,3 +210,13 @@ def test_from_a_diagnosis_json_with_a_txt_drive_and_a_figure(capsys):
                  "--out", str(stem)])
     err = capsys.readouterr().err
     assert code == 2 and "not a diagnosis JSON" in err and err.count("\n") == 1
+
+
+def test_docs_name_every_key_the_drive_json_has():
+    result, *_ = drive("sdof", "elcentro")
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "drive.md").read_text()
+    keys = set(result) | set(result["settings"]) | set(result["baselines"])
+    for m in (result["drive"], *result["baselines"].values()):
+        keys |= set(m) | set(m.get("spectrum", {}))
+    missing = sorted(k for k in keys if f"`{k}`" not in doc)
+    assert not missing, missing

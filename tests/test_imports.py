@@ -37,6 +37,8 @@ LATE_IMPORTS = {
         "start-up of every spawned diagnosis worker (vtable.diagnose imports the result)",
     ("vtable.diagnose.result", "vtable.viz.diagnosis_report"):
         "start-up of every spawned diagnosis worker (vtable.diagnose imports the result)",
+    ("vtable.drive.compensate", "vtable.viz.figures"):
+        "start-up: matplotlib (~0.9 s) only when a drive's figure is asked for",
 }
 
 
@@ -217,3 +219,16 @@ def test_no_import_circles():
 
 def test_no_module_over_500_lines():
     assert not long_modules(), long_modules()
+
+
+def test_every_package_is_installed():
+    """pyproject.toml lists the packages one by one: a new one left out would be missing
+    from `pip install .` (it was, for a moment, vtable.drive)."""
+    import tomllib
+
+    root = Path(__file__).resolve().parents[1]
+    listed = set(tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]
+                 ["packages"])
+    found = {".".join(p.parent.relative_to(root / "src").parts)
+             for p in (root / "src" / "vtable").rglob("__init__.py")}
+    assert found <= listed, sorted(found - listed)

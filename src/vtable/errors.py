@@ -1,5 +1,7 @@
 """The one exception type users see: a one-line message naming what was wrong."""
 
+import difflib
+
 
 class VtableError(Exception):
     """Bad input or an impossible request; the message is a single line for the user."""
@@ -24,7 +26,5 @@ def _fmt_root(z: complex) -> str:
 def did_you_mean(name: object, candidates) -> str:
     """" (did you mean 'x'?)" when `name` is a near miss of one of `candidates` (difflib's
     ratio ≥ 0.6, the closest), else ""."""
-    import difflib
-
     close = difflib.get_close_matches(str(name), [str(c) for c in candidates], n=1)
     return f" (did you mean {close[0]!r}?)" if close else ""

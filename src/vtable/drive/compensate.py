@@ -37,6 +37,7 @@ from vtable import units
 from vtable.diagnose.model import TableModel
 from vtable.drive.target import Target
 from vtable.errors import VtableError
+from vtable.ident.structure import effective_height
 from vtable.ident.tf import transfer_function
 from vtable.jsonable import jsonable
 from vtable.models.reduced import ReducedModel
@@ -236,7 +237,11 @@ class DriveResult:
         response spectra beneath."""
         from vtable.viz.figures import drive_png
 
-        p = drive_png(png, self)
+        def psa(x: np.ndarray, f: np.ndarray) -> np.ndarray:
+            return response_spectrum(acceleration(x, self.fs), 1 / self.fs, 1 / f,
+                                     SPECTRUM_DAMPING).psa
+
+        p = drive_png(png, self, psa)
         self.files.append(Path(p))
         return Path(p)
 
@@ -284,8 +289,6 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
         raise VtableError(f"need a regularisation > 0 and a cap > 1, got {regularisation:g} "
                           f"and {cap:g}")
     if h is None:
-        from vtable.ident.structure import effective_height
-
         h = effective_height(model.campaign_.runs[0])
     plant = DrivePlant(model, h)
     fs, T, t = target.fs, target.x, target.t

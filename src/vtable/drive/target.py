@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 from dataclasses import dataclass
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
@@ -87,8 +88,6 @@ def _uniform(name: str, t: np.ndarray, x: np.ndarray) -> Target:
     """Resample to DRIVE_FS (polyphase, anti-aliased)."""
     fs = 1.0 / float(np.mean(np.diff(t)))
     if abs(fs - DRIVE_FS) > 1e-6 * DRIVE_FS:
-        from fractions import Fraction
-
         r = Fraction(DRIVE_FS / fs).limit_denominator(1000)
         x = scipy.signal.resample_poly(x, r.numerator, r.denominator)
     rest = np.zeros(round(REST_S * DRIVE_FS))
