@@ -384,7 +384,8 @@ sky = "clear"
 def test_unknown_table_keys_are_errors(tmp_path, after, line, where):
     """The models read [table]: a key they would not use is an error, at every level."""
     text = UNKNOWN_EVERYWHERE.replace(after, after + "\n" + line, 1)
-    with pytest.raises(VtableError, match=re.escape(f"unk.toml {where}; expected one of")):
+    with pytest.raises(VtableError, match=re.escape(f"unk.toml {where}")
+                       + r"( \(did you mean '[a-z_]+'\?\))?; expected one of"):
         _read(tmp_path, "unk", CSV_OK, text)
 
 

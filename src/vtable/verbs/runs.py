@@ -74,11 +74,8 @@ def run_tf(path: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5,
             raise VtableError(f"--nperseg must be between 16 and the run's {n_samples} samples, "
                               f"got {nperseg}")
         n, why = nperseg, "given --nperseg"
-    elif (mode := lowest_declared_mode(run)) is not None:
-        f_n, xi_n = mode
-        choice = frame_for_mode(n_samples, run.fs, f_n, xi_n, "the declared specimen's mode")
-        n, why = choice.nperseg, (f"the declared specimen's lowest mode ({f_n:.3g} Hz, "
-                                  f"ξ {xi_n:.3g}): {choice.why}")
+    elif (choice := _mode_frames(run, n_samples)) is not None:
+        n, why = choice
     elif n8 is not None:
         n, why = n8, f"the longest power-of-two frame giving >= {MIN_AVERAGES} averages"
     else:
@@ -103,6 +100,22 @@ def run_tf(path: str, out: str = "x_t", inp: str = "x_c", fmin: float = 0.5,
     if png:
         r.plot(png)
     return r
+
+
+def _mode_frames(run, n_samples: int) -> tuple[int, str] | None:
+    """The frames that resolve the run's declared specimen's lowest mode and why; None
+    when it declares none, or when the record cannot hold a fit of it (the averages' rule
+    then, the reason in the notes)."""
+    mode = lowest_declared_mode(run)
+    if mode is None:
+        return None
+    f_n, xi_n = mode
+    try:
+        c = frame_for_mode(n_samples, run.fs, f_n, xi_n, "the declared specimen's mode")
+    except VtableError as e:
+        run.reports.append(f"{e}: frames chosen for averages instead")
+        return None
+    return c.nperseg, f"the declared specimen's lowest mode ({f_n:.3g} Hz, ξ {xi_n:.3g}): {c.why}"
 
 
 def identify(paths: Sequence[str]) -> CampaignIdentification:
