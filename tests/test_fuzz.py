@@ -422,7 +422,10 @@ def check_case(case: Case, verb: str, folder: Path) -> None:
         assert n in err, f"the error does not name {n!r}: {where}: {err}"
 
 
+@functools.cache
 def bases() -> dict[float, tuple[str, str]]:
+    """The base runs, made once per session in one folder (it was one folder, and four
+    truth simulations, per example)."""
     import tempfile
 
     return base_runs(tempfile.mkdtemp(prefix="vtable-fuzz-"))
