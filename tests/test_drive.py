@@ -148,6 +148,9 @@ def test_one_update_brings_the_sdof_frame_within_3_percent():
     result, _, x_eff1, _ = drive("sdof", "elcentro", update=run)
     T = target("elcentro")
     assert nrms(x_eff1, T) <= 0.03, (nrms(x_eff0, T), nrms(x_eff1, T))
+    # the lab run's 2 % sensor noise is not fed back: the spectrum stays within ±10 %
+    # (with the raw measured error it was 48 % off)
+    assert spectrum_error(x_eff1, T) <= 0.10, spectrum_error(x_eff1, T)
     assert any("lab runs used by this drive: 1" in n for n in result["notes"])
 
 
