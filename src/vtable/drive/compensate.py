@@ -373,15 +373,13 @@ def _played(name: str, d: np.ndarray, out: dict[str, np.ndarray], target: Target
 
 def fixed_base_peak(model: TableModel, x: np.ndarray, fs: float) -> float | None:
     """The peak relative displacement of the specimen on a rigid, unmoving base driven by
-    `x` (SDOF: the declared f and ξ; None for other specimens)."""
+    `x` (SDOF: the declared f and ξ, its response-spectrum ordinate; None for other
+    specimens)."""
     spec = model.physics_.specimen
     if not isinstance(spec, SDOFSpecimen):
         return None
-    w, z = spec.omega, spec.damping
-    sys = scipy.signal.lti([-1.0], [1.0, 2 * z * w, w * w])
-    t = np.arange(len(x)) / fs
-    _, u, _ = scipy.signal.lsim(sys, acceleration(x, fs), t)
-    return float(np.max(np.abs(u)))
+    return float(response_spectrum(acceleration(x, fs), 1 / fs, 1 / spec.frequency,
+                                   spec.damping).sd[0])
 
 
 def _elongated(plant: DrivePlant, target: Target, model: TableModel, fs: float) -> Played:

@@ -73,11 +73,8 @@ def _measured(run: Run, tgt: Target, h: float, objective: str
     """(the drive played, the objective motion measured) of a lab run, at the target's
     rate and length."""
     t = tgt.t
-    need = ["h_span", "avg_hdisp"] + (["pitch_disp"] if objective == "effective" else [])
-    for c in need:
+    for c in ("h_span", "avg_hdisp"):
         if not run.has(c):
-            if c == "pitch_disp":
-                continue
             raise VtableError(f"{run.name}: no channel {c!r}: a run measured with the "
                               "previous drive needs it for --update")
     tr = run.time - run.time[0]
