@@ -24,7 +24,7 @@ from vtable.drive import compensate, read_target
 from vtable.ident.drive import align
 from vtable.ident.structure import effective_height
 from vtable.runs import campaign
-from vtable.verbs.drive import drive
+from vtable.verbs.compensation import drive
 
 IN = 0.0254
 

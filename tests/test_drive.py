@@ -157,7 +157,9 @@ def test_one_update_brings_the_sdof_frame_within_3_percent():
 def test_friction_the_model_lacks_degrades_gracefully_and_one_update_recovers():
     """3 kip of actuator friction in the truth, none in the model: the first drive is
     worse than where the model is complete but still far better than the target sent as
-    it is; the lab run measured with it, through --update, brings it within 3 %."""
+    it is; the lab run measured with it, through --update, brings it within 3 % and its
+    spectrum within 10 % (the miss read from the accelerometers above 2 Hz: from the
+    displacement alone, below 5 Hz, the spectrum stayed 19.6 % off at 6-17 Hz)."""
     _, _, x_eff0, run = drive("friction", "elcentro")
     T = target("elcentro")
     first = nrms(x_eff0, T)
@@ -166,6 +168,7 @@ def test_friction_the_model_lacks_degrades_gracefully_and_one_update_recovers():
     _, x_as_is, _ = drive_as_is("friction")
     assert first < nrms(x_as_is, T) / 2, (first, nrms(x_as_is, T))
     assert updated <= 0.03 and updated < first, (first, updated)
+    assert spectrum_error(x_eff1, T) <= 0.10, spectrum_error(x_eff1, T)
 
 
 def drive_as_is(case: str):
@@ -186,7 +189,87 @@ def test_a_target_beyond_the_table_is_refused_with_the_limit_and_time(capsys):
                  "pitch_flexibility", "--out", str(setup("sdof")[0] / "too_big")])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1, err
-    assert "the table's limit (Table 2.2)" in err and "at t = " in err
+    assert "the table's stroke (Table 2.2)" in err and "at t = " in err
+
+
+def test_from_a_diagnosis_json_reuses_its_fitted_model_without_a_fit(capsys, tmp_path):
+    """--from with a diagnosis that holds its fitted values: the drive is computed on that
+    model (no fit: the drive equals compensate's on the same model); a value outside its
+    bounds for these runs (a diagnosis of other runs) is said, naming the key, and the
+    diagnosis's effects are calibrated again."""
+    from vtable.diagnose.model import TableModel
+    from vtable.drive import compensate, read_target
+    from vtable.ident.drive import align
+    from vtable.runs import campaign
+
+    _, paths = setup("sdof")
+    fitted = TableModel(["pitch_flexibility"]).fit([align(r) for r in campaign(paths)])
+    # the base moved off its fit, so that a re-fit could not land on the same values
+    base = {k: dict(v) for k, v in fitted.base_.items()}
+    key = "loop.f_o_hz" if "loop.f_o_hz" in base else next(iter(base))
+    lo, hi = base[key]["bounds"]
+    base[key]["fitted"] = lo + 0.3 * (hi - lo)
+    diag = tmp_path / "diag.json"
+    diag.write_text(json.dumps({"format": "vtable-diagnosis/1",
+                                "final_effects": ["pitch_flexibility"], "base": base,
+                                "final_params": fitted.physics_.effects}))
+    stem = tmp_path / "from_fit"
+    code = main(["drive", *paths, "--target", "elcentro", "--target-peak", "2", "--from",
+                 str(diag), "--out", str(stem), "--json", f"{stem}.json"])
+    out = capsys.readouterr().out
+    assert code == 0 and "final model as fitted" in out, out
+    values = {k: v["fitted"] for k, v in base.items()}
+    values.update({f"pitch_flexibility.{k}": v
+                   for k, v in fitted.physics_.effects["pitch_flexibility"].items()})
+    model = TableModel(["pitch_flexibility"]).at([align(r) for r in campaign(paths)], values)
+    assert model.base_[key]["fitted"] == pytest.approx(base[key]["fitted"])
+    expect = compensate(model, read_target("elcentro", peak=2.0), baselines=False)
+    got = json.loads(Path(f"{stem}.json").read_text())
+    assert got["history_nrms"] == pytest.approx(expect.history, rel=1e-9)
+    base[key]["fitted"] = hi * 2
+    diag.write_text(json.dumps({"format": "vtable-diagnosis/1",
+                                "final_effects": ["pitch_flexibility"], "base": base,
+                                "final_params": fitted.physics_.effects}))
+    code = main(["drive", *paths, "--target", "elcentro", "--target-peak", "2", "--from",
+                 str(diag), "--out", str(stem)])
+    out = capsys.readouterr().out
+    assert code == 0 and f"{key} = " in out and "outside its bounds" in out, out
+    assert "calibrated again on these runs; 3 run(s), with pitch_flexibility" in out, out
+
+
+def test_the_cap_holds_the_amplification_near_the_fixed_base_and_a_report(tmp_path):
+    """--cap 3: the drive's amplification of the target within ±30 % of the frame's
+    fixed-base frequency is held near 3 (it needs ~7.7 there), said in a note; the HTML
+    report holds the table of figures with the limits used and the figure."""
+    _, paths = setup("sdof")
+    stem = tmp_path / "capped"
+    assert main(["drive", *paths, "--target", "elcentro", "--target-peak", "2", "--with",
+                 "pitch_flexibility", "--cap", "3", "--out", str(stem), "--json",
+                 f"{stem}.json", "--report", f"{stem}.html"]) == 0
+    r = json.loads(Path(f"{stem}.json").read_text())
+    amp = r["drive"]["amplification"]
+    assert amp["capped"] and amp["near_fixed_base_uncapped"] > 6, amp
+    assert amp["near_fixed_base"] <= 3 * 1.15, amp
+    assert 2.0 < amp["near_fixed_base_hz"] < 3.8, amp
+    assert any("held to the cap 3" in n for n in r["notes"]), r["notes"]
+    use = r["drive"]["limit_use"]
+    assert 0.3 < use["displacement"] < 0.5 and 0 < use["velocity"] < 1 and 0 < use["force"] < 1
+    html = Path(f"{stem}.html").read_text()
+    assert html.count("<tr>") == 5 and "data:image/png;base64," in html and "stroke used" in html
+
+
+def test_model_miss_reads_the_acceleration_above_the_crossover():
+    """A 10 Hz miss the displacement sensors do not see (e_x = 0) but the accelerometers
+    do (e_a = -ω²x) comes back as that displacement, within 2 % in the record's middle;
+    a 0.5 Hz one seen by the displacement comes back from it."""
+    from vtable.drive.compensate import model_miss
+
+    t = np.arange(4000) / FS
+    for f, e_x, share in ((10.0, 0.0, 1.0), (0.5, 1.0, 0.0)):
+        x = 1e-3 * np.sin(2 * np.pi * f * t)
+        got = model_miss(e_x * x, FS, share * -(2 * np.pi * f) ** 2 * x)
+        mid = slice(1000, 3000)
+        assert np.max(np.abs(got[mid] - x[mid])) < 0.02e-3, (f, np.max(np.abs(got[mid] - x[mid])))
 
 
 def test_from_a_diagnosis_json_with_a_txt_drive_and_a_figure(capsys):

@@ -142,6 +142,11 @@ def coupled_sweep_png(path: str | Path, x, x_label: str, curves: dict, reference
 
 
 def drive_png(path: str | Path, r, psa) -> Path:
+    """`drive_figure` written as PNG."""
+    return _save(drive_figure(r, psa), path)
+
+
+def drive_figure(r, psa):
     """A drive (`vtable.drive.DriveResult`): the target, the predicted effective motion
     and the drive against time; the pseudo-acceleration spectra (`psa(x, f)`: of the
     displacement x at frequencies f, m/s²) of the target and of the effective motion
@@ -166,4 +171,5 @@ def drive_png(path: str | Path, r, psa) -> Path:
     a2.set_ylabel("PSA, 5 % damped (g)")
     a2.grid(alpha=0.3, which="both")
     a2.legend(fontsize=8)
-    return _save(fig, path)
+    fig.tight_layout()
+    return fig

@@ -71,7 +71,8 @@ def cmd_drive(a: argparse.Namespace) -> Result:
     verbs.load_effects(a.effects_from)
     return verbs.drive(a.runs, a.target, a.out, a.target_unit, a.objective,
                        verbs.effect_names(a.with_), a.from_, a.calibrate, a.regularisation,
-                       a.cap, a.update, a.fmt, a.png, a.target_peak)
+                       a.cap, a.update, a.fmt, a.png, a.target_peak, band=a.band,
+                       report=a.report)
 
 
 def cmd_diagnose(a: argparse.Namespace) -> Result:

@@ -187,8 +187,13 @@ def parser() -> argparse.ArgumentParser:
     dr.add_argument("--calibrate", default="", metavar="SPEC", help=_CALIBRATE)
     dr.add_argument("--regularisation", type=_number, default=0.05,
                     help="λ of the regularised inverse, relative to max |H| [0.05]")
-    dr.add_argument("--cap", type=_number, default=4.0,
-                    help="the largest amplification of the target at any frequency [4]")
+    dr.add_argument("--cap", type=_number, default=10.0,
+                    help="the largest amplification of the target near the specimen's "
+                         "fixed-base frequencies [10]")
+    dr.add_argument("--band", type=_number, default=30.0, metavar="HZ",
+                    help="the drive is corrected up to HZ; above, it is the target's [30]")
+    dr.add_argument("--report", metavar="FILE.html",
+                    help="an HTML report: settings, the table of figures, the figure")
     dr.add_argument("--update", action="append", default=[], metavar="RUN.toml",
                     help="a run measured with the previous drive: recalibrate with it and "
                          "correct the drive from its measured error; repeatable")

@@ -18,7 +18,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import threading
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -229,6 +229,43 @@ class TableModel:
         `base_` (the spec's `base` table), `notes_`."""
         with threadpool_limits(limits=1, user_api="blas"):
             return self._fit(Campaign.of(runs))
+
+    def at(self, runs: Sequence[Run] | Campaign, values: Mapping[str, float],
+           source: str = "values") -> TableModel:
+        """The model at given values of every calibrated parameter, not fitted: a
+        diagnosis's (`vtable drive --from`). `values`: "owner.param" -> value in the
+        parameter's unit, the base's keys (`base_table`) and each effect's
+        "effect.param"; a key missing or unknown to this campaign's model, or a value
+        outside its bounds, is an error naming `source` and the key. Sets `physics_`,
+        `base_`, `flags_` (values at a bound) and `notes_`, as `fit` does."""
+        campaign = Campaign.of(runs)
+        self.campaign_, self.vt, self.declared = campaign, campaign.table, campaign.specimen
+        start = self.start or Physics(nominal_open_loop(self.vt), campaign.specimen, {})
+        for e in self.effects:
+            if not start.has(e):
+                start = start.with_effect(e)
+        lay = self._layout(start)
+        keys = [p.key for p in lay]
+        unknown = sorted(set(values) - set(keys))
+        missing = [k for k in keys if k not in values]
+        if unknown or missing:
+            raise VtableError(f"{source}: " + (f"{unknown[0]!r} is not a parameter of the "
+                                               "model of these runs" if unknown else
+                                               f"no value for {missing[0]!r}")
+                              + " (was it made on these runs, with these effects?)")
+        ph = start
+        for p in lay:
+            v = float(values[p.key])
+            tol = 1e-6 * (p.upper - p.lower)
+            if not p.lower - tol <= v <= p.upper + tol:
+                raise VtableError(f"{source}: {p.key} = {v:g} is outside its bounds "
+                                  f"[{p.lower:g}, {p.upper:g}] for these runs' declarations")
+            ph = p.set(ph, min(max(v, p.lower), p.upper))
+        self.start_, self.layout_, self.physics_ = start, lay, ph
+        self.base_ = self.base_table(ph)
+        self.flags_ = self.at_bounds(ph)
+        self.notes_ = list(campaign.notes)
+        return self
 
     def _fit(self, campaign: Campaign) -> TableModel:
         self.campaign_ = campaign

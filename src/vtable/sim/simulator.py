@@ -15,11 +15,12 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from vtable import display, units
+from vtable import units
 from vtable.controllers import DOFS, Controller, LinearController, standard_controllers
 from vtable.errors import VtableError
 from vtable.interpolate import upsample
 from vtable.mjcf.builder import SLAB_JOINTS, BuiltModel
+from vtable.params.limits import check_motion
 from vtable.sim.stepping import mujoco_steps, sparse_rows, step_linear
 
 CHECK_EVERY = 250  # steps between the divergence checks (Python loop)
@@ -124,26 +125,10 @@ def _resampled(t: np.ndarray, v: np.ndarray, t_new: np.ndarray) -> np.ndarray:
 
 
 def check_commands(built: BuiltModel, t: np.ndarray, cmd: np.ndarray) -> None:
-    """Refuse commands beyond the table's displacement or velocity (Table 2.2)."""
-    specs = built.vt.table.specs
-    fam = display.table_family(built.vt)  # the message in the table's units
-    for dof, stroke, vmax in (("x", specs.stroke_h, specs.velocity_h),
-                              ("z", specs.stroke_v, specs.velocity_v)):
-        x = cmd[:, DOFS.index(dof)]
-        peak = float(np.max(np.abs(x)))
-        if peak > stroke * (1 + 1e-9):
-            i = int(np.argmax(np.abs(x) > stroke))
-            raise VtableError(f"{dof} command reaches {display.quantity(peak, 'in', fam, '.2f')} "
-                              f"(first beyond ±{display.quantity(stroke, 'in', fam, 'g')} at "
-                              f"t = {t[i]:.3f} s), the table's stroke ({built.vt.limits_source})")
-        v = np.gradient(x, t) if len(t) > 1 else np.zeros(1)
-        vpeak = float(np.max(np.abs(v)))
-        if vpeak > vmax * (1 + 1e-9):
-            i = int(np.argmax(np.abs(v) > vmax))
-            raise VtableError(f"{dof} command velocity reaches "
-                              f"{display.quantity(vpeak, 'in/s', fam, '.1f')} (first beyond "
-                              f"±{display.quantity(vmax, 'in/s', fam, 'g')} at t = {t[i]:.3f} s)"
-                              f", the table's velocity limit ({built.vt.limits_source})")
+    """Refuse commands beyond the table's displacement or velocity (Table 2.2;
+    `vtable.params.limits.check_motion`)."""
+    for dof in ("x", "z"):
+        check_motion(built.vt, t, cmd[:, DOFS.index(dof)], f"{dof} command", dof)
 
 
 class Simulator:

@@ -7,7 +7,7 @@ calling them (``from vtable.verbs import modes`` or ``vtable.verbs.modes``).
 The verbs live in one module per family, each importing what it needs at its top:
 `analytic` (modes, margins, presets, a model's tf), `runs` (tf, a run's tf, identify),
 `effects` (the user's effect files and names), `diagnosis` (compare, diagnose),
-`simulation` (simulate, export_mjcf, demo), `studies` (assess, study) and `drive`.
+`simulation` (simulate, export_mjcf, demo), `studies` (assess, study) and `compensation` (drive).
 
 This package imports none of them itself: `__getattr__` (PEP 562) imports a verb's module
 the first time the verb is asked for. It is the one deliberately lazy import of the
@@ -24,8 +24,8 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # what `__getattr__` gives, for type checkers and editors
     from vtable.verbs.analytic import config_tf, margins, modes, presets
+    from vtable.verbs.compensation import drive
     from vtable.verbs.diagnosis import DiagnosisInterrupted, compare, diagnose
-    from vtable.verbs.drive import drive
     from vtable.verbs.effects import effect_names, load_controllers, load_effects
     from vtable.verbs.runs import identify, is_run, run_tf, tf
     from vtable.verbs.simulation import demo, export_mjcf, simulate, simulation_summary
@@ -39,7 +39,7 @@ VERBS: dict[str, str] = {
     "compare": "diagnosis", "diagnose": "diagnosis", "DiagnosisInterrupted": "diagnosis",
     "simulate": "simulation", "simulation_summary": "simulation", "export_mjcf": "simulation",
     "demo": "simulation",
-    "assess": "studies", "study": "studies", "drive": "drive",
+    "assess": "studies", "study": "studies", "drive": "compensation",
 }
 
 __all__ = [  # = sorted(VERBS), spelled out for linters
