@@ -35,6 +35,7 @@ import scipy.signal
 
 from vtable.diagnose.groups import group_prediction, group_signal, run_groups
 from vtable.diagnose.sampling import BANDS, segments
+from vtable.ident import frames
 from vtable.runs.model import Run
 
 #: the spectral resolution (Hz) of the coherence and of the notch search
@@ -101,9 +102,9 @@ class StationarityCheck:
 
 def _nperseg(n: int, fs: float, averages: int) -> int | None:
     """Frames of `RESOLUTION_HZ` or finer with at least `averages` half-overlapping
-    frames in `n` samples, or None."""
+    frames in `n` samples (`vtable.ident.frames.averages`), or None."""
     nper = 1 << math.ceil(math.log2(fs / RESOLUTION_HZ))
-    return nper if 2 * n // nper - 1 >= averages else None
+    return nper if frames.averages(n, nper) >= averages else None
 
 
 def coherent_split(x: np.ndarray, r: np.ndarray, y: np.ndarray, fs: float,
