@@ -62,6 +62,41 @@ def building_stiffnesses(b: ShearBuilding) -> np.ndarray:
                                                tuple(map(float, b.frequencies))))
 
 
+def storey_stiffnesses_of(spec: Specimen) -> list[float]:
+    """Each storey's elastic stiffness (N/m) from the bottom: a SDOF frame's k_s (eq 3.8),
+    a shear building's k_1 .. k_n; none for a bare table or a block."""
+    if isinstance(spec, SDOFSpecimen):
+        return [spec.stiffness]
+    if isinstance(spec, ShearBuilding):
+        return [float(k) for k in building_stiffnesses(spec)]
+    return []
+
+
+def storey_masses(spec: Specimen) -> list[float]:
+    """The mass each storey's drift coordinate carries (kg), from the bottom: a SDOF
+    frame's m_s, a building's floor masses; none for a bare table or a block."""
+    if isinstance(spec, SDOFSpecimen):
+        return [spec.mass]
+    if isinstance(spec, ShearBuilding):
+        return [float(m) for m in spec.masses]
+    return []
+
+
+def storey_channels(drifts: list[np.ndarray], floor_acc: list[np.ndarray],
+                    masses: list[float]) -> dict[str, np.ndarray]:
+    """The run format's storey channels (SI) from each storey's drift (floor K minus floor
+    K−1, the platen floor 0) and each floor's absolute acceleration: floorK_drift, and
+    floorK_shear = −Σ_{j≥K} m_j a_j, the inertial forces of the floors above storey K (how
+    a lab computes it from its floor accelerometers and the masses; + resists + drift)."""
+    out: dict[str, np.ndarray] = {}
+    above = np.zeros_like(floor_acc[0])
+    for k in range(len(drifts), 0, -1):
+        above = above - masses[k - 1] * floor_acc[k - 1]
+        out[f"floor{k}_drift"] = drifts[k - 1]
+        out[f"floor{k}_shear"] = above
+    return out
+
+
 @functools.lru_cache(maxsize=64)
 def _storey_stiffnesses_cached(masses: tuple[float, ...],
                                frequencies_hz: tuple[float, ...]) -> tuple[float, ...]:

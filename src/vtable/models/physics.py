@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from vtable.analytic.servo import open_loop_from_servo, servo_from_open_loop
 from vtable.effects.registry import get
 from vtable.errors import VtableError
+from vtable.models.hysteresis import add_specimen_hysteresis
 from vtable.params.loops import OpenLoop
 from vtable.params.specimen import Specimen
 from vtable.params.table import ServoConstants
@@ -83,8 +84,10 @@ class Physics:
         return out
 
     def apply(self, assembly, model: str) -> None:
-        """Every effect enters `assembly` through its hook for `model` ("reduced" or
-        "virtual"), its table-dependent defaults on the assembly's table."""
+        """The specimen's declared yielding storeys (`models.hysteresis`), then every
+        effect through its hook for `model` ("reduced" or "virtual"), its table-dependent
+        defaults on the assembly's table."""
+        add_specimen_hysteresis(assembly, self.specimen)
         for name in self.effects:
             e = get(name)
             getattr(e, model)(assembly, e.si(self.values_on(name, assembly.table)))

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vtable._numba import njit
+from vtable.analytic.structure import storey_channels, storey_masses
 from vtable.analytic.virtual_table import mechanics
 from vtable.controllers.force_law import law_params, named
 from vtable.effects.table import TableView
@@ -40,7 +41,6 @@ from vtable.models.reduced_kernel import (
     simulate_reduced_python,
 )
 from vtable.models.stiffness import needed_stiffness
-from vtable.params.specimen import SDOFSpecimen, ShearBuilding
 from vtable.params.virtual import VirtualTable, split_rocking, virtual_table
 from vtable.runs.model import Run
 
@@ -154,7 +154,7 @@ class ReducedAssembly:
                          stiffness: float | None = None) -> None:
         if stiffness is None:
             stiffness = needed_stiffness(law, params, states)
-        masses = _storey_masses(self.specimen)
+        masses = storey_masses(self.specimen)
         for s, m in zip(self.storeys, masses, strict=True):
             self.add_force(law, s, None, params, states, m, stiffness)
 
@@ -210,14 +210,6 @@ def _mechanics(ph: phys.Physics, vt: VirtualTable):
         _MECHANICS.pop(next(iter(_MECHANICS)))
     _MECHANICS[key] = (vt, ph.specimen, vt_on, mech)
     return vt_on, mech
-
-
-def _storey_masses(spec) -> list[float]:
-    if isinstance(spec, SDOFSpecimen):
-        return [spec.mass]
-    if isinstance(spec, ShearBuilding):
-        return [float(m) for m in spec.masses]
-    return []
 
 
 _UPSAMPLED: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
@@ -317,7 +309,7 @@ class ReducedModel:
             raise RuntimeError(f"the reduced model's actuator law is {self.T.shape}, not 1 x 1")
         self.element = law.composition(KERNELS)  # the stage set's compiled element
         self.sp = law.vector(self.element)
-        self.storeys, self.h_top = m.storeys, m.h_top
+        self.storeys, self.h_top, self.specimen = m.storeys, m.h_top, m.specimen
         self.max_step = m.max_step
         self._element(m.elements)
         #: a linear model is stepped exactly (`reduced_kernel.simulate_linear`)
@@ -414,6 +406,10 @@ class ReducedModel:
                 continue
             out[f"floor{k}_acc"] = Qdd[:, x] + h_k * th_a + Qdd[:, below].sum(axis=1)
             out[f"floor{k}_disp"] = Q[:, x] + h_k * th + Q[:, below].sum(axis=1)
+        if slides:
+            out.update(storey_channels([Q[:, i] for i in slides],
+                                       [out[f"floor{k}_acc"] for k in range(1, len(slides) + 1)],
+                                       storey_masses(self.specimen)))
         for fn in self.assembly.filters:  # each distinct signal once (zeros stay zeros)
             done: dict[int, np.ndarray] = {}
             for k, v in out.items():

@@ -21,6 +21,7 @@ import numpy as np
 
 from vtable.errors import VtableError
 from vtable.params.base import Params, check_number, plain, quantity
+from vtable.params.hysteresis import Hysteresis, parse_hysteresis
 from vtable.units import G
 
 KINDS = ("none", "rigid", "sdof", "shear_building")
@@ -84,6 +85,8 @@ class SDOFSpecimen(Params):
     kind: str = plain(default="sdof")
     title: str = plain(default="SDOF structure")
     source: str = plain(default="")
+    #: Bouc–Wen yielding (`vtable.params.hysteresis`); None: elastic
+    hysteresis: Hysteresis | None = plain(default=None)
 
     @property
     def mass(self) -> float:
@@ -143,6 +146,8 @@ class ShearBuilding(Params):
     kind: str = plain(default="shear_building")
     title: str = plain(default="shear building")
     source: str = plain(default="")
+    #: Bouc–Wen yielding storeys (`vtable.params.hysteresis`); None: elastic
+    hysteresis: Hysteresis | None = plain(default=None)
 
     def __post_init__(self) -> None:
         n = len(self.weights)
@@ -288,13 +293,19 @@ SUSPICIOUS_DAMPING = 0.5
 
 
 def specimen_hints(specimen: Specimen, where: str = "specimen") -> list[str]:
-    """Plausibility hints on a legal specimen: a damping ratio ≥ `SUSPICIOUS_DAMPING`
-    (likely a percentage written as a number: 5 for 5 %, 1 for 1 %)."""
+    """Notes on a legal specimen: declared hysteresis (which models realise it), and a
+    damping ratio ≥ `SUSPICIOUS_DAMPING` (likely a percentage written as a number: 5 for
+    5 %, 1 for 1 %)."""
+    out = []
+    h = getattr(specimen, "hysteresis", None)
+    if h is not None:
+        out.append(f"{where}.hysteresis: storey(s) {', '.join(map(str, h.storeys))} yield "
+                   "(Bouc–Wen) in the reduced model and the virtual table; the analytical "
+                   "models (modes, margins, assess's linear models) use the initial stiffness")
     ratios = getattr(specimen, "damping", None)
     if ratios is None:
-        return []
+        return out
     ratios = ratios if isinstance(ratios, tuple) else (ratios,)
-    out = []
     for k, z in enumerate(ratios):
         if z >= SUSPICIOUS_DAMPING:
             key = "damping" if len(ratios) == 1 else f"damping[{k}]"
@@ -312,6 +323,20 @@ def specimen_from_dict(d: dict[str, Any], where: str = "specimen") -> Specimen:
     if not isinstance(kind, str) or kind not in _BY_KIND:
         raise VtableError(f"{where}.kind: expected one of {', '.join(KINDS)}, got {kind!r}")
     d = dict(d)
+    hyst = d.pop("hysteresis", None)
+    if hyst is not None and kind not in ("sdof", "shear_building"):
+        raise VtableError(f"{where}.hysteresis: only a sdof or shear_building specimen has "
+                          f"storeys that yield, not {kind!r}")
+    spec = _specimen(kind, d, where)
+    if hyst is None:
+        return spec
+    from vtable.analytic.structure import storey_stiffnesses_of
+
+    h = parse_hysteresis(hyst, storey_stiffnesses_of(spec), f"{where}.hysteresis")
+    return dataclasses.replace(spec, hysteresis=h)
+
+
+def _specimen(kind: str, d: dict[str, Any], where: str) -> Specimen:
     if kind == "shear_building":
         for k in ("weights_kip", "heights_in", "stiffnesses_kip_per_in", "frequencies_hz"):
             if isinstance(d.get(k), list) and len(d[k]) > MAX_STOREYS:

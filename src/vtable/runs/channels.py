@@ -8,19 +8,20 @@ from typing import Any
 
 from vtable import units
 
-_FLOOR = re.compile(r"floor([1-9][0-9]*)_(acc|disp)")
+_FLOOR = re.compile(r"floor([1-9][0-9]*)_(acc|disp|drift|shear)")
+_FLOOR_UNITS = {"acc": "g", "disp": "in", "drift": "in", "shear": "kip"}
 
 
 class _FormatUnits(dict):
     """The format's channel -> unit table. Besides the fixed names it holds the floor
-    channels floorK_acc (g) and floorK_disp (in) for any K >= 1 (they are not listed
-    when iterating)."""
+    channels floorK_acc (g), floorK_disp (in), floorK_drift (in) and floorK_shear (kip)
+    for any K >= 1 (they are not listed when iterating)."""
 
     def __missing__(self, key: str) -> str:
         m = _FLOOR.fullmatch(key) if isinstance(key, str) else None
         if m is None:
             raise KeyError(key)
-        return "g" if m.group(2) == "acc" else "in"
+        return _FLOOR_UNITS[m.group(2)]
 
     def __contains__(self, key: object) -> bool:
         return dict.__contains__(self, key) or (

@@ -19,9 +19,9 @@ from vtable.params.table import DIRECTIONS, KNOBS
 
 FORMAT = "vtable-run/1"
 SPECIMEN_KEYS = {"none": (), "rigid": ("weight_kip", "height_in"),
-                 "sdof": ("weight_kip", "height_in", "frequency_hz", "damping"),
+                 "sdof": ("weight_kip", "height_in", "frequency_hz", "damping", "hysteresis"),
                  "shear_building": ("weights_kip", "heights_in", "frequencies_hz", "damping",
-                                    "damping_rayleigh")}
+                                    "damping_rayleigh", "hysteresis")}
 
 
 def specimen_table(spec) -> dict[str, Any]:

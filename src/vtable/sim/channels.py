@@ -6,6 +6,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from vtable.analytic.structure import storey_channels, storey_masses
 from vtable.params.specimen import ShearBuilding
 from vtable.runs.model import FORMAT_UNITS, Run
 from vtable.sim.simulator import SimResult
@@ -66,6 +67,11 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
             si[f"floor{k}_acc"] = res.sensor(f"floor{k}_acc")[:, 0]
             x = res.sensor(f"floor{k}_pos")[:, 0]
             si[f"floor{k}_disp"] = x - x[0] if len(x) else x
+    if getattr(b.specimen, "hysteresis", None) is not None:  # a yielding specimen's storeys
+        n = len(b.structure_joints)
+        acc = [si[f"floor{k}_acc"] for k in range(1, n)] + [si["acc_n_ne"]]
+        si.update(storey_channels([res.joint(j) for j in b.structure_joints], acc,
+                                  storey_masses(b.specimen)))
     out = dict(si)
     extra_units: dict[str, str] = {k: FORMAT_UNITS[k] for k in si}
     if full_state:
