@@ -31,12 +31,16 @@ class Built:
     Cs: np.ndarray
     hs: np.ndarray
     c2s: np.ndarray
+    hy: np.ndarray  # Bouc–Wen storeys: (n, N_HY), see model.H_*
     delay: float  # s
     pitch_actuator: dict  # two_directional: ω_r, ξ_r, k_r and the passive k_p, c_p
 
     @property
     def n_state(self) -> int:
-        return m.N_BASE + 2 * int(self.fl[m.F_N])
+        """Base states, the floors (x_i, v_i) and, with Bouc–Wen storeys, one z per storey
+        (z_j at N_BASE + 2n + j; a storey that does not yield leaves its z at rest)."""
+        n = int(self.fl[m.F_N])
+        return m.N_BASE + (3 if self.fl[m.F_HYST] else 2) * n
 
     def active_states(self) -> list[int]:
         """States that carry dynamics in this configuration (for linearisation)."""
@@ -68,7 +72,12 @@ class Built:
             act += [m.S_N2A, m.S_N2B]
         if fl[m.F_YIELD]:
             act.append(m.S_Z)
-        act += list(range(m.N_BASE, self.n_state))
+        act += list(range(m.N_BASE, m.N_BASE + 2 * int(fl[m.F_N])))
+        if fl[m.F_HYST]:
+            # z of each yielding storey (linearised at rest the storey is elastic, k; z − d/u_y
+            # is conserved, a root at 0)
+            act += [m.N_BASE + 2 * int(fl[m.F_N]) + j for j in range(int(fl[m.F_N]))
+                    if self.hy[j, m.H_ON]]
         return sorted(act)
 
 
@@ -215,9 +224,25 @@ def build(table: Table, spec: Specimen, dt: float) -> Built:
             # c₂ = 3π m γ/4 with m the mass the storey carries (all floors above it):
             # equivalent ξ = 4 c₂ X/(3π m) = γ X for a drift amplitude X
             c2s[j] = 3 * math.pi * Ms[j:].sum() * gamma / 4
+    hy = np.zeros((max(n, 1), m.N_HY))
+    h = spec.hysteresis
+    if h is not None:
+        if n == 0:
+            raise TruthError("hysteresis needs a sdof or shear_building specimen")
+        fl[m.F_HYST] = 1
+        for K, uy, alpha in zip(h.storeys, h.yield_drift_in, h.post_yield_ratio, strict=True):
+            j = K - 1
+            hy[j, m.H_ON] = 1.0
+            hy[j, m.H_K] = spec.storey_k_kip_in[j] * c.KIP / c.INCH  # as in spec.stiffness()
+            hy[j, m.H_UY] = uy * c.INCH
+            hy[j, m.H_ALPHA] = alpha
+            hy[j, m.H_N], hy[j, m.H_BETA], hy[j, m.H_GAMMA] = h.n, h.beta, h.gamma
     if "yielding_storey" in eff:
         if n == 0:
             raise TruthError("yielding_storey needs a sdof or shear_building specimen")
+        if h is not None and 1 in h.storeys:
+            raise TruthError("yielding_storey: storey 1 already yields by the specimen's "
+                             "hysteresis; use one or the other")
         fl[m.F_YIELD] = 1
         k1 = spec.storey_k_kip_in[0] * c.KIP / c.INCH
         fy = eff["yielding_storey"]["yield_fraction"] * spec.total_weight_kip * c.KIP
@@ -226,4 +251,4 @@ def build(table: Table, spec: Specimen, dt: float) -> Built:
         p[m.P_BWN] = BOUC_WEN_N
     return Built(table, spec, p, fl, np.ascontiguousarray(Ms, dtype=float),
                  np.ascontiguousarray(Ks, dtype=float), np.ascontiguousarray(Cs, dtype=float),
-                 np.ascontiguousarray(hs, dtype=float), c2s, delay, pitch_act)
+                 np.ascontiguousarray(hs, dtype=float), c2s, hy, delay, pitch_act)

@@ -31,9 +31,11 @@ def jacobian(b: Built, rel: float = 1e-4) -> tuple[np.ndarray, list[int]]:
         sp, sm = s0.copy(), s0.copy()
         sp[i] += h
         sm[i] -= h
-        m.rhs(0.0, sp, 0.0, 0.0, 0.0, 0.0, b.p, fl, b.Ms, b.Ks, b.Cs, b.hs, b.c2s, ds, aux)
+        m.rhs(0.0, sp, 0.0, 0.0, 0.0, 0.0, b.p, fl, b.Ms, b.Ks, b.Cs, b.hs, b.c2s, b.hy, ds,
+              aux)
         fp = ds[act].copy()
-        m.rhs(0.0, sm, 0.0, 0.0, 0.0, 0.0, b.p, fl, b.Ms, b.Ks, b.Cs, b.hs, b.c2s, ds, aux)
+        m.rhs(0.0, sm, 0.0, 0.0, 0.0, 0.0, b.p, fl, b.Ms, b.Ks, b.Cs, b.hs, b.c2s, b.hy, ds,
+              aux)
         J[:, col] = (fp - ds[act]) / (2 * h)
     return J, act
 
@@ -63,10 +65,11 @@ def input_matrix(b: Built, h: float = 1e-3) -> np.ndarray:
     for col in range(3):
         u = np.zeros(3)
         u[col] = h
-        m.rhs(0.0, s0, u[0], u[1], u[2], 0.0, b.p, fl, b.Ms, b.Ks, b.Cs, b.hs, b.c2s, ds, aux)
-        fp = ds[act].copy()
-        m.rhs(0.0, s0, -u[0], -u[1], -u[2], 0.0, b.p, fl, b.Ms, b.Ks, b.Cs, b.hs, b.c2s, ds,
+        m.rhs(0.0, s0, u[0], u[1], u[2], 0.0, b.p, fl, b.Ms, b.Ks, b.Cs, b.hs, b.c2s, b.hy, ds,
               aux)
+        fp = ds[act].copy()
+        m.rhs(0.0, s0, -u[0], -u[1], -u[2], 0.0, b.p, fl, b.Ms, b.Ks, b.Cs, b.hs, b.c2s, b.hy,
+              ds, aux)
         B[:, col] = (fp - ds[act]) / (2 * h)
     return B
 

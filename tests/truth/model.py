@@ -10,6 +10,10 @@ Platen (Lagrange, c.o.m. at height e, inertia I about the actuator line):
 Specimen (relative coordinates u_i = x_i - x_t - h_i θ, as eqs 7.1-7.2, 8.7-8.9):
     m_i ẍ_i = -r_i,  r = K u + C u̇ + (storey nonlinearities),
     F_x += Σ r_i,  M_θ += Σ h_i r_i.
+Bouc–Wen storeys (F_HYST; Wen 1976, Baber & Wen 1981, A = 1): storey j's elastic force
+k_j d_j (d_j = u_j - u_{j-1}, u_0 = 0) becomes α k_j d_j + (1 - α) k_j u_y z_j, i.e. the
+storey force (1 - α) k_j (u_y z_j - d_j) is added to K u, with the state z_j (dimensionless,
+after the floors) ż_j = (ḋ_j - β|ḋ_j||z_j|ⁿ⁻¹z_j - γ ḋ_j|z_j|ⁿ)/u_y, stepped by the same RK4.
 Actuator (eqs 6.1-6.5, B.4-B.6, lumped): u = k_t[(x_c - x_m) - k_p P_fb], P_fb = P_L or
 the RC high-pass of P_L (eq B.4); u -> [delay] -> [spool lag τ] -> [orifice √(P_s - sgn P_L),
 eq C.14] -> [rated-flow cap A v_max] -> q; (V/4β_e) Ṗ_L = q - k_ct P_L - A ẋ_m (ẋ_m the
@@ -40,11 +44,18 @@ N_PARAM = 63
 
 # ---- flags ---------------------------------------------------------------------------------
 # F_CTRL: 0 the analog three-variable loop in flow units (Table B.5), 1 the law in volts
-# (controllers.py); F_NOTCH1/2: 0 none, 1 on the error, 2 on the drive
+# (controllers.py); F_NOTCH1/2: 0 none, 1 on the error, 2 on the drive; F_HYST: Bouc–Wen
+# storeys (then n states z_j follow the floors: z_j at N_BASE + 2n + j)
 (F_PITCH, F_CTRL, F_FFILT, F_ORIFICE, F_FRIC, F_SAT, F_LAG, F_DELAY, F_AIR, F_FOUND, F_BACK,
  F_PUMP, F_YIELD, F_ADD, F_RES, F_DFILT, F_REFG, F_NOTCH1, F_NOTCH2, F_LOADCELL,
- F_N) = range(21)
-N_FLAG = 21
+ F_N, F_HYST) = range(22)
+N_FLAG = 22
+
+# ---- Bouc–Wen storeys: columns of the (n, N_HY) array hy, one row per storey --------------
+# H_ON 1 for a yielding storey; H_K its elastic stiffness (N/m, the same k as in Ks);
+# H_UY yield drift (m); H_ALPHA post-yield ratio; H_N, H_BETA, H_GAMMA the shape
+(H_ON, H_K, H_UY, H_ALPHA, H_N, H_BETA, H_GAMMA) = range(7)
+N_HY = 7
 
 # ---- auxiliary outputs of the right-hand side ----------------------------------------------
 # A_U: valve command after delay and lag; A_UC: the controller's own output (before them);
@@ -112,7 +123,7 @@ def controller(s, xc, vc, ac, ax, p, fl, ds):
 
 
 @njit(cache=True)
-def rhs(t, s, xc, vc, ac, udel, p, fl, Ms, Ks, Cs, hs, c2s, ds, aux):
+def rhs(t, s, xc, vc, ac, udel, p, fl, Ms, Ks, Cs, hs, c2s, hy, ds, aux):
     """ds = ṡ. `udel` is the delayed valve command (used when F_DELAY is set). The
     mechanics come first (they depend on the state only), then the controller (which may
     feed back the platen acceleration), the valve and the oil column."""
@@ -186,6 +197,16 @@ def rhs(t, s, xc, vc, ac, udel, p, fl, Ms, Ks, Cs, hs, c2s, ds, aux):
             fj = 0.0
             if fl[F_ADD]:
                 fj += c2s[j] * abs(dd) * dd
+            if fl[F_HYST] and hy[j, H_ON] != 0.0:
+                iz = N_BASE + 2 * n + j
+                z = s[iz]
+                az = abs(z)
+                uy = hy[j, H_UY]
+                zn1 = az ** (hy[j, H_N] - 1.0)  # |z|^(n-1) (1 when n = 1)
+                ds[iz] = (dd - hy[j, H_BETA] * abs(dd) * zn1 * z
+                          - hy[j, H_GAMMA] * dd * zn1 * az) / uy
+                drift = uu[j] - (uu[j - 1] if j > 0 else 0.0)
+                fj += (1.0 - hy[j, H_ALPHA]) * hy[j, H_K] * (uy * z - drift)
             if j == 0 and fl[F_YIELD]:
                 z = s[S_Z]
                 dy = p[P_DY]
@@ -295,7 +316,7 @@ def _delayed(uh, j, i0):
 
 
 @njit(cache=True)
-def integrate(p, fl, Ms, Ks, Cs, hs, c2s, s0, xc, vc, ac, dt, nsteps, every, ndelay):
+def integrate(p, fl, Ms, Ks, Cs, hs, c2s, hy, s0, xc, vc, ac, dt, nsteps, every, ndelay):
     """RK4 at step dt; the command is given at half steps (xc[2k] at t_k, xc[2k+1] at
     t_k + dt/2), with its velocity vc and acceleration ac. Returns states, aux and state
     derivatives every `every` steps (from step 0).
@@ -321,7 +342,7 @@ def integrate(p, fl, Ms, Ks, Cs, hs, c2s, s0, xc, vc, ac, dt, nsteps, every, nde
         t = k * dt
         i0 = 2 * k
         ud0 = _delayed(uh, i0 - ndelay, i0 - 2) if fl[F_DELAY] else 0.0
-        rhs(t, s, xc[i0], vc[i0], ac[i0], ud0, p, fl, Ms, Ks, Cs, hs, c2s, k1, aux)
+        rhs(t, s, xc[i0], vc[i0], ac[i0], ud0, p, fl, Ms, Ks, Cs, hs, c2s, hy, k1, aux)
         uh[i0] = aux[A_UC]  # the controller's output at t_k, from the current state
         ud1 = 0.0
         ud2 = 0.0
@@ -338,15 +359,15 @@ def integrate(p, fl, Ms, Ks, Cs, hs, c2s, s0, xc, vc, ac, dt, nsteps, every, nde
         for i in range(ns):
             tmp[i] = s[i] + 0.5 * dt * k1[i]
         rhs(t + 0.5 * dt, tmp, xc[i0 + 1], vc[i0 + 1], ac[i0 + 1], ud1, p, fl, Ms, Ks, Cs, hs,
-            c2s, k2, dummy)
+            c2s, hy, k2, dummy)
         for i in range(ns):
             tmp[i] = s[i] + 0.5 * dt * k2[i]
         rhs(t + 0.5 * dt, tmp, xc[i0 + 1], vc[i0 + 1], ac[i0 + 1], ud1, p, fl, Ms, Ks, Cs, hs,
-            c2s, k3, dummy)
+            c2s, hy, k3, dummy)
         for i in range(ns):
             tmp[i] = s[i] + dt * k3[i]
         rhs(t + dt, tmp, xc[i0 + 2], vc[i0 + 2], ac[i0 + 2], ud2, p, fl, Ms, Ks, Cs, hs, c2s,
-            k4, dummy)
+            hy, k4, dummy)
         for i in range(ns):
             s[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
     return S, X, D

@@ -43,12 +43,18 @@ FAMILY = {"h_span": "disp", "avg_hdisp": "disp", "h_vel": "vel", "avg_hacc": "ac
           **{f"p{i}_stab": "force" for i in (1, 2, 3, 4)}}
 
 
+FLOOR_FAMILY = {"_acc": "acc", "_disp": "disp", "_drift": "disp", "_shear": "force"}
+
+
 def family(name: str) -> str:
-    """The unit family of a channel (floorK_acc, floorK_disp included)."""
+    """The unit family of a channel (floorK_acc, floorK_disp, floorK_drift and floorK_shear
+    included)."""
     if name in FAMILY:
         return FAMILY[name]
-    if name.startswith("floor") and name.endswith(("_acc", "_disp")):
-        return "acc" if name.endswith("_acc") else "disp"
+    if name.startswith("floor"):
+        for suffix, fam in FLOOR_FAMILY.items():
+            if name.endswith(suffix):
+                return fam
     raise TruthError(f"write_run: no unit for channel {name!r}")
 
 

@@ -36,7 +36,12 @@ class Result:
     `sensors` maps each channel to the physical sensor group it belongs to; channels of
     the same quantity measured by different sensors (h1_disp..h3_disp, acc_n_ne/acc_n_nw,
     pot_n_sw/pot_n_se) get independent noise in `write_run`. `internal` holds truth
-    quantities that are not measured (x_t, θ, P_L, storey drift, base shear, ...)."""
+    quantities that are not measured (x_t, θ, P_L, storey drift, base shear, ...).
+
+    A specimen with Bouc–Wen storeys adds floorK_drift (storey K's drift, floor K minus
+    floor K-1 in the storey springs' coordinate u_i = x_i - x_t - h_i θ) and floorK_shear
+    (-Σ_{j≥K} m_j a_j, + resisting + drift) for every storey K, and internal zK (the
+    hysteretic variable of each yielding storey). internal driftK is every storey's drift."""
 
     t: np.ndarray
     fs: float
@@ -95,7 +100,7 @@ def simulate(table: Table, spec: Specimen, cmd: Command, fs: float = 256.0) -> R
     ndelay = round(2 * built.delay / dt) if built.delay > 0 else 0
     s0 = np.zeros(built.n_state)
     S, X, D = m.integrate(built.p, built.fl, built.Ms, built.Ks, built.Cs, built.hs, built.c2s,
-                          s0, xc, vc, ac, dt, nsteps, every, ndelay)
+                          built.hy, s0, xc, vc, ac, dt, nsteps, every, ndelay)
     if not np.all(np.isfinite(S)):
         raise TruthError("simulate: the response diverged (unstable configuration)")
     ch, internal = _channels(built, S, X, D)
@@ -149,7 +154,24 @@ def _channels(b: Built, S: np.ndarray, X: np.ndarray, D: np.ndarray):
             for i in range(n):
                 ch[f"floor{i + 1}_acc"] = D[:, v0 + i]
                 ch[f"floor{i + 1}_disp"] = S[:, x0 + i]
-        u1 = S[:, x0] - S[:, m.S_X] - b.hs[0] * S[:, m.S_TH]
-        internal["drift1"] = u1
+        # storey drifts in the storey springs' coordinate: u_i = x_i - x_t - h_i θ,
+        # drift_K = u_K - u_{K-1} (u_0 = 0, the platen)
+        u = [S[:, x0 + i] - S[:, m.S_X] - b.hs[i] * S[:, m.S_TH] for i in range(n)]
+        drift = [u[0]] + [u[i] - u[i - 1] for i in range(1, n)]
+        for i in range(n):
+            internal[f"drift{i + 1}"] = drift[i]
         internal["top_rel"] = top_x - S[:, m.S_X] - b.hs[n - 1] * S[:, m.S_TH]
+        if b.fl[m.F_HYST]:
+            # storey shear, + resisting + drift: -Σ_{j≥K} m_j a_j (absolute accelerations)
+            shear = np.zeros_like(top_a)
+            shears = []
+            for i in range(n - 1, -1, -1):
+                shear = shear - b.Ms[i] * D[:, v0 + i]
+                shears.append(shear)
+            shears.reverse()
+            for i in range(n):
+                ch[f"floor{i + 1}_drift"] = drift[i]
+                ch[f"floor{i + 1}_shear"] = shears[i]
+                if b.hy[i, m.H_ON]:
+                    internal[f"z{i + 1}"] = S[:, x0 + 2 * n + i]
     return ch, internal

@@ -8,6 +8,11 @@ every fixed-base mode at the ratio `xi` or each at its own (`mode_xi`); or Rayle
 C = α M + β K (Chopra §11.4.1), whose ratio in mode i is ξ_i = α/(2ω_i) + β ω_i/2, with
 α, β fixed by two (frequency, ratio) pairs (`rayleigh`), or by ξ at modes 1 and 2 when
 `damping="rayleigh"`. A run declares the ratio of every mode (a list).
+
+A sdof or shear building may have yielding (Bouc–Wen) storeys (`Hysteresis`; Wen 1976,
+Baber & Wen 1981 with A = 1): storey K of elastic stiffness k and drift u resists with
+α k u + (1 − α) k u_y z in place of k u, ż = (u̇ − β|u̇||z|ⁿ⁻¹z − γ u̇|z|ⁿ)/u_y; the viscous
+storey damping is unchanged. A run declares it as [specimen.hysteresis].
 """
 
 from __future__ import annotations
@@ -23,6 +28,32 @@ from .constants import INCH, KIP, G
 from .errors import TruthError
 
 KINDS = ("none", "rigid", "sdof", "shear_building")
+HYSTERESIS_KEYS = ("storeys", "yield_drift_in", "post_yield_ratio", "n", "beta", "gamma")
+
+
+@dataclass(frozen=True)
+class Hysteresis:
+    """Bouc–Wen storeys: `storeys` 1-based from the bottom (increasing), one yield drift
+    u_y (in) and one post-yield stiffness ratio α per listed storey, and the shape
+    parameters n ≥ 1, β, γ shared by all of them."""
+
+    storeys: tuple[int, ...]
+    yield_drift_in: tuple[float, ...]
+    post_yield_ratio: tuple[float, ...]
+    n: float = 2.0
+    beta: float = 0.5
+    gamma: float = 0.5
+
+    @property
+    def z_max(self) -> float:
+        """The bound of |z| reached under monotonic drift: (1/(β + γ))^(1/n)."""
+        return (1.0 / (self.beta + self.gamma)) ** (1.0 / self.n)
+
+    def declared(self) -> dict:
+        """The run format's [specimen.hysteresis] table."""
+        return {"storeys": list(self.storeys), "yield_drift_in": list(self.yield_drift_in),
+                "post_yield_ratio": list(self.post_yield_ratio), "n": self.n,
+                "beta": self.beta, "gamma": self.gamma}
 
 
 @dataclass(frozen=True)
@@ -39,6 +70,7 @@ class Specimen:
     inertia_kip_in_s2: float = 0.0  # rigid block: own pitch inertia about its c.g.
     mode_xi: tuple[float, ...] = ()  # one ratio per fixed-base mode (overrides xi)
     rayleigh: tuple[tuple[float, float], tuple[float, float]] | None = None  # (f Hz, ξ) x 2
+    hysteresis: Hysteresis | None = None  # yielding storeys (sdof, shear_building)
 
     @property
     def n(self) -> int:
@@ -121,20 +153,79 @@ class Specimen:
             return {"kind": "rigid", "weight_kip": self.weights_kip[0],
                     "height_in": self.heights_in[0]}
         if self.kind == "sdof":
-            return {"kind": "sdof", "weight_kip": self.weights_kip[0],
-                    "height_in": self.heights_in[0],
-                    "frequency_hz": self.frequencies_hz()[0], "damping": self.xi}
-        damping = (self.xi if not (self.mode_xi or self.is_rayleigh)
-                   else [float(x) for x in self.modal_damping()])
-        return {"kind": "shear_building", "weights_kip": list(self.weights_kip),
-                "heights_in": list(self.heights_in),
-                "frequencies_hz": self.frequencies_hz(), "damping": damping}
+            out = {"kind": "sdof", "weight_kip": self.weights_kip[0],
+                   "height_in": self.heights_in[0],
+                   "frequency_hz": self.frequencies_hz()[0], "damping": self.xi}
+        else:
+            damping = (self.xi if not (self.mode_xi or self.is_rayleigh)
+                       else [float(x) for x in self.modal_damping()])
+            out = {"kind": "shear_building", "weights_kip": list(self.weights_kip),
+                   "heights_in": list(self.heights_in),
+                   "frequencies_hz": self.frequencies_hz(), "damping": damping}
+        if self.hysteresis is not None:
+            out["hysteresis"] = self.hysteresis.declared()
+        return out
 
 
 def _positive(name: str, v: float) -> float:
     if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
         raise TruthError(f"specimen: {name} must be a positive number, got {v!r}")
     return float(v)
+
+
+def _number(v) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _hysteresis(h, n: int) -> Hysteresis | None:
+    """Check a hysteresis dict (or a Hysteresis) for a specimen of n storeys."""
+    if h is None:
+        return None
+    if isinstance(h, Hysteresis):
+        h = h.declared()
+    if not isinstance(h, dict):
+        raise TruthError(f"specimen: hysteresis must be a dict, got {type(h).__name__}")
+    unknown = sorted(set(h) - set(HYSTERESIS_KEYS))
+    if unknown:
+        raise TruthError(f"specimen: hysteresis has unknown key(s) {unknown}; it takes "
+                         f"{list(HYSTERESIS_KEYS)}")
+    storeys = h.get("storeys", list(range(1, n + 1)))
+    if isinstance(storeys, int) and not isinstance(storeys, bool):
+        storeys = [storeys]
+    if (not isinstance(storeys, list | tuple) or not storeys
+            or not all(isinstance(k, int) and not isinstance(k, bool) for k in storeys)
+            or not all(1 <= k <= n for k in storeys) or len(set(storeys)) != len(storeys)):
+        raise TruthError(f"specimen: hysteresis.storeys must be distinct storey numbers in "
+                         f"1..{n}, got {storeys!r}")
+
+    def per_storey(key: str, ok, what: str) -> list[float]:
+        if key not in h:
+            raise TruthError(f"specimen: hysteresis.{key} is required")
+        v = h[key]
+        vals = list(v) if isinstance(v, list | tuple) else [v] * len(storeys)
+        if len(vals) != len(storeys):
+            raise TruthError(f"specimen: hysteresis.{key} needs {len(storeys)} value(s) (one "
+                             f"per storey) or one number, got {v!r}")
+        if not all(_number(x) and ok(x) for x in vals):
+            raise TruthError(f"specimen: hysteresis.{key} must be {what}, got {v!r}")
+        return [float(x) for x in vals]
+
+    uy = per_storey("yield_drift_in", lambda x: x > 0, "positive (in)")
+    alpha = per_storey("post_yield_ratio", lambda x: 0 <= x <= 1, "in [0, 1]")
+    shape = {}
+    for key, default in (("n", 2.0), ("beta", 0.5), ("gamma", 0.5)):
+        v = h.get(key, default)
+        if not _number(v):
+            raise TruthError(f"specimen: hysteresis.{key} must be a number, got {v!r}")
+        shape[key] = float(v)
+    if shape["n"] < 1:
+        raise TruthError(f"specimen: hysteresis.n must be >= 1, got {shape['n']!r}")
+    if shape["beta"] + shape["gamma"] <= 0:
+        raise TruthError("specimen: hysteresis needs beta + gamma > 0 (bounded z), got "
+                         f"beta={shape['beta']!r}, gamma={shape['gamma']!r}")
+    order = sorted(range(len(storeys)), key=lambda i: storeys[i])
+    return Hysteresis(tuple(int(storeys[i]) for i in order), tuple(uy[i] for i in order),
+                      tuple(alpha[i] for i in order), **shape)
 
 
 def none() -> Specimen:
@@ -153,32 +244,41 @@ def rigid(weight_kip: float, height_in: float, inertia_kip_in_s2: float = 0.0) -
                     inertia_kip_in_s2=float(inertia_kip_in_s2))
 
 
-def sdof(weight_kip: float, height_in: float, f_hz: float, xi: float) -> Specimen:
-    """A SDOF structure (§2.4, Table 8.1: 68 kips at 219 in, 2.87 Hz, 1 %)."""
+def sdof(weight_kip: float, height_in: float, f_hz: float, xi: float,
+         hysteresis: dict | None = None) -> Specimen:
+    """A SDOF structure (§2.4, Table 8.1: 68 kips at 219 in, 2.87 Hz, 1 %).
+
+    hysteresis: a yielding storey (its only storey is 1), e.g. {"yield_drift_in": 0.3,
+    "post_yield_ratio": 0.05} (n, beta, gamma optional: 2, 0.5, 0.5)."""
     m = _positive("weight_kip", weight_kip) * KIP / G
     k = m * (2 * math.pi * _positive("f_hz", f_hz)) ** 2
     if not 0 <= xi < 1:
         raise TruthError(f"specimen: xi must be in [0, 1), got {xi!r}")
     return Specimen("sdof", (float(weight_kip),), (float(height_in),),
-                    (k / (KIP / INCH),), float(xi))
+                    (k / (KIP / INCH),), float(xi), hysteresis=_hysteresis(hysteresis, 1))
 
 
 def building(weights_kip: list[float], heights_in: list[float],
              storey_k_kip_in: list[float] | None = None,
              frequencies_hz: list[float] | None = None, xi: float | list[float] = 0.02,
              damping: str = "modal",
-             rayleigh: tuple[tuple[float, float], tuple[float, float]] | None = None
-             ) -> Specimen:
+             rayleigh: tuple[tuple[float, float], tuple[float, float]] | None = None,
+             hysteresis: dict | None = None) -> Specimen:
     """An n-storey shear building, floors from the bottom. Give the storey stiffnesses
     (kip/in) or the n fixed-base frequencies (the stiffnesses are then solved for, from
     a uniform-stiffness start; an unreachable set of frequencies is an error).
 
     Damping: `xi` one ratio for every mode or a list (one per mode, from the bottom one);
-    `rayleigh` ((f₁ Hz, ξ₁), (f₂ Hz, ξ₂)): C = α M + β K through those two pairs."""
+    `rayleigh` ((f₁ Hz, ξ₁), (f₂ Hz, ξ₂)): C = α M + β K through those two pairs.
+
+    hysteresis: yielding storeys, {"storeys": [2], "yield_drift_in": [0.3],
+    "post_yield_ratio": [0.05], "n": 2.0, "beta": 0.5, "gamma": 0.5} (storeys 1-based from
+    the bottom, all when left out; one value per listed storey or one for all)."""
     n = len(weights_kip)
     if n == 0 or len(heights_in) != n:
         raise TruthError(f"specimen: weights_kip and heights_in must have the same "
                          f"non-zero length, got {len(weights_kip)} and {len(heights_in)}")
+    hyst = _hysteresis(hysteresis, n)
     for w in weights_kip:
         _positive("weights_kip", w)
     if any(b <= a for a, b in itertools.pairwise(heights_in)):
@@ -203,7 +303,7 @@ def building(weights_kip: list[float], heights_in: list[float],
         rayleigh, xi = pairs, pairs[0][1]
     base = Specimen("shear_building", tuple(map(float, weights_kip)),
                     tuple(map(float, heights_in)), (), float(xi), damping, mode_xi=mode_xi,
-                    rayleigh=rayleigh)
+                    rayleigh=rayleigh, hysteresis=hyst)
     if storey_k_kip_in is not None:
         if len(storey_k_kip_in) != n:
             raise TruthError(f"specimen: storey_k_kip_in needs {n} values")
@@ -228,13 +328,16 @@ def building(weights_kip: list[float], heights_in: list[float],
 
 
 def perturb(spec: Specimen, seed: int, frequency: float = 0.03, damping: float = 1.5,
-            weight: float = 0.05, height: float = 0.0) -> Specimen:
+            weight: float = 0.05, height: float = 0.0, yield_drift: float = 0.1) -> Specimen:
     """What a lab would declare: each property moved by between half and all of its bound,
     with a random sign (seeded), so the declaration always differs from the truth.
 
     frequency: relative bound on the fixed-base frequencies (stiffnesses scale with it);
     damping: factor bound (ξ multiplied or divided by up to `damping`);
-    weight, height: relative bounds.
+    weight, height: relative bounds;
+    yield_drift: relative bound on each yielding storey's yield drift (post-yield ratio,
+    n, β, γ kept); drawn after everything else, and only for a specimen with hysteresis,
+    so the other draws of a seed do not depend on it.
     """
     rng = np.random.default_rng(seed)
 
@@ -259,10 +362,17 @@ def perturb(spec: Specimen, seed: int, frequency: float = 0.03, damping: float =
     k = tuple(kk * ratio[j] * (1 + df) ** 2 for j, kk in enumerate(spec.storey_k_kip_in))
     if spec.kind == "shear_building":
         k = tuple(kk * (1 + 0.3 * rel(frequency)) for kk in k)  # a little shape change too
+    hyst = spec.hysteresis
+    if hyst is not None:  # the last draws: a seed's other draws are those of an elastic one
+        if not 0 <= yield_drift < 1:
+            raise TruthError(f"perturb: yield_drift must be in [0, 1), got {yield_drift!r}")
+        hyst = replace(hyst, yield_drift_in=tuple(u * (1 + rel(yield_drift))
+                                                  for u in hyst.yield_drift_in))
     if mode_xi:
         return replace(spec, weights_kip=w, heights_in=h, storey_k_kip_in=k, xi=mode_xi[0],
-                       mode_xi=mode_xi, rayleigh=None, damping="modal")
-    return replace(spec, weights_kip=w, heights_in=h, storey_k_kip_in=k, xi=xi)
+                       mode_xi=mode_xi, rayleigh=None, damping="modal", hysteresis=hyst)
+    return replace(spec, weights_kip=w, heights_in=h, storey_k_kip_in=k, xi=xi,
+                   hysteresis=hyst)
 
 
 def misdeclare(spec: Specimen, frequency: float = 0.0, damping: float = 1.0,

@@ -4,9 +4,10 @@ vocabulary (`Assembly.add_force` on the storey's drift coordinate), for a specim
 declared hysteresis and for the `storey_yield` effect alike.
 
 The storey's elastic spring k stays in both models (the slide's stiffness); the element
-adds +(1 − α) k (u − u_y z) to its −k u, so the storey resists with α k u + (1 − α) k u_y z. Its state
-z (dimensionless) is the reduced model's element state (RK4 with the other states) and the
-virtual table's force-law controller state (explicit Euler at the control step)."""
+adds +(1 − α) k (u − u_y z) to its −k u, so the storey resists with
+α k u + (1 − α) k u_y z. Its state z (dimensionless) is the reduced model's element state
+(RK4 with the other states) and the virtual table's force-law controller state (the
+midpoint rule at the control step, `vtable.controllers.force_law`)."""
 
 from __future__ import annotations
 

@@ -118,6 +118,7 @@ class Experiment:
     command: Command
     files: list[Path] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    specimen: Specimen | None = None
 
     @property
     def result(self) -> SimResult:
@@ -147,7 +148,7 @@ def run_experiment(specimen: Specimen, command: Command, *, vt: VirtualTable | N
             for k, pv in added.items()))
     run = simulate(ph, command, rate, vt=vt, name=str(out or command.name), full_state=True,
                    title=title or f"{command.name}, {specimen.title} (vtable virtual table)")
-    exp = Experiment(run, command, notes=notes)
+    exp = Experiment(run, command, notes=notes, specimen=specimen)
     if out is not None:
         exp.files += list(write_run(exp.run, out))
     return exp

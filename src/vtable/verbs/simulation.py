@@ -48,10 +48,20 @@ def simulation_summary(exp, fam: str = "imperial") -> dict[str, Any]:
     ch = exp.run.channels
     peaks = {k: {"peak": float(units.from_si(np.max(np.abs(ch[k])), u)), "unit": u}
              for k, u in PEAK_CHANNELS if k in ch}
+    notes = list(exp.notes)
+    h = getattr(exp.specimen, "hysteresis", None)
+    for k in (h.storeys if h is not None else ()):
+        for c, u in ((f"floor{k}_drift", "in"), (f"floor{k}_shear", "kip")):
+            if c in ch:
+                peaks[c] = {"peak": float(units.from_si(np.max(np.abs(ch[c])), u)), "unit": u}
+        if f"floor{k}_drift" in ch:
+            mu = float(np.max(np.abs(ch[f"floor{k}_drift"]))) / h.of_storey(k)[0]
+            notes.append(f"storey {k}: peak drift {mu:.2f} x its yield drift"
+                         + (" (it yielded)" if mu > 1 else " (it stayed elastic)"))
     return {"peaks": peaks, "exceedances": [str(e) for e in exp.result.exceedances],
             "limits_shown": [exceedance_text(e, fam) for e in exp.result.exceedances],
             "shown_units": {k: exp.run.units[k] for k in peaks},
-            "files": [str(f) for f in exp.files], "notes": list(exp.notes)}
+            "files": [str(f) for f in exp.files], "notes": notes}
 
 
 #: the specimen `simulate` carries when none is chosen and the table's payload allows it
