@@ -50,15 +50,20 @@ def played(kind: str, hysteretic: bool = True):
 def test_the_declaration_reads_converts_and_round_trips():
     spec = specimen_from_dict(BUILDING)
     h = spec.hysteresis
-    assert h.storeys == (2,) and h.of_storey(1) is None
-    assert h.of_storey(2) == (pytest.approx(0.15 * IN), 0.05) and (h.n, h.beta) == (3.0, 0.5)
+    assert h.storeys == (2,) and h.of_storey(1, 1e7) is None
+    assert h.of_storey(2, 1e7) == (pytest.approx(0.15 * IN), 0.05)
+    assert (h.n, h.beta) == (3.0, 0.5)
     assert specimen_from_dict(spec.to_dict()) == spec
-    # a strength instead of a drift: u_y = V_y / k_s (k_s = m ω², eq 3.8: 57.3 kip/in here)
+    # a strength instead of a drift, kept as declared: u_y = V_y / k_s with the model's
+    # stiffness (k_s = m ω², eq 3.8: 57.3 kip/in for the declared frame)
     frame = specimen_from_dict({**FRAME, "hysteresis": {"yield_shear_kip": 10.0,
                                                         "post_yield_ratio": 0.1}})
     k = (68.0 * KIP / 9.80665) * (2 * np.pi * 2.87) ** 2
-    assert frame.hysteresis.yield_drift[0] == pytest.approx(10.0 * KIP / k)
-    assert frame.hysteresis.yield_drift[0] / IN == pytest.approx(0.1746, abs=1e-3)
+    assert frame.stiffness == pytest.approx(k)
+    u_y = frame.hysteresis.of_storey(1, frame.stiffness)[0]
+    assert u_y == pytest.approx(10.0 * KIP / k) and u_y / IN == pytest.approx(0.1746, abs=1e-3)
+    assert frame.to_dict()["hysteresis"]["yield_shear_kip"] == [pytest.approx(10.0)]
+    assert specimen_from_dict(frame.to_dict()) == frame
     bad = [({"yield_drift": 1.0, "post_yield_ratio": 0.1}, "did you mean 'yield_drift_in'"),
            ({"yield_drift_in": 1.0}, "post_yield_ratio"),
            ({"yield_drift_in": [1.0, 2.0], "post_yield_ratio": 0.1}, "2 values for 1 storeys"),
@@ -94,7 +99,7 @@ def test_the_storey_shear_follows_an_independent_bouc_wen_integration():
     table's own drift: within 2 % NRMS; and the loop reaches the strength, not k u."""
     spec, run, _ = played("frame")
     h = spec.hysteresis
-    u_y, alpha = h.of_storey(1)
+    u_y, alpha = h.of_storey(1, spec.stiffness)
     t = run.time
     u = run.channels["floor1_drift"]
     v = np.gradient(u, t)

@@ -29,8 +29,7 @@ elongation (the record slowed by the ratio of the fixed-base to the coupled freq
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -39,11 +38,11 @@ import scipy.signal
 
 from vtable.analytic.structure import specimen_frequencies
 from vtable.diagnose.model import TableModel
+from vtable.drive.result import DriveResult, Played, acceleration, nrms, spectrum_error
 from vtable.drive.target import Target
 from vtable.errors import VtableError
 from vtable.ident.structure import effective_height
 from vtable.ident.tf import transfer_function
-from vtable.jsonable import jsonable
 from vtable.models.reduced import ReducedModel
 from vtable.params.limits import check_force, check_motion, motion_limits, share_above
 from vtable.params.specimen import SDOFSpecimen
@@ -71,9 +70,6 @@ BAND_MARGIN = 0.05
 #: the window (a fraction of each fixed-base frequency) in which the drive's total
 #: amplification of the target is held to the cap (the report's warning, §10.2)
 NEAR_FIXED_BASE = 0.3
-#: the response spectrum's frequencies (Hz) and damping (issue 20: 0.5-20 Hz, 5 %)
-SPECTRUM_HZ = (0.5, 20.0)
-SPECTRUM_DAMPING = 0.05
 #: the band (Hz) in which a measured run's displacement differs from the model's as the
 #: model's miss (`--update`); above it the displacement sensors' noise hides the miss.
 #: Measured on the truth (benchmarks/drive_acceptance.py, 2 % noise): the raw difference
@@ -85,26 +81,6 @@ UPDATE_BAND_HZ = 5.0
 #: 4th-order weights): friction the model lacks shows at 6-20 Hz in the acceleration ~10x
 #: above its noise, and not at all through the displacement's (2 % noise, the truth)
 UPDATE_CROSSOVER_HZ = 2.0
-
-
-def _nrms(e: np.ndarray, ref: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(e**2)) / np.sqrt(np.mean(ref**2)))
-
-
-def acceleration(x: np.ndarray, fs: float) -> np.ndarray:
-    """Second derivative by central differences (m/s² from m)."""
-    return np.gradient(np.gradient(x, 1 / fs), 1 / fs)
-
-
-def spectrum_error(y: np.ndarray, target: np.ndarray, fs: float) -> dict[str, float]:
-    """The 5 %-damped pseudo-acceleration spectrum of `y` against the target's over
-    0.5-20 Hz: the worst ratio error and where."""
-    f = np.geomspace(*SPECTRUM_HZ, 60)
-    a_y, a_t = (response_spectrum(acceleration(v, fs), 1 / fs, 1 / f, SPECTRUM_DAMPING).psa
-                for v in (y, target))
-    r = a_y / a_t - 1
-    i = int(np.argmax(np.abs(r)))
-    return {"worst_ratio_error": float(r[i]), "at_hz": float(f[i])}
 
 
 @dataclass
@@ -276,106 +252,6 @@ def capped_near_fixed_base(plant: DrivePlant, t: np.ndarray, T: np.ndarray, d: n
     return d, out, amp
 
 
-@dataclass
-class Played:
-    """A drive played on the model and how the specimen's base felt it."""
-
-    name: str
-    drive: np.ndarray
-    channels: dict[str, np.ndarray] = field(repr=False)
-    metrics: dict[str, Any]
-
-
-@dataclass
-class DriveResult:
-    """`compensate`'s result: the drive, what the model predicts when it is played, the
-    iteration history and the baselines, with the settings used (`to_json`, `report`,
-    `plot`)."""
-
-    objective: str
-    target: Target
-    fs: float
-    drive: Played
-    baselines: list[Played]
-    history: list[float]
-    settings: dict[str, float]
-    h: float
-    notes: list[str] = field(default_factory=list)
-    files: list[Path] = field(default_factory=list)
-
-    def to_json(self) -> dict[str, Any]:
-        return jsonable({"format": "vtable-drive/1", "objective": self.objective,
-                         "target": self.target.name, "fs_hz": self.fs,
-                         "effective_height_m": self.h, "settings": self.settings,
-                         "iterations": len(self.history) - 1,
-                         "history_nrms": self.history, "drive": self.drive.metrics,
-                         "baselines": {b.name: b.metrics for b in self.baselines},
-                         "notes": self.notes})
-
-    def report(self) -> str:
-        out = [f"drive for {self.target.name} ({self.target.t[-1]:.1f} s), objective "
-               f"{'x_t + θh' if self.objective == 'effective' else 'x_t'} "
-               f"(h = {self.h / 0.0254:.1f} in); λ {self.settings['regularisation']:g}, "
-               f"cap {self.settings['cap']:g}; {len(self.history) - 1} iterations on the "
-               "model, NRMS " + " -> ".join(f"{100 * e:.2f} %" for e in self.history)]
-        out.append(f"  {'':28}{'NRMS':>8}{'peak err':>10}{'spectrum':>10}{'at Hz':>7}"
-                   f"{'specimen':>10}{'drive pk':>10}{'stroke':>8}{'vel':>6}{'force':>7}")
-        for p in (self.drive, *self.baselines):
-            m = p.metrics
-            sp = m.get("spectrum", {})
-            spec = m.get("specimen_peak_ratio")
-            out.append(f"  {p.name:28}{_pct(m.get('nrms')):>8}{_pct(m.get('peak_error')):>10}"
-                       f"{_pct(sp.get('worst_ratio_error')):>10}"
-                       f"{sp.get('at_hz', float('nan')):>7.2f}"
-                       f"{'—' if spec is None else f'{spec:.3f}':>10}"
-                       f"{m['drive_peak_in']:>8.3f} in"
-                       + "".join(f"{_use(m.get('limit_use', {}).get(k)):>{w}}"
-                                 for k, w in (("displacement", 8), ("velocity", 6),
-                                              ("force", 7))))
-        out.append("  spectrum: the worst error of the 5 %-damped PSA of x_eff over the "
-                   "target's, 0.5-20 Hz; specimen: its predicted peak drift over its "
-                   "fixed-base peak under the target; stroke, vel, force: the drive's "
-                   "peaks as shares of the table's limits")
-        amp = self.drive.metrics.get("amplification")
-        if amp:
-            out.append(f"  the drive's amplification of the target: largest {amp['largest']:.1f}"
-                       f" at {amp['at_hz']:.1f} Hz" + (
-                           f"; near the specimen's fixed-base frequency "
-                           f"{amp['near_fixed_base']:.1f} at {amp['near_fixed_base_hz']:.2f} Hz"
-                           if "near_fixed_base" in amp else ""))
-        out += [f"  note: {n}" for n in self.notes]
-        out += [f"wrote {f}" for f in self.files]
-        return "\n".join(out)
-
-    def psa(self, x: np.ndarray, f: np.ndarray) -> np.ndarray:
-        """The 5 %-damped pseudo-acceleration spectrum (m/s²) of displacement x at f (Hz)."""
-        return response_spectrum(acceleration(x, self.fs), 1 / self.fs, 1 / f,
-                                 SPECTRUM_DAMPING).psa
-
-    def plot(self, png: str | Path) -> Path:
-        """Target, predicted effective motion and the drive against time; their 5 %
-        response spectra beneath."""
-        from vtable.viz.figures import drive_png
-
-        p = drive_png(png, self, self.psa)
-        self.files.append(Path(p))
-        return Path(p)
-
-    def write_report(self, path: str | Path) -> Path:
-        """The HTML report (`vtable.viz.drive_report`)."""
-        from vtable.viz.drive_report import write_report
-
-        return write_report(self, path, self.psa)
-
-
-def _use(v: float | None) -> str:
-    return "—" if v is None else f"{100 * v:.0f}%"
-
-
-def _pct(v: float | None) -> str:
-    return "—" if v is None else f"{100 * v:.2f}%"
-
-
 def compensate(model: TableModel, target: Target, h: float | None = None,
                objective: str = "effective",
                regularisation: float = REGULARISATION, cap: float = CAP,
@@ -444,12 +320,12 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
                           if a0 else None, band[1])
         d = d0
     out = plant.play(t, d)
-    history = [_nrms(out[key] + bias - T, T)]
+    history = [nrms(out[key] + bias - T, T)]
     best = (history[0], d, out)
     for _ in range(max_iterations):
         d = at_rest(d + apply_filter(T - out[key] - bias, fs, f, Hc), fs)
         out = plant.play(t, d)
-        history.append(_nrms(out[key] + bias - T, T))
+        history.append(nrms(out[key] + bias - T, T))
         if history[-1] < best[0]:
             stalled = history[-1] > best[0] * (1 - STALL)
             best = (history[-1], d, out)
@@ -478,7 +354,7 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
         notes.append(f"the drive's amplification of the target near the specimen's "
                      f"fixed-base frequency reached {amp['near_fixed_base_uncapped']:.1f}; held "
                      f"to the cap {cap:g} there (the model's NRMS {100 * uncapped:.2f} % -> "
-                     f"{100 * _nrms(out[key] + bias - T, T):.2f} %; raise --cap to follow "
+                     f"{100 * nrms(out[key] + bias - T, T):.2f} %; raise --cap to follow "
                      "the target closer)")
     played = _played("drive", d, out, target, model, fs)
     played.metrics["amplification"] = amp
@@ -512,7 +388,7 @@ def _played(name: str, d: np.ndarray, out: dict[str, np.ndarray], target: Target
         "limit_use": limit_use(model.vt, d, fs, out.get("h1_force")),
         "above_band_share": share_above(d, fs, model.vt.table.specs.bandwidth)}
     if compare_to_target:
-        m["nrms"] = _nrms(y - T, T)
+        m["nrms"] = nrms(y - T, T)
         m["peak_error"] = float(np.max(np.abs(y - T)) / np.max(np.abs(T)))
         m["spectrum"] = spectrum_error(y, T, fs)
     fb = fixed_base_peak(model, T, fs)

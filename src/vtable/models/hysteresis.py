@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from vtable.analytic.structure import storey_masses, storey_stiffnesses_of
 from vtable.params.hysteresis import Hysteresis
+from vtable.params.specimen import SDOFSpecimen
 
 
 def bouc_wen(d: float, v: float, z, p, dz) -> float:
@@ -29,8 +30,6 @@ def bouc_wen(d: float, v: float, z, p, dz) -> float:
 def storey_coordinate(spec, k: int) -> str:
     """The name of storey k's drift coordinate in both models (1-based): a SDOF frame's
     "x_s", a building's "x_s1", "x_s2", ..."""
-    from vtable.params.specimen import SDOFSpecimen
-
     return "x_s" if isinstance(spec, SDOFSpecimen) else f"x_s{k}"
 
 
@@ -51,6 +50,7 @@ def add_specimen_hysteresis(m, spec) -> None:
     h: Hysteresis | None = getattr(spec, "hysteresis", None)
     if h is None:
         return
+    stiff = storey_stiffnesses_of(spec)
     for k in h.storeys:
-        u_y, alpha = h.of_storey(k)
+        u_y, alpha = h.of_storey(k, stiff[k - 1])
         add_yielding_storey(m, spec, k, u_y, alpha, h.n, h.beta, h.gamma)

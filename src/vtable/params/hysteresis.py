@@ -17,7 +17,8 @@ analytical models use the initial stiffness k (`specimen_hints` says so).
 
 The declaration names the storeys that yield (`storeys`, 1-based from the bottom; all
 of them when left out) and, for each, u_y (`yield_drift_in`, or `yield_shear_kip`: the
-strength V_y = k u_y) and α (`post_yield_ratio`); a single number applies to every listed
+strength V_y = k u_y, kept as declared and turned into u_y with the storey's stiffness as
+the model carries it) and α (`post_yield_ratio`); a single number applies to every listed
 storey. `n`, `beta`, `gamma` are shared."""
 
 from __future__ import annotations
@@ -41,11 +42,15 @@ class Hysteresis(Params):
     yield drift u_y (m) and post-yield ratio α; shared n, β, γ."""
 
     storeys: tuple[int, ...] = plain()
-    yield_drift: tuple[float, ...] = quantity("in", "yield_drift_in", vector=True, minimum=0,
-                                              doc="u_y of each listed storey")
     post_yield_ratio: tuple[float, ...] = quantity("1", "post_yield_ratio", vector=True,
                                                    minimum=0, exclusive=False, maximum=1,
                                                    doc="α of each listed storey")
+    yield_drift: tuple[float, ...] | None = quantity(
+        "in", "yield_drift_in", default=None, vector=True, minimum=0,
+        doc="u_y of each listed storey")
+    yield_shear: tuple[float, ...] | None = quantity(
+        "kip", "yield_shear_kip", default=None, vector=True, minimum=0,
+        doc="V_y = k u_y of each listed storey (instead of u_y)")
     n: float = quantity("1", "n", default=DEFAULT_N, minimum=1, exclusive=False,
                         maximum=50, source="Baber & Wen 1981: n = 2, a smooth knee",
                         doc="sharpness of the transition")
@@ -59,21 +64,28 @@ class Hysteresis(Params):
         if len(set(self.storeys)) != len(self.storeys) or not self.storeys:
             raise VtableError(f"{where}.storeys: expected distinct storey numbers, got "
                               f"{list(self.storeys)}")
+        if (self.yield_drift is None) == (self.yield_shear is None):
+            raise VtableError(f"{where}: give exactly one of yield_drift_in and "
+                              "yield_shear_kip")
         for key, v in (("yield_drift_in", self.yield_drift),
+                       ("yield_shear_kip", self.yield_shear),
                        ("post_yield_ratio", self.post_yield_ratio)):
-            if len(v) != len(self.storeys):
+            if v is not None and len(v) != len(self.storeys):
                 raise VtableError(f"{where}.{key}: {len(v)} values for {len(self.storeys)} "
                                   "storeys")
         if not self.beta + self.gamma > 0:
             raise VtableError(f"{where}: beta + gamma must be > 0 (the loops' strength is "
                               f"finite only then), got {self.beta:g} + {self.gamma:g}")
 
-    def of_storey(self, k: int) -> tuple[float, float] | None:
-        """(u_y in m, α) of storey k (1-based), None when it stays elastic."""
+    def of_storey(self, k: int, stiffness: float) -> tuple[float, float] | None:
+        """(u_y in m, α) of storey k (1-based) whose elastic stiffness is `stiffness`
+        (N/m; a declared strength gives u_y = V_y/k), None when it stays elastic."""
         if k not in self.storeys:
             return None
         i = self.storeys.index(k)
-        return self.yield_drift[i], self.post_yield_ratio[i]
+        u_y = self.yield_drift[i] if self.yield_drift is not None else \
+            self.yield_shear[i] / stiffness
+        return u_y, self.post_yield_ratio[i]
 
     @property
     def z_max(self) -> float:
@@ -86,48 +98,43 @@ class Hysteresis(Params):
         return d
 
 
-def parse_hysteresis(d: Any, stiffnesses: list[float], where: str) -> Hysteresis:
-    """The `[specimen.hysteresis]` table of a specimen whose storeys have the elastic
-    `stiffnesses` (N/m, from the bottom); `yield_shear_kip` is turned into the yield drift
-    V_y/k."""
+def parse_hysteresis(d: Any, n_storeys: int, where: str) -> Hysteresis:
+    """The `[specimen.hysteresis]` table of a specimen of `n_storeys` storeys."""
     if not isinstance(d, dict):
         raise VtableError(f"{where}: expected a table, got {type(d).__name__}")
     unknown = sorted(set(d) - set(KEYS))
     if unknown:
         raise VtableError(f"{where}: unknown key {unknown[0]!r}"
                           f"{did_you_mean(unknown[0], KEYS)}; expected {', '.join(KEYS)}")
-    n_st = len(stiffnesses)
-    storeys = d.get("storeys", list(range(1, n_st + 1)))
+    storeys = d.get("storeys", list(range(1, n_storeys + 1)))
     if not isinstance(storeys, list) or not storeys or any(
-            isinstance(s, bool) or not isinstance(s, int) or not 1 <= s <= n_st
+            isinstance(s, bool) or not isinstance(s, int) or not 1 <= s <= n_storeys
             for s in storeys):
-        raise VtableError(f"{where}.storeys: expected a list of storey numbers 1..{n_st}, "
-                          f"got {storeys!r:.60}")
+        raise VtableError(f"{where}.storeys: expected a list of storey numbers "
+                          f"1..{n_storeys}, got {storeys!r:.60}")
     if ("yield_drift_in" in d) == ("yield_shear_kip" in d):
         raise VtableError(f"{where}: give exactly one of yield_drift_in and yield_shear_kip")
     if "post_yield_ratio" not in d:
         raise VtableError(f"{where}: missing key 'post_yield_ratio' (α, the post-yield "
                           "stiffness over the elastic one)")
-
-    def per_storey(key: str, unit: str) -> list[float]:
+    out: dict[str, Any] = {"storeys": tuple(storeys)}
+    for key, field_name in (("yield_drift_in", "yield_drift"), ("yield_shear_kip", "yield_shear"),
+                            ("post_yield_ratio", "post_yield_ratio")):
+        if key not in d:
+            continue
         v = d[key]
         vals = v if isinstance(v, list) else [v] * len(storeys)
         if len(vals) != len(storeys):
             raise VtableError(f"{where}.{key}: {len(vals)} values for {len(storeys)} storeys "
                               f"({list(storeys)})")
-        return [check_number(x, f"{where}.{key}[{i}]", unit) for i, x in enumerate(vals)]
-
-    if "yield_drift_in" in d:
-        u_y = per_storey("yield_drift_in", "in")
-    else:
-        u_y = [v / stiffnesses[s - 1]
-               for v, s in zip(per_storey("yield_shear_kip", "kip"), storeys, strict=True)]
-    if any(not math.isfinite(u) or u <= 0 for u in u_y):
-        key = "yield_drift_in" if "yield_drift_in" in d else "yield_shear_kip"
-        raise VtableError(f"{where}.{key}: every value must be > 0")
-    shape = {k: check_number(d[k], f"{where}.{k}") for k in ("n", "beta", "gamma") if k in d}
+        unit = {"yield_drift_in": "in", "yield_shear_kip": "kip"}.get(key, "1")
+        out[field_name] = tuple(check_number(x, f"{where}.{key}[{i}]", unit)
+                                for i, x in enumerate(vals))
+        if key != "post_yield_ratio" and any(not (math.isfinite(x) and x > 0)
+                                             for x in out[field_name]):
+            raise VtableError(f"{where}.{key}: every value must be > 0")
+    out.update({k: check_number(d[k], f"{where}.{k}") for k in ("n", "beta", "gamma") if k in d})
     try:
-        return Hysteresis(storeys=tuple(storeys), yield_drift=tuple(u_y),
-                          post_yield_ratio=tuple(per_storey("post_yield_ratio", "1")), **shape)
+        return Hysteresis(**out)
     except VtableError as e:
         raise VtableError(f"{where}: {e}") from None

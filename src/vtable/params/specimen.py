@@ -330,9 +330,8 @@ def specimen_from_dict(d: dict[str, Any], where: str = "specimen") -> Specimen:
     spec = _specimen(kind, d, where)
     if hyst is None:
         return spec
-    from vtable.analytic.structure import storey_stiffnesses_of
-
-    h = parse_hysteresis(hyst, storey_stiffnesses_of(spec), f"{where}.hysteresis")
+    h = parse_hysteresis(hyst, len(spec.weights) if isinstance(spec, ShearBuilding) else 1,
+                         f"{where}.hysteresis")
     return dataclasses.replace(spec, hysteresis=h)
 
 

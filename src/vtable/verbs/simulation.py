@@ -14,6 +14,7 @@ import numpy as np
 
 from vtable import display, units
 from vtable.analytic import configs
+from vtable.analytic.structure import storey_stiffnesses_of
 from vtable.display import table_family
 from vtable.effects.registry import parse_spec
 from vtable.errors import VtableError
@@ -55,7 +56,8 @@ def simulation_summary(exp, fam: str = "imperial") -> dict[str, Any]:
             if c in ch:
                 peaks[c] = {"peak": float(units.from_si(np.max(np.abs(ch[c])), u)), "unit": u}
         if f"floor{k}_drift" in ch:
-            mu = float(np.max(np.abs(ch[f"floor{k}_drift"]))) / h.of_storey(k)[0]
+            u_y = h.of_storey(k, storey_stiffnesses_of(exp.specimen)[k - 1])[0]
+            mu = float(np.max(np.abs(ch[f"floor{k}_drift"]))) / u_y
             notes.append(f"storey {k}: peak drift {mu:.2f} x its yield drift"
                          + (" (it yielded)" if mu > 1 else " (it stayed elastic)"))
     return {"peaks": peaks, "exceedances": [str(e) for e in exp.result.exceedances],
