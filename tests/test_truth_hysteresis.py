@@ -47,23 +47,32 @@ def k_si(spec, storey=1):
 # the law
 
 
-def test_alpha_one_is_the_elastic_frame_and_small_drift_nearly_so():
+def test_alpha_one_is_the_elastic_frame_and_small_drift_nearly_so(monkeypatch):
     """α = 1 leaves only α k u = k u: the same response as the elastic frame (z is still
     integrated). Far below u_y, z ≈ u/u_y and the frame is nearly elastic too."""
     rigid = truth.sdof(68.0, 219.0, 2.87, 0.01,
                        hysteresis={"yield_drift_in": 0.3, "post_yield_ratio": 1.0})
     a, e = run(rigid), run(ELASTIC)
     for ch in ("avg_hdisp", "h1_force", "acc_n_ne", "pot_n_sw", "pitch_acc"):
-        assert nrms(a.channels[ch], e.channels[ch]) < 1e-6, ch
-    assert nrms(a.channels["floor1_drift"], e.internal["drift1"]) < 1e-6
+        assert nrms(a.channels[ch], e.channels[ch]) < 1e-5, ch  # the elastic run's step: 2x
+    # at the same internal step the two are the same run
+    sim = importlib.import_module("truth.simulate")
+    monkeypatch.setattr(sim, "DT_MAX", sim.DT_MAX_HYSTERESIS)
+    e = truth.simulate(HYBRID, ELASTIC, quake())
+    assert e.dt == a.dt
+    for ch in ("avg_hdisp", "h1_force", "acc_n_ne", "pot_n_sw", "pitch_acc"):
+        assert nrms(a.channels[ch], e.channels[ch]) < 1e-12, ch
+    assert nrms(a.channels["floor1_drift"], e.internal["drift1"]) < 1e-12
     assert np.max(np.abs(a.internal["z1"])) > 0.9  # it went through yield, with no effect
-    small = truth.random_command(10.0, (0, 10), peak_in=0.02, seed=3)
+    small = truth.random_command(10.0, (0, 10), peak_in=0.01, seed=3)
     soft = truth.sdof(68.0, 219.0, 2.87, 0.01,
                       hysteresis={"yield_drift_in": 0.3, "post_yield_ratio": 0.05})
     s, se = (truth.simulate(HYBRID, x, small) for x in (soft, ELASTIC))
     peak = np.max(np.abs(s.channels["floor1_drift"])) / const.INCH
     assert peak < 0.03  # a tenth of u_y
-    assert nrms(s.channels["acc_n_ne"], se.channels["acc_n_ne"]) < 2e-3
+    off = nrms(s.channels["acc_n_ne"], se.channels["acc_n_ne"])
+    print(f"drift peak {peak:.3g} in (u_y 0.3): acc_n_ne {off:.2g} off the elastic frame")
+    assert off < 2e-3
 
 
 def test_strength_bound_and_yield_under_a_strong_el_centro():
@@ -161,16 +170,21 @@ def test_building_storey_obeys_the_law_along_its_recorded_drift():
                        rtol=0, atol=1e-9 * np.max(np.abs(v1)))
 
 
-def test_the_internal_step_is_converged():
-    """A 0.24 ms step (fs 256) against 0.12 ms (fs 8192): the drift and z agree to ~1e-6."""
+def test_the_internal_step_is_converged(monkeypatch):
+    """The 0.24 ms step (fs 256) against 0.12 ms: the drift and z agree to ~1e-6."""
     spec = truth.sdof(68.0, 219.0, 2.87, 0.01, hysteresis=YIELD)
     sim = importlib.import_module("truth.simulate")
     assert sim.stable_step(HYBRID, spec) == sim.DT_MAX_HYSTERESIS == 2.5e-4
-    a, b = run(spec), run(spec, fs=8192.0)
-    assert b.dt < a.dt / 1.9
-    d, db = a.channels["floor1_drift"], b.channels["floor1_drift"][::32]
-    assert np.max(np.abs(d - db)) < 2e-6 * np.max(np.abs(db))  # measured 5.6e-7
-    assert np.max(np.abs(a.internal["z1"] - b.internal["z1"][::32])) < 3e-6
+    assert sim.stable_step(HYBRID, ELASTIC) == sim.DT_MAX == 5e-4
+    a = run(spec)
+    monkeypatch.setattr(sim, "DT_MAX_HYSTERESIS", 1.25e-4)
+    b = truth.simulate(HYBRID, spec, quake(), fs=256.0)
+    assert b.dt == pytest.approx(a.dt / 2)
+    d, db = a.channels["floor1_drift"], b.channels["floor1_drift"]
+    print(f"step {a.dt:.3g} s vs {b.dt:.3g} s: drift {np.max(np.abs(d - db)) / np.max(abs(db)):.2g}"
+          f" of its peak, z {np.max(np.abs(a.internal['z1'] - b.internal['z1'])):.2g}")
+    assert np.max(np.abs(d - db)) < 2e-6 * np.max(np.abs(db))
+    assert np.max(np.abs(a.internal["z1"] - b.internal["z1"])) < 3e-6
 
 
 # ---------------------------------------------------------------------------------------------
@@ -294,8 +308,7 @@ def test_elastic_runs_keep_their_columns(tmp_path):
         "floor1_disp,floor2_acc,floor2_disp")
     assert "hysteresis" not in tomllib.loads(tpath.read_text())["specimen"]
     s = truth.simulate(HYBRID, ELASTIC, truth.random_command(2.0, peak_in=0.1, seed=1))
-    assert cpath.read_text().splitlines()[0].startswith(",".join(
-        ["time", "h_span", *[k for k in truth.runfile.ORDER if k in s.channels][1:]]))
-    assert set(s.channels) == {"h_span", "avg_hdisp", "h1_disp", "h2_disp", "h3_disp", "h_vel",
-                               "avg_hacc", "h1_force", "h2_force", "h3_force", "pitch_acc",
-                               "pitch_disp", "acc_n_ne", "acc_n_nw", "pot_n_sw", "pot_n_se"}
+    sc = truth.write_run(tmp_path / "s", s, declared=ELASTIC)[1]
+    assert sc.read_text().splitlines()[0] == (
+        "time,h_span,avg_hdisp,h1_disp,h2_disp,h3_disp,h_vel,avg_hacc,h1_force,h2_force,"
+        "h3_force,pitch_acc,pitch_disp,acc_n_ne,acc_n_nw,pot_n_sw,pot_n_se")
