@@ -170,3 +170,33 @@ def test_the_declared_hysteresis_explains_an_independent_truths_yielding_runs(
           f"{without.error:.4f}, noise floor {with_h.noise_floor:.4f}")
     assert with_h.error < 2.0 * with_h.noise_floor, (with_h.error, with_h.noise_floor)
     assert without.error > 3 * with_h.error, (without.error, with_h.error)
+
+
+def test_an_analytical_model_of_a_yielding_specimen_says_it_is_linear(tmp_path):
+    """The analytical models take the storey at its initial stiffness, and their title
+    says so (the declaration is not silently dropped): the same modes as the elastic
+    frame's."""
+    from vtable.analytic import configs
+
+    text = """model = "hybrid"
+[specimen]
+kind = "sdof"
+weight_kip = 68.0
+height_in = 219.0
+frequency_hz = 2.87
+damping = 0.01
+%s
+[open_loop]
+f_o_hz = 9.6
+xi_o = 0.606
+k_o_per_s = 29.5
+[rocking]
+k_theta_lb_in_per_rad = 2.22e10
+c_theta_lb_in_s_per_rad = 3.7e8
+"""
+    (tmp_path / "y.toml").write_text(text % "[specimen.hysteresis]\nyield_drift_in = 0.3\n"
+                                     "post_yield_ratio = 0.1")
+    (tmp_path / "e.toml").write_text(text % "")
+    y, e = configs.load(str(tmp_path / "y.toml")), configs.load(str(tmp_path / "e.toml"))
+    assert "initial stiffness" in y.title and "initial stiffness" not in e.title
+    assert np.allclose(np.sort_complex(y.poles()), np.sort_complex(e.poles()))

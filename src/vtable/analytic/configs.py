@@ -226,7 +226,7 @@ def _hybrid_physical(d: dict[str, Any], where: str) -> HybridModel:
     check_physical(ol, f"{where} [open_loop]")
     p = HybridParams.from_physical(spec, geo.mass, geo.pitch_inertia, ol,
                                    RockingSpring.from_dict(d["rocking"], f"{where} [rocking]"),
-                                   title=spec.title)
+                                   title=spec.title + _initial_stiffness(spec))
     check_physical(p, f"{where} (derived from [specimen], [open_loop], [rocking])")
     return HybridModel(p, height=spec.height)
 
@@ -245,4 +245,14 @@ def _mdof_from(d: dict[str, Any], where: str) -> MDOFHybrid:
     ol = OpenLoop.from_dict(d["open_loop"], f"{where} [open_loop]")
     check_physical(ol, f"{where} [open_loop]")
     return MDOFHybrid(ol, geo.mass, geo.pitch_inertia,
-                      RockingSpring.from_dict(d["rocking"], f"{where} [rocking]"), building)
+                      RockingSpring.from_dict(d["rocking"], f"{where} [rocking]"), building,
+                      title=(f"{building.n}-storey building on the hybrid table"
+                             + _initial_stiffness(building)))
+
+
+def _initial_stiffness(spec) -> str:
+    """What a linear model's title says of a specimen that declares yielding storeys."""
+    if getattr(spec, "hysteresis", None) is None:
+        return ""
+    return (" (its yielding storeys at their initial stiffness: this analytical model is "
+            "linear)")
