@@ -336,6 +336,7 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
     _, d, out = best
     uncapped = best[0]
     d, out, amp = capped_near_fixed_base(plant, t, T, d, out, cap, fs)
+    capped = nrms(out[key] + bias - T, T)
     check_limits(model.vt, t, d, out.get("h1_force"))
     notes = []
     bw = model.vt.table.specs.bandwidth
@@ -354,8 +355,7 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
         notes.append(f"the drive's amplification of the target near the specimen's "
                      f"fixed-base frequency reached {amp['near_fixed_base_uncapped']:.1f}; held "
                      f"to the cap {cap:g} there (the model's NRMS {100 * uncapped:.2f} % -> "
-                     f"{100 * nrms(out[key] + bias - T, T):.2f} %; raise --cap to follow "
-                     "the target closer)")
+                     f"{100 * capped:.2f} %; raise --cap to follow the target closer)")
     played = _played("drive", d, out, target, model, fs)
     played.metrics["amplification"] = amp
     res = DriveResult(objective, target, fs, played,
