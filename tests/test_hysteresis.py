@@ -163,13 +163,18 @@ def test_the_declared_hysteresis_explains_an_independent_truths_yielding_runs(
     the noise floor; declared elastic, the same model misses by several times more."""
     from vtable import verbs
 
-    yielding, elastic = truth_campaign(str(tmp_path_factory.mktemp("truth_yield")))
-    with_h = verbs.compare(yielding, ["pitch_flexibility"])
+    tmp = tmp_path_factory.mktemp("truth_yield")
+    yielding, elastic = truth_campaign(str(tmp))
+    with_h = verbs.compare(yielding, ["pitch_flexibility"], report=str(tmp / "report.html"))
     without = verbs.compare(elastic, ["pitch_flexibility"])
     print(f"with the declared hysteresis {with_h.error:.4f}, declared elastic "
           f"{without.error:.4f}, noise floor {with_h.noise_floor:.4f}")
     assert with_h.error < 2.0 * with_h.noise_floor, (with_h.error, with_h.noise_floor)
     assert without.error > 3 * with_h.error, (without.error, with_h.error)
+    # the report draws each run's storey loop, measured and the model's (one figure a run)
+    html = (tmp / "report.html").read_text()
+    loops = html.split("id='loops'")[1].split("<h2>")[0]
+    assert loops.count("data:image/png;base64,") == len(yielding), loops[:200]
 
 
 def test_an_analytical_model_of_a_yielding_specimen_says_it_is_linear(tmp_path):

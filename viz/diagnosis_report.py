@@ -1,8 +1,9 @@
 """The HTML report of a diagnosis: verdict, what remains unexplained, the notes, the base
 calibration, ranking tables with evidence and fit flags, the error waterfall, Bode plots
 of every run (dB on a log frequency axis with the measured ±1σ band, unwrapped phase,
-coherence beneath, the start and final models overlaid) and held-out time histories with
-the final model's fit % per channel group and the residual (matplotlib, embedded PNGs).
+coherence beneath, the start and final models overlaid), held-out time histories with
+the final model's fit % per channel group and the residual, and, for runs with storey
+channels, each storey's shear against its drift (matplotlib, embedded PNGs).
 Every axis names its unit; transfer functions are shown in the run format's units per inch
 of command. It renders the stages
 the diagnosis kept (models, predictions, comparisons) and simulates nothing; `d` is a
@@ -165,6 +166,37 @@ def time_histories(d: Any, run, groups=("table displacement", "table acceleratio
     return fig
 
 
+def hysteresis_loops(d: Any, run):
+    """Each storey's shear against its drift over the whole of `run` (the run's
+    floorK_drift and floorK_shear), measured and the final model's: a yielding storey's
+    loops, an elastic one's line. None when the run has no storey channels."""
+    storeys = [k for k in range(1, 51) if run.has(f"floor{k}_drift")
+               and run.has(f"floor{k}_shear")]
+    if not storeys or not d.stages:
+        return None
+    pred = d.stages[-1].predictions[run.name]
+    final = model_stages(d)[-1][0]
+    fam = display.run_family(run)
+    du = display.unit_for("in", fam, run.units.values())
+    fu = display.unit_for("kip", fam, run.units.values())
+    fig, ax = plt.subplots(1, len(storeys), figsize=(3.4 * len(storeys) + 0.6, 3.4),
+                           squeeze=False)
+    for a, k in zip(ax[0], storeys, strict=True):
+        u, v = run.channels[f"floor{k}_drift"], run.channels[f"floor{k}_shear"]
+        a.plot(display.from_si(u, du), display.from_si(v, fu), "k-", lw=0.6, label="measured")
+        if f"floor{k}_drift" in pred and f"floor{k}_shear" in pred:
+            a.plot(display.from_si(pred[f"floor{k}_drift"], du),
+                   display.from_si(pred[f"floor{k}_shear"], fu), color=MODEL_COLORS[final],
+                   lw=0.8, label=final)
+        a.set_xlabel(f"storey {k} drift ({du})")
+        a.set_ylabel(f"storey {k} shear ({fu})")
+        a.grid(alpha=0.3)
+        a.legend(fontsize=7)
+    fig.suptitle(f"{short(run.name)}: storey shear against drift", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
 def _plus(effects) -> str:
     return (" + " + ", ".join(effects)) if effects else ""
 
@@ -221,6 +253,11 @@ def write_report(d: Any, path: str | Path) -> Path:
             fig = time_histories(d, run)
             if fig is not None:
                 parts.append(f"<img src='data:image/png;base64,{_png(fig)}'>")
+        loops = [fig for fig in (hysteresis_loops(d, run) for run in d.runs) if fig is not None]
+        if loops:
+            parts.append("<h2 id='loops'>Hysteresis loops: storey shear against drift "
+                         "(measured and final model)</h2>")
+            parts += [f"<img src='data:image/png;base64,{_png(fig)}'>" for fig in loops]
         parts.append("<h2>Error per channel group (held out, NRMS)</h2><table><tr><th>run</th>"
                      "<th>group</th><th>start</th><th>final</th></tr>")
         for run, errs in d.comparison_start.per_run.items():
