@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from vtable import verbs
-from vtable.effects.registry import BUILT_IN
+from vtable.effects.registry import BUILT_IN, get
 
 #: what the virtual table itself has and the bare reduced model lacks
 OWN = ("force_feedback_filter", "pitch_flexibility")
@@ -34,7 +34,7 @@ COMMANDS = (("random_0.1", dict(kind="random", band=(0.0, 25.0), peak=0.1, durat
 
 def hidden_cases() -> list[str | None]:
     """None (nothing hidden), then every catalog effect the standard table lacks."""
-    return [None] + [e for e in BUILT_IN if e not in OWN]
+    return [None] + [e for e in BUILT_IN if e not in OWN and get(e).default_candidate]
 
 
 def campaign(hidden: str | None, noise: float, root: Path) -> list[str]:

@@ -71,8 +71,8 @@ from vtable.diagnose.result import (
 from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE, failing
 from vtable.diagnose.stationarity import stationarity_check
 from vtable.diagnose.statistics import Comparison, held_out_gain
+from vtable.effects.registry import default_candidates
 from vtable.effects.registry import get as effect
-from vtable.effects.registry import names as registered
 from vtable.effects.table import TableView
 from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
@@ -127,7 +127,7 @@ class Diagnoser:
         self.specimen = self.runs[0].specimen()
         self.start = Physics(nominal_open_loop(self.vt), self.specimen,
                              {e: {} for e in start_effects})
-        self.catalog = list(catalog or registered())
+        self.catalog = list(catalog or default_candidates())
         for e in self.catalog:
             effect(e)
         self.progress = progress or (lambda i, n, s: None)

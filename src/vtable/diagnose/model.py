@@ -15,6 +15,7 @@ from the base.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 import threading
@@ -28,6 +29,7 @@ from threadpoolctl import threadpool_limits
 from vtable.diagnose.calibration import LOOP, BaseParam, Calibration, base_params
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare, group_prediction, segments
+from vtable.diagnose.reuse import model_at
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
@@ -144,8 +146,10 @@ class TableModel:
                            self.vt, self.calibration, pitch=pitches(ph, self.vt))
 
     def _layout(self, ph: Physics) -> list[BaseParam]:
+        """The fitted parameters: the base's and the effects' continuous ones (a discrete
+        parameter is chosen by `_fit`, not moved by least squares)."""
         return self.base_params(ph) + [_effect_param(name, p) for name in ph.effects
-                       for p in effect(name).params]
+                                       for p in effect(name).params if not p.discrete]
 
     @staticmethod
     def _pack(ph: Physics, lay) -> np.ndarray:
@@ -232,40 +236,9 @@ class TableModel:
 
     def at(self, runs: Sequence[Run] | Campaign, values: Mapping[str, float],
            source: str = "values") -> TableModel:
-        """The model at given values of every calibrated parameter, not fitted: a
-        diagnosis's (`vtable drive --from`). `values`: "owner.param" -> value in the
-        parameter's unit, the base's keys (`base_table`) and each effect's
-        "effect.param"; a key missing or unknown to this campaign's model, or a value
-        outside its bounds, is an error naming `source` and the key. Sets `physics_`,
-        `base_`, `flags_` (values at a bound) and `notes_`, as `fit` does."""
-        campaign = Campaign.of(runs)
-        self.campaign_, self.vt, self.declared = campaign, campaign.table, campaign.specimen
-        start = self.start or Physics(nominal_open_loop(self.vt), campaign.specimen, {})
-        for e in self.effects:
-            if not start.has(e):
-                start = start.with_effect(e)
-        lay = self._layout(start)
-        keys = [p.key for p in lay]
-        unknown = sorted(set(values) - set(keys))
-        missing = [k for k in keys if k not in values]
-        if unknown or missing:
-            raise VtableError(f"{source}: " + (f"{unknown[0]!r} is not a parameter of the "
-                                               "model of these runs" if unknown else
-                                               f"no value for {missing[0]!r}")
-                              + " (was it made on these runs, with these effects?)")
-        ph = start
-        for p in lay:
-            v = float(values[p.key])
-            tol = 1e-6 * (p.upper - p.lower)
-            if not p.lower - tol <= v <= p.upper + tol:
-                raise VtableError(f"{source}: {p.key} = {v:g} is outside its bounds "
-                                  f"[{p.lower:g}, {p.upper:g}] for these runs' declarations")
-            ph = p.set(ph, min(max(v, p.lower), p.upper))
-        self.start_, self.layout_, self.physics_ = start, lay, ph
-        self.base_ = self.base_table(ph)
-        self.flags_ = self.at_bounds(ph)
-        self.notes_ = list(campaign.notes)
-        return self
+        """The model at given values of every calibrated parameter, not fitted
+        (`vtable.diagnose.reuse.model_at`: a diagnosis's, for `vtable drive --from`)."""
+        return model_at(self, Campaign.of(runs), values, source)
 
     def _fit(self, campaign: Campaign) -> TableModel:
         self.campaign_ = campaign
@@ -275,6 +248,45 @@ class TableModel:
         for e in self.effects:
             if not start.has(e):
                 start = start.with_effect(e)
+        choices = [(name, p) for name in start.effects for p in effect(name).params
+                   if p.discrete]
+        if not choices:
+            return self._fit_from(campaign, start)
+        return self._fit_choices(campaign, start, choices)
+
+    def _fit_choices(self, campaign: Campaign, start: Physics, choices) -> TableModel:
+        """Fit once for every combination of the discrete parameters' whole values that
+        the model can be built with (a storey the specimen has), keeping the lowest
+        training cost; `choice_costs_` holds each combination's."""
+        combos: list[dict] = [{}]
+        for name, p in choices:
+            combos = [{**c, (name, p.name): v} for c in combos
+                      for v in range(int(p.lower), int(p.upper) + 1)]
+        best, costs = None, {}
+        for combo in combos:
+            ph = start
+            for (name, pname), v in combo.items():
+                ph = dataclasses.replace(ph, effects={**ph.effects,
+                                                      name: {**ph.effects[name], pname: v}})
+            try:
+                ReducedModel(ph, self.vt)
+            except VtableError:  # e.g. a storey the specimen does not have
+                continue
+            sub = copy.copy(self)
+            sub._last, sub._commands = None, {}
+            sub._fit_from(campaign, ph)
+            costs[tuple(combo.values())] = sub.cost_
+            if best is None or sub.cost_ < best.cost_:
+                best = sub
+        if best is None:
+            raise VtableError(f"no value of {', '.join(f'{n}.{p.name}' for n, p in choices)} "
+                              "gives a model of these runs")
+        self.__dict__.update(best.__dict__)
+        self.choice_costs_ = costs
+        return self
+
+    def _fit_from(self, campaign: Campaign, start: Physics) -> TableModel:
+        """The fit from `start` (its discrete parameters as they are)."""
         self.start_ = start
         lay = self._layout(start)
         x0 = self._pack(start, lay)

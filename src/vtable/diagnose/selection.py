@@ -95,7 +95,7 @@ def implausibility(name: str, values: dict[str, float], table=None) -> list[tupl
     EERC table's) in prior widths (`PLAUSIBLE`)."""
     e, out = effect(name), []
     for q in e.params:
-        if q.name not in values:
+        if q.name not in values or q.discrete:  # a choice (which storey), not a distance
             continue
         v = float(values[q.name])
         d = q.default if table is None else q.default_on(table)

@@ -31,13 +31,15 @@ class Param:
     `vtable.units.UNITS`). `default` may be a callable: of no argument (evaluated when
     first needed), or of the run's table (`table.TableView` -> value), resolved on the
     model's table when the effect is applied (`default` itself is the EERC table's);
-    `source` says where the default comes from."""
+    `source` says where the default comes from. A `discrete` parameter takes whole values
+    from `lower` to `upper` (which storey, say): the fit tries each value the model can be
+    built with and keeps the best, rather than moving it by least squares."""
 
     def __init__(self, name: str, unit: str, default: float | Callable[..., float],
                  lower: float, upper: float, log: bool = False, source: str = "",
-                 doc: str = "") -> None:
+                 doc: str = "", discrete: bool = False) -> None:
         self.name, self.unit, self.lower, self.upper = name, unit, lower, upper
-        self.log, self.source, self.doc = log, source, doc
+        self.log, self.source, self.doc, self.discrete = log, source, doc, discrete
         self._default = default
         self._of_table: Callable | None = None
         if callable(default) and len(inspect.signature(default).parameters) == 1:
@@ -77,6 +79,10 @@ class Param:
         if not self.lower < self.upper:
             raise VtableError(f"{where}: parameter {self.name!r}: lower bound {self.lower:g} is "
                               f"not below the upper bound {self.upper:g}")
+        if self.discrete and (self.log or any(float(v) != int(v) for v in (self.lower,
+                                                                            self.upper))):
+            raise VtableError(f"{where}: parameter {self.name!r} is discrete: it needs whole "
+                              "bounds and a linear scale")
         if self.log and self.lower <= 0:
             raise VtableError(f"{where}: parameter {self.name!r} is fitted on a log scale, so "
                               f"its lower bound must be > 0, got {self.lower:g}")
@@ -166,6 +172,8 @@ class Effect:
     section: str = ""
     signature: str = ""
     params: tuple[Param, ...] = ()
+    #: whether `diagnose` tries it when not told which effects to try
+    default_candidate: bool = True
 
     def apply(self, m: Assembly, p: dict[str, float]) -> None:
         raise NotImplementedError(f"{type(self).__name__} must define apply(m, p)")
@@ -204,6 +212,8 @@ class Effect:
             if not (isinstance(v, int | float) and math.isfinite(v) and q.lower <= v <= q.upper):
                 raise VtableError(f"{where}: {k} = {v:g} {q.unit} is outside "
                                   f"[{q.lower:g}, {q.upper:g}]")
+            if q.discrete and v != int(v):
+                raise VtableError(f"{where}: {k} = {v:g} must be a whole number")
         return out
 
     def si(self, values: dict[str, float]) -> dict[str, float]:

@@ -15,7 +15,7 @@ from vtable.userfile import run_user_file
 BUILT_IN = ("pitch_flexibility", "force_feedback_filter", "valve_flow_nonlinearity",
             "actuator_friction", "flow_saturation", "valve_dynamics", "oil_column_air",
             "amplitude_dependent_damping", "foundation_compliance", "sensor_filter",
-            "platen_resonator")
+            "platen_resonator", "storey_yield")
 
 #: what the standard virtual table has beyond the chapter-7 base: its pitch system (Table
 #: 8.1) and the RC filter on the horizontal ΔP feedback (Table B.5), at their defaults
@@ -100,6 +100,12 @@ def names() -> list[str]:
     """Every registered effect: the catalog's, then users'."""
     _load_built_in()
     return list(_REGISTRY)
+
+
+def default_candidates() -> list[str]:
+    """The effects `diagnose` tries when not told which (`names` but those whose
+    `Effect.default_candidate` is False: asked for by name, `--effects`)."""
+    return [n for n in names() if get(n).default_candidate]
 
 
 def parse_spec(text: str, where: str = "--effect") -> tuple[str, dict[str, float]]:
