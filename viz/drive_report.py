@@ -71,13 +71,9 @@ def write_report(r: Any, path: str | Path, psa) -> Path:
     parts.append("</table><p>PSA: the 5 %-damped pseudo-acceleration spectrum of the "
                  "effective motion over the target's, 0.5–20 Hz. Used: the peak as a share "
                  "of the table's stroke, velocity and actuator capacity.</p>")
-    amp = r.drive.metrics.get("amplification")
-    if amp:
-        parts.append(f"<p>The drive's amplification of the target: largest {amp['largest']:.1f}"
-                     f" at {amp['at_hz']:.1f} Hz" + (
-                         f"; near the specimen's fixed-base frequency {amp['near_fixed_base']:.1f}"
-                         f" at {amp['near_fixed_base_hz']:.2f} Hz"
-                         if "near_fixed_base" in amp else "") + ".</p>")
+    text = r.amplification_text()
+    if text:
+        parts.append(f"<p>{e(text[0].upper() + text[1:])}.</p>")
     skipped = [b for b in r.baselines if "skipped" in b.metrics]
     for b in skipped:
         parts.append(f"<p>{e(b.name)}: skipped ({e(b.metrics['skipped'])}).</p>")

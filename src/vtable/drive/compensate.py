@@ -217,7 +217,8 @@ def amplification(T: np.ndarray, d: np.ndarray, fs: float, smooth_hz: float = 0.
 
 
 def capped_near_fixed_base(plant: DrivePlant, t: np.ndarray, T: np.ndarray, d: np.ndarray,
-                           out: dict[str, np.ndarray], cap: float, fs: float
+                           out: dict[str, np.ndarray], cap: float, fs: float,
+                           band_hz: float = BAND_HZ[1]
                            ) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, Any]]:
     """The drive with its total amplification of the target held to `cap` within
     ±`NEAR_FIXED_BASE` of each fixed-base frequency of the model's specimen (each
@@ -241,7 +242,7 @@ def capped_near_fixed_base(plant: DrivePlant, t: np.ndarray, T: np.ndarray, d: n
         capped = True
     if capped:
         out = plant.play(t, d)
-    band = (f > 0.1) & (f <= BAND_HZ[1])
+    band = (f > 0.1) & (f <= band_hz)
     i = int(np.argmax(np.where(band, G, 0)))
     amp: dict[str, Any] = {"largest": float(G[i]), "at_hz": float(f[i]),
                            "capped": capped}
@@ -335,7 +336,7 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
             break
     _, d, out = best
     uncapped = best[0]
-    d, out, amp = capped_near_fixed_base(plant, t, T, d, out, cap, fs)
+    d, out, amp = capped_near_fixed_base(plant, t, T, d, out, cap, fs, band[1])
     capped = nrms(out[key] + bias - T, T)
     check_limits(model.vt, t, d, out.get("h1_force"))
     notes = []

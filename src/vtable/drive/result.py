@@ -101,16 +101,23 @@ class DriveResult:
                    "target's, 0.5-20 Hz; specimen: its predicted peak drift over its "
                    "fixed-base peak under the target; stroke, vel, force: the drive's "
                    "peaks as shares of the table's limits")
-        amp = self.drive.metrics.get("amplification")
-        if amp:
-            out.append(f"  the drive's amplification of the target: largest {amp['largest']:.1f}"
-                       f" at {amp['at_hz']:.1f} Hz" + (
-                           f"; near the specimen's fixed-base frequency "
-                           f"{amp['near_fixed_base']:.1f} at {amp['near_fixed_base_hz']:.2f} Hz"
-                           if "near_fixed_base" in amp else ""))
+        if self.amplification_text():
+            out.append(f"  {self.amplification_text()}")
         out += [f"  note: {n}" for n in self.notes]
         out += [f"wrote {f}" for f in self.files]
         return "\n".join(out)
+
+    def amplification_text(self) -> str:
+        """The drive's amplification of the target in words (`capped_near_fixed_base`'s
+        figures), for the printed and the HTML report; '' when there are none."""
+        amp = self.drive.metrics.get("amplification")
+        if not amp:
+            return ""
+        return (f"the drive's amplification of the target: largest {amp['largest']:.1f} at "
+                f"{amp['at_hz']:.1f} Hz" + (
+                    f"; near the specimen's fixed-base frequency {amp['near_fixed_base']:.1f} "
+                    f"at {amp['near_fixed_base_hz']:.2f} Hz" if "near_fixed_base" in amp
+                    else ""))
 
     def psa(self, x: np.ndarray, f: np.ndarray) -> np.ndarray:
         """The 5 %-damped pseudo-acceleration spectrum (m/s²) of displacement x at f (Hz)."""
