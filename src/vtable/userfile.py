@@ -7,15 +7,21 @@ import hashlib
 import importlib.util
 import sys
 from pathlib import Path
+from types import ModuleType
 
 from vtable.errors import VtableError
 
 
 def run_user_file(path: str | Path, prefix: str, flag: str) -> Path:
+    """`user_module`'s file, resolved (the file is run for what it registers)."""
+    return Path(user_module(path, prefix, flag).__file__).resolve()
+
+
+def user_module(path: str | Path, prefix: str, flag: str) -> ModuleType:
     """Run `path` as the module `prefix` + a hash of its resolved path (the same name in
     every process: a compiled stage refers to its module). Any problem — a missing file,
     a syntax error, an exception while it runs — is one line naming the file (`flag`, the
-    option that names such files, in the missing-file message). Returns the resolved path.
+    option that names such files, in the missing-file message). Returns the module.
     """
     p = Path(path)
     if not p.is_file():
@@ -34,4 +40,4 @@ def run_user_file(path: str | Path, prefix: str, flag: str) -> Path:
         raise VtableError(f"{p}: line {e.lineno}: syntax error: {e.msg}") from None
     except Exception as e:
         raise VtableError(f"{p}: {type(e).__name__} while loading: {e}") from None
-    return p.resolve()
+    return module

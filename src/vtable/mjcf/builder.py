@@ -30,7 +30,14 @@ from vtable.params.bodies import (
     specimen_bodies,
     specimen_damping,
 )
-from vtable.params.specimen import NoSpecimen, RigidBlock, SDOFSpecimen, ShearBuilding, Specimen
+from vtable.params.specimen import (
+    NoSpecimen,
+    OpenSeesSpecimen,
+    RigidBlock,
+    SDOFSpecimen,
+    ShearBuilding,
+    Specimen,
+)
 from vtable.params.virtual import VirtualTable
 from vtable.units import G
 
@@ -148,8 +155,8 @@ def table_spec(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: 
         t.width = 0.05 if a.kind == "horizontal" else 0.04
         names.append(a.name)
     joints, heights, masses = _add_specimen(s, slab, specimen, pivot, with_meshes, add_mesh)
-    weight = (g.mass + sum(masses) + (specimen.mass if isinstance(specimen, RigidBlock) else 0.0)
-              ) * G
+    rigid = specimen.mass if isinstance(specimen, RigidBlock | OpenSeesSpecimen) else 0.0
+    weight = (g.mass + sum(masses) + rigid) * G
     top = None
     if joints:
         top = "top_mass" if joints[-1] == "x_s" else joints[-1].replace("x_s", "storey")
@@ -210,7 +217,11 @@ def compile_table(ts: TableSpec) -> BuiltModel:
 
 
 def _add_specimen(s, slab, spec: Specimen, pivot: float, with_meshes: bool, add_mesh):
-    """Bodies from `specimen_bodies` (the same list the analytic model reads)."""
+    """Bodies from `specimen_bodies` (the same list the analytic model reads); an OpenSees
+    model's masses as one rigid body (`_add_opensees_body`)."""
+    if isinstance(spec, OpenSeesSpecimen):
+        _add_opensees_body(slab, spec, pivot)
+        return [], [], []
     bodies = specimen_bodies(spec)
     made = {"slab": slab}
     joints, heights, masses = [], [], []
@@ -249,6 +260,27 @@ def _add_specimen(s, slab, spec: Specimen, pivot: float, with_meshes: bool, add_
                       pos=[0, 0, pivot], rgba=[0.25, 0.45, 0.7, 1], **_NO_COLLIDE)
     _add_specimen_damping(s, spec, joints)
     return joints, heights, masses
+
+
+def _add_opensees_body(slab, spec: OpenSeesSpecimen, pivot: float) -> None:
+    """The OpenSees model's masses, welded to the slab as one rigid body (its mass, centre
+    and inertia: `OpenSeesModel.rigid_body`); the model itself adds only what its relative
+    motion changes (`vtable.opensees.stepper`). Inertia about x and z from the masses'
+    spread (the model is planar: none across it), the nodes' rotational masses added to
+    all three axes."""
+    built = spec.built
+    mass, c, _ = built.rigid_body()
+    if mass <= 0:
+        return
+    r = built.coords - c
+    m = built.masses[:, 0]
+    rot = float(built.masses[:, 2].sum())
+    i_x, i_z = float((m * r[:, 1] ** 2).sum()), float((m * r[:, 0] ** 2).sum())
+    floor = 1e-6 * mass  # a stick model has no spread across one axis
+    body = slab.add_body(name="specimen", pos=[c[0], 0.0, c[1] + pivot])
+    body.explicitinertial = True
+    body.mass, body.ipos = mass, [0.0, 0.0, 0.0]
+    body.inertia = [i_x + rot + floor, i_x + i_z + rot + floor, i_z + rot + floor]
 
 
 #: prefix of the fixed tendons that carry a building's damping (`_add_specimen_damping`)
@@ -300,7 +332,8 @@ def check_specimen(vt: VirtualTable, spec: Specimen) -> None:
                           f"kips ({vt.limits_source})")
     tops = {RigidBlock: lambda: spec.height + (spec.size[1] / 2 if spec.size else 0.0),
             SDOFSpecimen: lambda: spec.height,
-            ShearBuilding: lambda: max(spec.heights)}
+            ShearBuilding: lambda: max(spec.heights),
+            OpenSeesSpecimen: lambda: spec.built.top + line}
     top = tops[type(spec)]() - line
     if top > top_clear:
         raise VtableError(f"specimen reaches {units.from_si(top, 'ft'):.1f} ft above the table "

@@ -13,7 +13,7 @@ from vtable.effects.registry import get
 from vtable.errors import VtableError
 from vtable.models.hysteresis import add_specimen_hysteresis
 from vtable.params.loops import OpenLoop
-from vtable.params.specimen import Specimen
+from vtable.params.specimen import OpenSeesSpecimen, Specimen
 from vtable.params.table import ServoConstants
 from vtable.params.virtual import VirtualTable, virtual_table
 from vtable.units import G
@@ -84,10 +84,13 @@ class Physics:
         return out
 
     def apply(self, assembly, model: str) -> None:
-        """The specimen's declared yielding storeys (`models.hysteresis`), then every
+        """The specimen's declared yielding storeys (`models.hysteresis`) or OpenSees model,
+        then every
         effect through its hook for `model` ("reduced" or "virtual"), its table-dependent
         defaults on the assembly's table."""
         add_specimen_hysteresis(assembly, self.specimen)
+        if isinstance(self.specimen, OpenSeesSpecimen):
+            assembly.add_opensees(self.specimen)
         for name in self.effects:
             e = get(name)
             getattr(e, model)(assembly, e.si(self.values_on(name, assembly.table)))

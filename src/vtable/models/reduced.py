@@ -130,6 +130,10 @@ class ReducedAssembly:
         self.add_spring(name, None, stiffness, damping)
         self.set_actuator(reaction=name)
 
+    def add_opensees(self, spec) -> None:
+        raise VtableError("the reduced model cannot hold an OpenSees specimen: only the "
+                          "virtual table steps it (vtable simulate)")
+
     def add_force(self, law: Callable, a: str, b: str | None = None,
                   params: Sequence[float] = (), states: int = 0, mass: float = 0.0,
                   stiffness: float | None = None) -> None:

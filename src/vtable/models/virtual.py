@@ -128,6 +128,14 @@ class VirtualAssembly:
     def add_storey_quadratic_damper(self, c2: float) -> None:
         self.add_storey_force(quadratic_damper, [c2])
 
+    def add_opensees(self, spec) -> None:
+        """An OpenSees specimen stepped with the platen (`controllers.opensees_specimen`)."""
+        from vtable.controllers.opensees_specimen import OpenSeesSpecimen
+
+        depth = self.vt.table.geometry.actuator_line_depth
+        self.controllers.append(OpenSeesSpecimen(spec.built, depth,
+                                                 float(self.ts.spec.option.timestep)))
+
     def add_output_filter(self, fn: Callable) -> None:
         self.filters.append(fn)
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -24,7 +25,7 @@ from vtable.params.base import Params, check_number, plain, quantity
 from vtable.params.hysteresis import Hysteresis, parse_hysteresis
 from vtable.units import G
 
-KINDS = ("none", "rigid", "sdof", "shear_building")
+KINDS = ("none", "rigid", "sdof", "shear_building", "opensees")
 #: the most storeys a shear building may have (eq 4.5 models; a lab specimen has a few)
 MAX_STOREYS = 50
 #: structural damping ratios are fractions of critical, at most 1 (critically damped)
@@ -282,9 +283,33 @@ def _rayleigh_anchors(v: Any, where: str) -> tuple[tuple[float, float], tuple[fl
     return out[0], out[1]
 
 
-Specimen = NoSpecimen | RigidBlock | SDOFSpecimen | ShearBuilding
+@dataclass(frozen=True)
+class OpenSeesSpecimen(Params):
+    """Any openseespy model (`model`: a Python file defining ``build(ops)``, see
+    `vtable.opensees.model`), stepped by the virtual table with the platen
+    (`vtable.opensees.stepper`). Its masses, floors and heights are read from the model it
+    builds (openseespy needed: the ``opensees`` extra)."""
+
+    model: str = plain(doc="the model's Python file (relative to the TOML file)")
+    kind: str = plain(default="opensees")
+    title: str = plain(default="OpenSees model")
+    source: str = plain(default="")
+
+    @property
+    def built(self):
+        """The model as vtable reads it (`vtable.opensees.model.OpenSeesModel`)."""
+        from vtable.opensees.model import load_model
+
+        return load_model(self.model)
+
+    @property
+    def mass(self) -> float:
+        return self.built.mass
+
+
+Specimen = NoSpecimen | RigidBlock | SDOFSpecimen | ShearBuilding | OpenSeesSpecimen
 _BY_KIND: dict[str, type] = {"none": NoSpecimen, "rigid": RigidBlock, "sdof": SDOFSpecimen,
-                             "shear_building": ShearBuilding}
+                             "shear_building": ShearBuilding, "opensees": OpenSeesSpecimen}
 
 
 #: a structural damping ratio at or above this is legal but suspicious (structures on a
@@ -315,8 +340,10 @@ def specimen_hints(specimen: Specimen, where: str = "specimen") -> list[str]:
     return out
 
 
-def specimen_from_dict(d: dict[str, Any], where: str = "specimen") -> Specimen:
-    """A specimen from a TOML table whose `kind` picks the class (run-format names)."""
+def specimen_from_dict(d: dict[str, Any], where: str = "specimen",
+                       folder: Path | None = None) -> Specimen:
+    """A specimen from a TOML table whose `kind` picks the class (run-format names); an
+    OpenSees model's file is found relative to `folder` (the TOML file's), and loaded."""
     if not isinstance(d, dict):
         raise VtableError(f"{where}: expected a table")
     kind = d.get("kind")
@@ -328,6 +355,16 @@ def specimen_from_dict(d: dict[str, Any], where: str = "specimen") -> Specimen:
         raise VtableError(f"{where}.hysteresis: only a sdof or shear_building specimen has "
                           f"storeys that yield, not {kind!r}")
     spec = _specimen(kind, d, where)
+    if isinstance(spec, OpenSeesSpecimen):
+        path = Path(spec.model)
+        if folder is not None and not path.is_absolute():
+            path = folder / path
+        spec = dataclasses.replace(spec, model=str(path.resolve()) if path.is_file()
+                                   else str(path))
+        try:
+            spec.built  # noqa: B018 - loads and checks the model now, naming the key
+        except VtableError as e:
+            raise VtableError(f"{where}.model: {e}") from None
     if hyst is None:
         return spec
     h = parse_hysteresis(hyst, len(spec.weights) if isinstance(spec, ShearBuilding) else 1,

@@ -21,7 +21,8 @@ FORMAT = "vtable-run/1"
 SPECIMEN_KEYS = {"none": (), "rigid": ("weight_kip", "height_in"),
                  "sdof": ("weight_kip", "height_in", "frequency_hz", "damping", "hysteresis"),
                  "shear_building": ("weights_kip", "heights_in", "frequencies_hz", "damping",
-                                    "damping_rayleigh", "hysteresis")}
+                                    "damping_rayleigh", "hysteresis"),
+                 "opensees": ("model",)}
 
 
 def specimen_table(spec) -> dict[str, Any]:

@@ -16,7 +16,12 @@ from typing import Any
 from vtable import units
 from vtable.analytic.structure import specimen_frequencies
 from vtable.errors import VtableError, did_you_mean
-from vtable.params.specimen import Specimen, specimen_from_dict, specimen_hints
+from vtable.params.specimen import (
+    OpenSeesSpecimen,
+    Specimen,
+    specimen_from_dict,
+    specimen_hints,
+)
 from vtable.runs.channels import channel_dimension
 from vtable.runs.format import FORMAT, CommandDescription, check_control, command_from_dict
 from vtable.runs.table import TableDescription, table_from_dict
@@ -69,8 +74,11 @@ def declare(meta: dict[str, Any], where: str, folder: Path | None = None) -> Dec
         notes += check_control(meta["control"], f"{where} [control]")
     specimen = None
     if "specimen" in meta:
-        specimen = specimen_from_dict(meta["specimen"], f"{where} [specimen]")
+        specimen = specimen_from_dict(meta["specimen"], f"{where} [specimen]", folder)
         notes += specimen_hints(specimen, f"{where} [specimen]")
+        if isinstance(specimen, OpenSeesSpecimen):  # the models read its floors
+            specimen, note = as_building(specimen, table)
+            notes.append(f"{where} [specimen]: {note}")
     else:
         notes.append(f"{where}: no [specimen]: treated as a bare table")
     command = None
@@ -83,6 +91,17 @@ def declare(meta: dict[str, Any], where: str, folder: Path | None = None) -> Dec
                        control=dict(meta.get("control", {})), specimen=specimen,
                        command=command, units=dict(meta.get("units", {})),
                        notes=tuple(notes), meta=meta)
+
+
+def as_building(spec: OpenSeesSpecimen, table) -> tuple[Specimen, str]:
+    """An OpenSees specimen as the shear building identification and diagnosis read
+    (`vtable.opensees.equivalent`), on the run's table."""
+    from vtable.opensees.equivalent import equivalent_building
+    from vtable.params.lab import lab_table
+    from vtable.params.virtual import virtual_table_for
+
+    depth = virtual_table_for(lab_table(table)).pivot_depth
+    return equivalent_building(spec, depth)
 
 
 def check_meta(meta: dict[str, Any], where: str, folder: Path | None) -> Declaration:

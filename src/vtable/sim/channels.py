@@ -67,6 +67,8 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
             si[f"floor{k}_acc"] = res.sensor(f"floor{k}_acc")[:, 0]
             x = res.sensor(f"floor{k}_pos")[:, 0]
             si[f"floor{k}_disp"] = x - x[0] if len(x) else x
+    if res.specimen is not None:  # an OpenSees model's floors (`OpenSeesSpecimen.history`)
+        si.update(opensees_channels(res))
     if getattr(b.specimen, "hysteresis", None) is not None:  # a yielding specimen's storeys
         n = len(b.structure_joints)
         acc = [si[f"floor{k}_acc"] for k in range(1, n)] + [si["acc_n_ne"]]
@@ -88,6 +90,31 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
             out[f"state_{s}"] = res.controller_states[:, i]
             extra_units[f"state_{s}"] = u  # the stage's (`Stage.state_units`), SI
     return out, extra_units
+
+
+def opensees_channels(res: SimResult) -> dict[str, np.ndarray]:
+    """An OpenSees specimen's floors as a building's (floorK_acc, floorK_disp, floorK_drift,
+    floorK_shear, the top floor's instruments) from its recorded relative motion u, ü and
+    the platen's: a floor at η above the actuator line moves x_t + θ η + u (small θ)."""
+    model = res.built.specimen.built
+    h = res.specimen
+    eta = model.floor_heights + res.built.vt.table.geometry.actuator_line_depth
+    x_t, a_t = res.joint("x"), res.joint("x", "qacc")
+    theta, alpha = res.joint("pitch"), res.joint("pitch", "qacc")
+    out: dict[str, np.ndarray] = {}
+    acc, drift = [], []
+    for k in range(h["u"].shape[1]):
+        a = a_t + alpha * eta[k] + h["a"][:, k]
+        x = x_t + theta * eta[k] + h["u"][:, k]
+        out[f"floor{k + 1}_acc"] = a
+        out[f"floor{k + 1}_disp"] = x - x[0] if len(x) else x
+        acc.append(a)
+        drift.append(h["u"][:, k] - (h["u"][:, k - 1] if k else 0.0))
+    top = h["u"].shape[1]
+    out["acc_n_ne"] = out["acc_n_nw"] = out[f"floor{top}_acc"]
+    out["pot_n_sw"] = out["pot_n_se"] = out[f"floor{top}_disp"]
+    out.update(storey_channels(drift, acc, model.floor_masses))
+    return out
 
 
 def result_run(res: SimResult, meta: dict, name: str, full_state: bool = True,

@@ -78,7 +78,7 @@ def load_specimen(name_or_path: str | None) -> Specimen:
     p = Path(name_or_path)
     if name_or_path.endswith(".toml") or p.is_file():
         d = read_toml(p)
-        return specimen_from_dict(d.get("specimen", d), f"{p} [specimen]")
+        return specimen_from_dict(d.get("specimen", d), f"{p} [specimen]", p.parent)
     return presets.specimen(name_or_path)
 
 

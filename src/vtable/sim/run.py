@@ -160,4 +160,6 @@ def every(res: SimResult, k: int) -> SimResult:
     """Every k-th recorded sample of `res` (the same as recording at k times the step)."""
     sub = {f.name: getattr(res, f.name)[::k] for f in dataclasses.fields(SimResult)
            if isinstance(getattr(res, f.name), np.ndarray)}
+    if res.specimen is not None:
+        sub["specimen"] = {name: v[::k] for name, v in res.specimen.items()}
     return dataclasses.replace(res, **sub)

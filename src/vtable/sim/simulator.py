@@ -71,6 +71,8 @@ class SimResult:
     pressure_forces: np.ndarray | None = None
     #: the units of `controller_state_names` (`vtable.units`)
     controller_state_units: tuple[str, ...] = ()
+    #: an OpenSees specimen's recorded floors and wrench (`OpenSeesSpecimen.history`)
+    specimen: dict[str, np.ndarray] | None = None
 
     def joint(self, name: str, what: str = "qpos") -> np.ndarray:
         """A joint's history; a locked slab joint (left out of the model) is zero."""
@@ -147,10 +149,12 @@ class Simulator:
         dup = {a for a in driven if driven.count(a) > 1}
         if dup:
             raise VtableError(f"actuator {sorted(dup)[0]} is driven by two controllers")
-        for c in self.controllers:
-            c.bind(names)
         self.n = len(names)
         self.data = mujoco.MjData(self.model)
+        for c in self.controllers:
+            c.bind(names)
+            if hasattr(c, "attach"):  # a controller that reads or pushes the bodies itself
+                c.attach(self.model, self.data)
         mujoco.mj_forward(self.model, self.data)
         self.rest_length = self.data.actuator_length[: self.n].copy()
         self._fuse()
@@ -306,6 +310,9 @@ class Simulator:
                         controller_state_names=self.state_names,
                         controller_state_units=self.state_units)
         res.pressure_forces = np.where(np.isnan(pressure), res.forces, pressure)
+        for c in self.controllers:
+            if hasattr(c, "history"):
+                res.specimen = c.history(out_idx)
         res.exceedances = exceedances(self.built, tk, ext_all, forces_all)
         return res
 
