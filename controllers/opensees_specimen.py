@@ -19,6 +19,11 @@ from vtable.opensees.model import OpenSeesModel
 from vtable.opensees.stepper import OpenSeesStepper
 
 
+#: the most nodes whose every displacement is kept for drawing (memory: 2 floats a node
+#: a step)
+MAX_DRAWN_NODES = 500
+
+
 class OpenSeesSpecimen:
     """The model `model` at `depth` (m, the actuator line below the table top), stepped
     at `dt` (the control step)."""
@@ -28,6 +33,8 @@ class OpenSeesSpecimen:
     def __init__(self, model: OpenSeesModel, depth: float, dt: float) -> None:
         self.stepper = OpenSeesStepper(model, depth, dt)
         self.model = model
+        #: keep every node's displacement (the deformed shape drawn) for models this small
+        self.draw = len(model.nodes) <= MAX_DRAWN_NODES
 
     def attach(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
         """The simulator's model and data: the slab's body and joints."""
@@ -50,6 +57,7 @@ class OpenSeesSpecimen:
         self.k = 0
         self.a_before = np.zeros(3)
         self.rows: list[np.ndarray] = []
+        self.nodes: list[np.ndarray] = []
 
     def _acc(self, i: int | None) -> float:
         return 0.0 if i is None else float(self.d.qacc[i])
@@ -70,12 +78,19 @@ class OpenSeesSpecimen:
                           d.qfrc_applied)
         u, acc = self.stepper.floors()
         self.rows.append(np.concatenate([u, acc, [f_xi, f_eta, m_y]]))
+        if self.draw:
+            self.nodes.append(self.stepper.u[:, :2].astype(np.float32))
         self.k += 1
         return np.zeros(0)
 
     def history(self, rows: np.ndarray) -> dict[str, np.ndarray]:
         """The recorded steps `rows`: each floor's relative displacement and acceleration
-        (n_t, n_floors; m, m/s²) and the wrench on the platen (F_ξ, F_η, M_y; N, N m)."""
+        (n_t, n_floors; m, m/s²), the wrench on the platen (F_ξ, F_η, M_y; N, N m) and,
+        for a model of at most `MAX_DRAWN_NODES` nodes, every node's relative displacement
+        (n_t, n_nodes, 2; m)."""
         h = np.asarray(self.rows)[rows]
         n = len(self.model.floors)
-        return {"u": h[:, :n], "a": h[:, n:2 * n], "wrench": h[:, 2 * n:]}
+        out = {"u": h[:, :n], "a": h[:, n:2 * n], "wrench": h[:, 2 * n:]}
+        if self.draw:
+            out["nodes"] = np.asarray(self.nodes)[rows]
+        return out

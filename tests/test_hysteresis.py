@@ -256,3 +256,12 @@ def test_diagnose_finds_the_storey_that_yields_and_its_yield_drift(case, tmp_pat
     assert p["yield_drift"] == pytest.approx(u_y, rel=0.2), p
     assert p["post_yield_ratio"] == pytest.approx(alpha, abs=0.05), p
     assert d.unexplained is None and d.final_error < 2 * d.noise_floor, d.verdict
+    # the .rrd draws each storey's loop, measured and modelled (issue 21, "see it")
+    from vtable.viz.diagnosis_rerun import log_diagnosis, read_blueprint_views
+    from vtable.viz.rerun_scene import read_rrd
+
+    rrd = log_diagnosis(d, f"{tmp}/d.rrd")
+    ents = [str(e) for e in read_rrd(rrd)]
+    assert any(e.endswith(f"loops/storey{storey}/model") for e in ents), ents
+    assert any(v.get("class") == "2D" and v.get("name", "").startswith(f"storey {storey}:")
+               for v in read_blueprint_views(rrd))

@@ -198,3 +198,22 @@ def test_opensees_run_reads_back_as_a_building(fibre_run):
     assert isinstance(spec, ShearBuilding) and spec.n == 3
     np.testing.assert_allclose(units.from_si(np.array(spec.weights), "kip"), 15.0, rtol=1e-5)
     assert any("read as a 3-storey shear building" in n for n in run.reports)
+
+
+def test_the_recording_draws_the_deformed_frame_and_its_loops(fibre_run, tmp_path):
+    """The .rrd: the frame's 9 elements (6 columns, 3 beams) as lines on the slab at every
+    sample, its nodes displaced (×10), and each storey's shear-drift loop with its view."""
+    from vtable.viz.diagnosis_rerun import read_blueprint_views
+    from vtable.viz.rerun_scene import log_run, read_rrd
+
+    exp, _ = fibre_run
+    rrd = log_run(exp.run, tmp_path / "frame.rrd")
+    ents = read_rrd(rrd)
+    frame = ents["/world/table/slab/opensees"]
+    strips = [s for b in frame if "LineStrips3D:strips" in b.schema.names
+              for s in b.column("LineStrips3D:strips").to_pylist()]
+    assert len(strips) == len(exp.run.time) and all(len(s) == 9 for s in strips)
+    for k in (1, 2, 3):
+        assert f"/loops/storey{k}/loop" in ents and f"/loops/storey{k}/now" in ents
+    names = [v.get("name", "") for v in read_blueprint_views(rrd) if v.get("class") == "2D"]
+    assert sorted(n.split(":")[0] for n in names) == ["storey 1", "storey 2", "storey 3"]

@@ -94,6 +94,34 @@ def _text(d) -> str:
     return "\n".join(lines)
 
 
+def _loops(rec: rr.RecordingStream, run, pred: dict[str, np.ndarray], base: str,
+           color: list[int]) -> list:
+    """Each storey's shear against its drift, measured (black) and as the final model
+    predicts it, both scaled by the measured peaks (a 2D view draws x and y at one scale;
+    the shear negated for Rerun's downward y); their views."""
+    views = []
+    k = 1
+    while run.has(f"floor{k}_drift") and run.has(f"floor{k}_shear"):
+        d = units.from_si(run.channels[f"floor{k}_drift"], "in")
+        v = units.from_si(run.channels[f"floor{k}_shear"], "kip")
+        dm, vm = float(np.max(np.abs(d))) or 1.0, float(np.max(np.abs(v))) or 1.0
+        ent = f"{base}/storey{k}"
+        rec.log(f"{ent}/measured", rr.LineStrips2D([np.column_stack([d / dm, -v / vm])],
+                                                   colors=[MEASURED], radii=[0.004]),
+                static=True)
+        if f"floor{k}_drift" in pred and f"floor{k}_shear" in pred:
+            dp = units.from_si(pred[f"floor{k}_drift"], "in")
+            vp = units.from_si(pred[f"floor{k}_shear"], "kip")
+            rec.log(f"{ent}/model", rr.LineStrips2D([np.column_stack([dp / dm, -vp / vm])],
+                                                    colors=[color], radii=[0.004]),
+                    static=True)
+        views.append(rrb.Spatial2DView(
+            name=f"storey {k}: shear (up, ±{vm:.3g} kip) against drift (right, ±{dm:.3g} "
+                 "in): measured black, the final model in its colour", origin=ent))
+        k += 1
+    return views
+
+
 def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis") -> Path:
     """Write the .rrd of diagnosis `d` (from the stages it kept: nothing is simulated again)
     to `path`."""
@@ -137,9 +165,13 @@ def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis")
                 residuals.append(rrb.TimeSeriesView(
                     name=f"{g}: model − measured ({shown})", origin=f"{base}/residual",
                     plot_legend=LEGEND))
+            loops = _loops(rec, run, d.stages[-1].predictions.get(run.name, {}) if d.stages
+                           else {}, f"runs/{name}/loops", stage_color(len(preds) - 1))
             if signals:
                 tabs.append(rrb.Tabs(rrb.Grid(*signals, grid_columns=2, name="measured & models"),
                                      rrb.Grid(*residuals, grid_columns=2, name="residuals"),
+                                     *([rrb.Grid(*loops, grid_columns=2, name="storey loops")]
+                                       if loops else []),
                                      name=name))
         hist = d.history()
         if hist:

@@ -34,18 +34,65 @@ def log_run(run, path: str | Path, *, exaggeration: float = 50.0) -> Path:
 
 def log_simulation(res, path: str | Path, channels: dict[str, np.ndarray] | None = None,
                    *, exaggeration: float = 50.0, force_scale: float = 0.02,
-                   application_id: str = "vtable") -> Path:
+                   deformation: float = 10.0, application_id: str = "vtable") -> Path:
     """Write an .rrd of a `SimResult`: scene under ``world/``, channels under
-    ``channels/``. Pitch and roll are multiplied by `exaggeration` in the 3D view only;
-    force arrows are `force_scale` m per kip."""
+    ``channels/``, each storey's shear against its drift under ``loops/`` (a run with
+    storey channels). Pitch and roll are multiplied by `exaggeration` in the 3D view only,
+    an OpenSees model's deformation by `deformation`; force arrows are `force_scale` m per
+    kip."""
     path = Path(path)
     with rrd_file(path, application_id) as rec:
-        _log_simulation(rec, res, channels, exaggeration, force_scale)
+        _log_simulation(rec, res, channels, exaggeration, force_scale, deformation)
     return path
 
 
+def storey_loops(rec: rr.RecordingStream, times, channels: dict[str, np.ndarray],
+                 prefix: str = "loops") -> list[str]:
+    """Each storey's shear against its drift (channels in run-file units): the whole loop as
+    a line and the present state as a point moving along it, each axis scaled by its peak
+    (a 2D view draws x and y at one scale; y up: the shear is negated for Rerun's
+    downward y). Returns the view names' storeys, "storey K: ±D in, ±V kip"."""
+    out = []
+    k = 1
+    while f"floor{k}_drift" in channels and f"floor{k}_shear" in channels:
+        d, v = channels[f"floor{k}_drift"], channels[f"floor{k}_shear"]
+        dm, vm = float(np.max(np.abs(d))) or 1.0, float(np.max(np.abs(v))) or 1.0
+        xy = np.column_stack([d / dm, -v / vm])
+        ent = f"{prefix}/storey{k}"
+        rec.log(f"{ent}/loop", rr.LineStrips2D([xy], colors=[[60, 110, 180]], radii=[0.004]),
+                static=True)
+        rr.send_columns(f"{ent}/now", indexes=times, recording=rec,
+                        columns=rr.Points2D.columns(positions=xy).partition(
+                            np.ones(len(xy), int)))
+        rec.log(f"{ent}/now", rr.Points2D.from_fields(colors=[[220, 40, 40]], radii=[0.03]),
+                static=True)
+        out.append(f"storey {k}: drift ±{dm:.3g} in (right), shear ±{vm:.3g} kip (up)")
+        k += 1
+    return out
+
+
+def _log_opensees(rec: rr.RecordingStream, res, times, depth: float, scale: float) -> None:
+    """An OpenSees model's elements as lines on the slab, its nodes displaced by `scale`
+    times their displacement relative to the platen."""
+    model = res.built.specimen.built
+    nodes = res.specimen.get("nodes") if res.specimen else None
+    if nodes is None or not model.elements:
+        return
+    xy = model.coords[None, :, :] + scale * nodes  # (n_t, n_nodes, 2)
+    pos = np.stack([xy[..., 0], np.zeros(xy.shape[:2]), xy[..., 1] + depth], axis=-1)
+    ia = [model.index(a) for a, _ in model.elements]
+    ib = [model.index(b) for _, b in model.elements]
+    strips = np.stack([pos[:, ia], pos[:, ib]], axis=2).reshape(-1, 2, 3)
+    ent = "world/table/slab/opensees"
+    rr.send_columns(ent, indexes=times, recording=rec,
+                    columns=rr.LineStrips3D.columns(strips=strips).partition(
+                        np.full(len(xy), len(ia))))
+    rec.log(ent, rr.LineStrips3D.from_fields(colors=[[60, 110, 180]], radii=[0.03]),
+            static=True)
+
+
 def _log_simulation(rec: rr.RecordingStream, res, channels, exaggeration: float,
-                    force_scale: float) -> None:
+                    force_scale: float, deformation: float = 10.0) -> None:
     b, vt = res.built, res.built.vt
     g, lay = vt.table.geometry, vt.layout
     t = res.t - res.t[0]
@@ -91,6 +138,8 @@ def _log_simulation(rec: rr.RecordingStream, res, channels, exaggeration: float,
                             columns=rr.Transform3D.columns(
                                 translation=np.column_stack([drift, np.zeros(n),
                                                              np.full(n, h)])))
+    elif b.specimen.kind == "opensees":
+        _log_opensees(rec, res, times, vt.pivot_depth, deformation)
     elif b.specimen.kind == "rigid":
         rec.log("world/table/slab/specimen", rr.Boxes3D(
             centers=[[0, 0, b.specimen.height]],
@@ -119,12 +168,14 @@ def _log_simulation(rec: rr.RecordingStream, res, channels, exaggeration: float,
     for name, v in (channels or {}).items():
         rr.send_columns(f"channels/{name}", indexes=times, recording=rec,
                         columns=rr.Scalars.columns(scalars=np.asarray(v, dtype=float)))
-    rec.send_blueprint(blueprint(list(channels or {})))
+    loops = storey_loops(rec, times, channels or {})
+    rec.send_blueprint(blueprint(list(channels or {}), loops))
 
 
-def blueprint(channel_names: list[str]) -> rrb.Blueprint:
+def blueprint(channel_names: list[str], loops: list[str] = ()) -> rrb.Blueprint:
     """3D view beside the table-motion, pitch, pitch-acceleration, force and specimen time
-    series: one quantity per view, its unit in its name."""
+    series (one quantity per view, its unit in its name), and each storey's loop (`loops`:
+    `storey_loops`' names) under them."""
     groups = {
         "table motion (in)": ["h_span", "avg_hdisp"],
         "pitch (rad)": ["pitch_disp"],  # one quantity per axis: θ and θ̈ apart
@@ -135,9 +186,13 @@ def blueprint(channel_names: list[str]) -> rrb.Blueprint:
     views = [rrb.TimeSeriesView(name=title, origin="channels",
                                 contents=[f"channels/{c}" for c in names if c in channel_names])
              for title, names in groups.items() if any(c in channel_names for c in names)]
+    scene = rrb.Spatial3DView(name="virtual table (pitch and roll exaggerated)", origin="world")
+    if loops:
+        scene = rrb.Vertical(scene, rrb.Horizontal(*[
+            rrb.Spatial2DView(name=name, origin=f"loops/storey{k}")
+            for k, name in enumerate(loops, 1)]), row_shares=[3, 2])
     return rrb.Blueprint(rrb.Horizontal(
-        rrb.Spatial3DView(name="virtual table (pitch and roll exaggerated)", origin="world"),
-        rrb.Vertical(*views) if views else rrb.TimeSeriesView(origin="channels"),
+        scene, rrb.Vertical(*views) if views else rrb.TimeSeriesView(origin="channels"),
         column_shares=[3, 2]))
 
 

@@ -39,6 +39,8 @@ class OpenSeesModel:
     coords: np.ndarray  # (n, 2), m
     masses: np.ndarray  # (n, 3): m_x, m_y (kg), rotational (kg m²)
     fixed: np.ndarray  # (n, 3) bool: the DOFs the model fixes (ops.fix)
+    #: the elements as node-tag pairs (a many-node element: its outline), for drawing
+    elements: tuple[tuple[int, int], ...]
     base: tuple[int, ...]
     floors: tuple[tuple[int, ...], ...]
     units: str
@@ -183,7 +185,12 @@ def read(p: Path, ops, out: dict) -> OpenSeesModel:
         if not fixed[nodes.index(t)].all():
             raise VtableError(f"{p}: base node {t} must be fixed in every DOF "
                               "(ops.fix(node, 1, 1, 1))")
-    model = OpenSeesModel(p, nodes, coords, mass, fixed, base, floors, units)
+    lines = []
+    for e in ops.getEleTags():
+        ns = [int(t) for t in ops.eleNodes(e)]
+        ring = ns if len(ns) <= 2 else [*ns, ns[0]]
+        lines += [(a, b) for a, b in zip(ring, ring[1:], strict=False) if a != b]
+    model = OpenSeesModel(p, nodes, coords, mass, fixed, tuple(lines), base, floors, units)
     fm = model.floor_masses
     if np.any(fm <= 0):
         k = int(np.argmax(fm <= 0)) + 1
