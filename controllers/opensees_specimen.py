@@ -18,7 +18,6 @@ import numpy as np
 from vtable.opensees.model import OpenSeesModel
 from vtable.opensees.stepper import OpenSeesStepper
 
-
 #: the most nodes whose every displacement is kept for drawing (memory: 2 floats a node
 #: a step)
 MAX_DRAWN_NODES = 500

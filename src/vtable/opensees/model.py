@@ -13,6 +13,7 @@ platen's motion and the transient analysis (`vtable.opensees.stepper`).
 from __future__ import annotations
 
 import functools
+import itertools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -189,7 +190,7 @@ def read(p: Path, ops, out: dict) -> OpenSeesModel:
     for e in ops.getEleTags():
         ns = [int(t) for t in ops.eleNodes(e)]
         ring = ns if len(ns) <= 2 else [*ns, ns[0]]
-        lines += [(a, b) for a, b in zip(ring, ring[1:], strict=False) if a != b]
+        lines += [(a, b) for a, b in itertools.pairwise(ring) if a != b]
     model = OpenSeesModel(p, nodes, coords, mass, fixed, tuple(lines), base, floors, units)
     fm = model.floor_masses
     if np.any(fm <= 0):
