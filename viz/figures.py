@@ -141,6 +141,27 @@ def coupled_sweep_png(path: str | Path, x, x_label: str, curves: dict, reference
     return _save(fig, path)
 
 
+def ductility_png(path: str | Path, y, period: float, title: str = "") -> Path:
+    """Ductility demand and residual drift against period, fixed base and on the table
+    (`vtable.studies.yielding.DuctilitySweep`), the specimen's own period marked."""
+    fig, ax = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
+    for values, label, style in ((y.ductility_fixed, "fixed base", "k--"),
+                                 (y.ductility_table, "on the table", "C0-")):
+        ax[0].plot(y.periods, values, style, lw=1.2, label=label)
+    for values, label, style in ((y.residual_fixed, "fixed base", "k--"),
+                                 (y.residual_table, "on the table", "C0-")):
+        ax[1].plot(y.periods, np.abs(values) / 0.0254, style, lw=1.2, label=label)
+    for a in ax:
+        a.axvline(period, color="C3", lw=0.8, label="the specimen's period")
+        a.grid(alpha=0.3)
+        a.legend(fontsize=8)
+    ax[0].set_ylabel("ductility μ = max|u| / u_y")
+    ax[1].set_ylabel("|residual drift| (in)")
+    ax[1].set_xlabel("period (s)")
+    fig.suptitle(title)
+    return _save(fig, path)
+
+
 def drive_png(path: str | Path, r, psa) -> Path:
     """`drive_figure` written as PNG."""
     return _save(drive_figure(r, psa), path)

@@ -392,6 +392,9 @@ class Assessment:
     compensated_error: float
     files: list[Path]
     notes: list[str]
+    #: a yielding specimen's ductility and residual drift, fixed base and on the table,
+    #: across the swept periods (`vtable.studies.yielding.DuctilitySweep`)
+    yielding: Any = None
 
     def to_json(self) -> dict[str, Any]:
         return jsonable({"verdict": self.verdict, "specimen": self.specimen,
@@ -400,11 +403,23 @@ class Assessment:
                          "rocking_share": self.rocking_share,
                          "time_elongation": self.time_elongation,
                          "compensated_error": self.compensated_error,
+                         **({"yielding": self.yielding.to_json()} if self.yielding else {}),
                          "files": _names(self.files), "notes": self.notes})
 
     def report(self) -> str:
         out = [f"note: {n}" for n in self.notes]
-        out += [self.verdict, "wrote " + ", ".join(_names(self.files))]
+        out.append(self.verdict)
+        if self.yielding is not None:
+            y = self.yielding
+            out.append(f"yielding ({y.held} as declared): ductility and residual drift, fixed "
+                       "base / on the table")
+            out.append(f"{'T s':>6s} {'mu fixed':>9s} {'mu table':>9s} {'change':>7s} "
+                       f"{'residual fixed':>15s} {'residual table':>15s}")
+            for T, mf, mt, rf, rt in zip(y.periods, y.ductility_fixed, y.ductility_table,
+                                         y.residual_fixed, y.residual_table, strict=True):
+                out.append(f"{T:6.3f} {mf:9.2f} {mt:9.2f} {100 * (mt / mf - 1):+6.0f} % "
+                           f"{rf / 0.0254:+12.3f} in {rt / 0.0254:+12.3f} in")
+        out.append("wrote " + ", ".join(_names(self.files)))
         return "\n".join(out)
 
 

@@ -14,7 +14,9 @@ from vtable.results import Assessment, Study
 from vtable.signals.processing import process_record
 from vtable.signals.records import load_record
 from vtable.sim.experiment import load_specimen
+from vtable.params.specimen import SDOFSpecimen
 from vtable.studies import interaction as ia
+from vtable.studies import yielding
 from vtable.studies.scaleout import height_record_study, run_study
 from vtable.viz import figures
 
@@ -29,7 +31,8 @@ def assess(specimen: str = "sdof_frame", record: str = "elcentro", raw: bool = F
     else:
         cmd = process_record(rec)
         acc, dt, label = cmd.acceleration, cmd.dt, f"{rec.name} (§9.2 processed)"
-    res = ia.assess(load_specimen(specimen), acc, dt, label)
+    spec = load_specimen(specimen)
+    res = ia.assess(spec, acc, dt, label)
     s = res.specimen
     folder = Path(out)
     f_s = np.linspace(0.5, 10.0, 39)
@@ -53,11 +56,27 @@ def assess(specimen: str = "sdof_frame", record: str = "elcentro", raw: bool = F
         files.append(figures.coupled_sweep_png(
             folder / f"coupled_vs_{label_x}.png", f_s, "f_s (Hz)", curves, ref,
             f"hybrid model: varying structural {label_x} (Figs 9.9-9.12)"))
+    notes = list(getattr(rec, "notes", ()))
+    ductility = None
+    if getattr(spec, "hysteresis", None) is not None:
+        if not isinstance(spec, SDOFSpecimen):
+            notes.append("the ductility sweep takes a sdof specimen; this building's yielding "
+                         "storeys are assessed through its first mode's linear models only")
+        else:
+            cmd = process_record(rec)  # the table's displacement command (also with --raw)
+            if raw:
+                notes.append("the ductility sweep plays the §9.2-processed record (the table "
+                             "model needs its displacement command)")
+            periods = np.unique(np.append(np.geomspace(0.1, 2.0, 12), 1.0 / s.frequency))
+            ductility = yielding.sweep(spec, cmd.time, cmd.displacement, cmd.acceleration,
+                                       periods)
+            files.append(figures.ductility_png(
+                folder / "ductility_vs_period.png", ductility, 1.0 / s.frequency,
+                f"{s.title}: ductility and residual drift, {rec.name}"))
     return Assessment(res.verdict(), s.title, label,
                       {k: {"f_hz": f, "damping": z} for k, (f, z) in res.modes.items()},
                       res.psv_at_specimen, res.rocking_share, res.elongation,
-                      res.compensated_error, [Path(f) for f in files],
-                      list(getattr(rec, "notes", ())))
+                      res.compensated_error, [Path(f) for f in files], notes, ductility)
 
 
 def study(store: str, heights: Sequence[float], records: Sequence[str] = ("elcentro",),
