@@ -55,7 +55,7 @@ class DuctilitySweep:
 
 def _with_tail(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     dt = float(t[1] - t[0])
-    n = int(round(TAIL / dt))
+    n = round(TAIL / dt)
     return (np.concatenate([t, t[-1] + dt * np.arange(1, n + 1)]),
             np.concatenate([x, np.full(n, x[-1])]))
 
@@ -98,7 +98,7 @@ def sweep(spec: SDOFSpecimen, t: np.ndarray, x_c: np.ndarray, acc: np.ndarray,
     tt, xx = _with_tail(t, x_c)
     _, aa = _with_tail(t, acc)
     aa[len(t):] = 0.0
-    n_end = int(round(SETTLED / (t[1] - t[0])))
+    n_end = round(SETTLED / (t[1] - t[0]))
     out = {k: [] for k in ("mf", "mt", "rf", "rt")}
     for T in np.asarray(periods, dtype=float):
         s = dataclasses.replace(spec, frequency=1.0 / T)

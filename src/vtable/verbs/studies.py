@@ -10,11 +10,11 @@ from typing import Any
 
 import numpy as np
 
+from vtable.params.specimen import SDOFSpecimen
 from vtable.results import Assessment, Study
 from vtable.signals.processing import process_record
 from vtable.signals.records import load_record
 from vtable.sim.experiment import load_specimen
-from vtable.params.specimen import SDOFSpecimen
 from vtable.studies import interaction as ia
 from vtable.studies import yielding
 from vtable.studies.scaleout import height_record_study, run_study
