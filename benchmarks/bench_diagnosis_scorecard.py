@@ -8,6 +8,7 @@ diagnosed with the full catalog; one line per case and the acceptance totals.
     python benchmarks/bench_diagnosis_scorecard.py --list
     python benchmarks/bench_diagnosis_scorecard.py --set 18         # issue 18's 30 cases
     python benchmarks/bench_diagnosis_scorecard.py --set all        # both (70 cases)
+    python benchmarks/bench_diagnosis_scorecard.py --set 21         # issue 21's yielding set
 
 Campaigns and results are cached under $VTABLE_SCORECARD_CACHE (default
 ~/.cache/vtable-scorecard; results are keyed by the case and the vtable source, so a changed
@@ -55,7 +56,17 @@ def line(case: sc.Case, r: dict) -> str:
     u = r["unexplained"]
     ratio = f"{u['ratio_to_floor']:.1f}" if u else "-"
     found = ",".join(r["found"]) or "-"
-    return (f"{case.name:<30} {_short(case.kind):<8} {_truth(case):<44.44} {found:<56.56} "
+    if isinstance(case, sc.Case21) and r.get("storey_yield"):
+        p = r["storey_yield"]
+        found = found.replace("storey_yield", f"storey_yield(s{p['storey']:g},"
+                                               f"{p['yield_drift']:.3g}in,{p['post_yield_ratio']:.2g})")
+    truth_ = _truth(case)
+    if isinstance(case, sc.Case21) and case.yielding:
+        h = case.yielding
+        truth_ = "+".join(x for x in (f"yield(s{','.join(map(str, sc.expected_storeys(case)))},"
+                                      f"{h['yield_drift_in']:g}in,{h['post_yield_ratio']:g})",
+                                      _truth(case)) if x != "-")
+    return (f"{case.name:<30} {_short(case.kind):<8} {truth_:<44.44} {found:<56.56} "
             f"{(r['first_ranked'] or '-'):<24.24} {r['start_error']:6.2%} "
             f"{r['final_error']:6.2%} {r['noise_floor']:6.2%} {ratio:>5} "
             f"{r['time_s']:5.0f}s  {'yes' if r['ok'] else 'NO: ' + r['why']}"
@@ -63,7 +74,10 @@ def line(case: sc.Case, r: dict) -> str:
 
 
 def _case(name: str) -> sc.Case | sc.Case18:
-    return sc.BY_NAME[name] if name in sc.BY_NAME else sc.BY_NAME_18[name]
+    for by in (sc.BY_NAME, sc.BY_NAME_18, sc.BY_NAME_21):
+        if name in by:
+            return by[name]
+    raise KeyError(name)
 
 
 def _expected(case: sc.Case18) -> str:
@@ -158,8 +172,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--fresh", action="store_true", help="ignore cached results")
     ap.add_argument("--json", help="write every result to this file")
     ap.add_argument("--list", action="store_true", help="list the cases and exit")
-    ap.add_argument("--set", choices=("12", "18", "all"), default="12",
-                    help="issue 12's 40 cases (default), issue 18's 30, or all")
+    ap.add_argument("--set", choices=("12", "18", "21", "all"), default="12",
+                    help="issue 12's 40 cases (default), issue 18's 30, issue 21's yielding "
+                         "set (its own catalog: + storey_yield), or 12 and 18")
     a = ap.parse_args(argv)
     if a.list:
         for c in sc.CASES if a.set in ("12", "all") else []:
@@ -173,18 +188,20 @@ def main(argv: list[str] | None = None) -> int:
                   f"{_expected(c)}")
         return 0
     names = ([c.name for c in sc.CASES] if a.set in ("12", "all") else []) + (
-        [c.name for c in sc.CASES_18] if a.set in ("18", "all") else [])
+        [c.name for c in sc.CASES_18] if a.set in ("18", "all") else []) + (
+        [c.name for c in sc.CASES_21] if a.set == "21" else [])
     if a.quick:
         names = list(sc.QUICK)
     if a.cases:
         names = [n.strip() for n in a.cases.split(",") if n.strip()]
-        bad = [n for n in names if n not in sc.BY_NAME and n not in sc.BY_NAME_18]
+        bad = [n for n in names if n not in sc.BY_NAME and n not in sc.BY_NAME_18
+               and n not in sc.BY_NAME_21]
         if bad:
             print(f"unknown case(s) {', '.join(bad)}; --list shows them", file=sys.stderr)
             return 2
     print(f"diagnosis scorecard: {len(names)} case(s), {a.jobs} process(es), cache "
           f"{sc.cache_root()}, engine {sc.engine_fingerprint()}")
-    if any(n in sc.BY_NAME for n in names):
+    if any(n in sc.BY_NAME or n in sc.BY_NAME_21 for n in names):
         print(HEAD)
     if any(n in sc.BY_NAME_18 for n in names):
         print(HEAD_18)
@@ -204,7 +221,8 @@ def main(argv: list[str] | None = None) -> int:
             print(_line(n, r), flush=True)
     wall = time.perf_counter() - t0
     done_all = [(_case(n), results[n]) for n in names]
-    done = [(c, r) for c, r in done_all if isinstance(c, sc.Case)]
+    done21 = [(c, r) for c, r in done_all if isinstance(c, sc.Case21)]
+    done = [(c, r) for c, r in done_all if isinstance(c, sc.Case) and c not in dict(done21)]
     done18 = [(c, r) for c, r in done_all if isinstance(c, sc.Case18)]
     tot = sc.totals(done)
     tot18 = sc.totals18(done18)
@@ -214,19 +232,30 @@ def main(argv: list[str] | None = None) -> int:
         _totals12(tot)
     if done18:
         _totals18(tot18)
+    tot21 = sc.totals21(done21)
+    if done21:
+        fr = tot21["yielding_fraction"]
+        print(f"issue 21: yielding storey and yield drift right in {_frac(tot21['yielding'])}"
+              + (f" ({fr:.0%}; acceptance >= 90 %)" if fr is not None else ""))
+        print(f"  elastic cases right with storey_yield in the catalog: "
+              f"{_frac(tot21['elastic'])}; a false storey_yield in "
+              f"{tot21['false_storey_yield'] or 'none'} (acceptance: none)")
+        print(f"  outside the catalog, unexplained: {_frac(tot21['outside'])} "
+              "(acceptance: all)")
     n_new = sum(not r.get("cached") for _, r in done_all)
     t_all = sum(r["time_s"] for _, r in done_all)
     per = t_all / len(done_all) if done_all else 0.0
     print(f"diagnosis time: {t_all:.0f} s in all, {per:.0f} s per case "
           f"({n_new} diagnosed now, {len(done_all) - n_new} from the cache); wall {wall:.0f} s")
-    met = (not done or tot["accepted"]) and (not done18 or tot18["accepted"])
+    met = ((not done or tot["accepted"]) and (not done18 or tot18["accepted"])
+           and (not done21 or tot21["accepted"]))
     print("acceptance on these cases: " + ("MET" if met else "NOT MET")
           + (" (issue 18's set alone; the whole scorecard below)" if done and done18 else ""))
     if done and done18:
         _combined(done, done18, tot, tot18)
     if a.json:
         Path(a.json).write_text(json.dumps({"totals": tot, "totals_18": tot18,
-                                            "results": results}, indent=1,
+                                            "totals_21": tot21, "results": results}, indent=1,
                                            default=str))
     return 0
 

@@ -295,9 +295,13 @@ def diagnose_case(case: Case, root: Path | None = None, use_cache: bool = True,
     from vtable.runs import read_run
 
     t1, c1 = time.perf_counter(), time.process_time()
+    catalog = None
+    if isinstance(case, Case21):  # the catalog with the yielding storey asked for
+        from vtable.effects.registry import default_candidates
+        catalog = [*default_candidates(), *EXTRA_21]
     try:
         runs = [read_run(p) for p in paths]
-        d = Diagnoser(runs, workers=workers).diagnose()
+        d = Diagnoser(runs, workers=workers, catalog=catalog).diagnose()
     except VtableError as e:  # vtable refuses the campaign: a failure naming the refusal
         if not isinstance(case, Case18):
             raise
@@ -320,6 +324,8 @@ def diagnose_case(case: Case, root: Path | None = None, use_cache: bool = True,
            "noise_floor": d.noise_floor, "unexplained": d.unexplained, "verdict": d.verdict,
            "base_at_bounds": d.base_at_bounds,
            "samples": int(sum(len(r.time) for r in runs)),
+           "storey_yield": (dict(d.final.effects["storey_yield"])
+                            if "storey_yield" in d.final_effects else None),
            "time_generate_s": t_gen, "time_s": t_diag, "cpu_s": c_diag,
            "diagnosis": d.to_json()}
     out.update(judge(case, out))
@@ -361,6 +367,8 @@ def judge(case: Case | Case18, r: dict) -> dict:
     """The acceptance rule for one case: {"ok": bool, "why": str}."""
     if isinstance(case, Case18):
         return judge18(case, r)
+    if isinstance(case, Case21):
+        return judge21(case, r)
     found = sorted(r["found"])
     if case.kind == "in_catalog":
         ok = found == case.hidden
@@ -721,4 +729,149 @@ def totals18(results: list[tuple[Case18, dict]]) -> dict[str, Any]:
             "refused": sorted(c.name for c, r in results if r.get("refused")),
             "accepted": (frac is not None and frac >= 0.95 and n_fp == 0 and all(une)
                          and all(sus)),
+            "time_s": sum(r["time_s"] for _, r in results)}
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 21's yielding cases (CASES_21: in the benchmark with --set 21). The truth's specimen
+# has Bouc-Wen storeys (tests/truth: its own integration of the law from Wen 1976) that the
+# declaration does not (declared elastic, and off as in CASES), diagnosed with the catalog
+# plus storey_yield (`EXTRA_21`: the effect is asked for by name; it is not among the
+# default candidates). Beside them, elastic cases of CASES and two outside-catalog ones,
+# diagnosed with the same catalog: no storey_yield may be added to an elastic specimen, and
+# the outside stays unexplained.
+
+EXTRA_21 = ("storey_yield",)
+
+
+@dataclass(frozen=True)
+class Case21(Case):
+    """A scorecard case diagnosed with `EXTRA_21` in the catalog. `hysteresis`: the truth's
+    yielding storeys (truth.sdof/building's dict; None: elastic), declared elastic."""
+
+    hysteresis: tuple[tuple[str, Any], ...] | None = None
+
+    @property
+    def yielding(self) -> dict | None:
+        return None if self.hysteresis is None else {k: (list(v) if isinstance(v, tuple)
+                                                         else v) for k, v in self.hysteresis}
+
+    @property
+    def hidden(self) -> list[str]:
+        return sorted([*super().hidden, *(["storey_yield"] if self.hysteresis else [])])
+
+    def definition(self) -> dict[str, Any]:
+        d = super().definition()
+        d["hysteresis"] = self.yielding
+        d["catalog_extra"] = list(EXTRA_21)
+        return d
+
+    def elastic_specimen(self) -> truth.Specimen:
+        return Case.true_specimen(self)
+
+    def true_specimen(self) -> truth.Specimen:
+        spec = self.elastic_specimen()
+        if self.hysteresis is None:
+            return spec
+        if self.specimen == "sdof":
+            return truth.sdof(68.0, 219.0, 2.87, 0.02, hysteresis=self.yielding)
+        return truth.building([25.0, 25.0, 25.0], [110.0, 160.0, 210.0],
+                              storey_k_kip_in=[120.0, 100.0, 80.0], xi=0.02,
+                              hysteresis=self.yielding)
+
+    def declared_specimen(self) -> truth.Specimen:
+        spec = self.elastic_specimen()
+        if self.perturb is None:
+            return spec
+        f, d, w = self.perturb
+        if self.specimen == "3storey":
+            f, w = 0.75 * f, min(w, 0.05)
+        return truth.perturb(spec, seed=self.seed + 1000, frequency=f, damping=d, weight=w)
+
+
+def _cases_21() -> list[Case21]:
+    def y(name, spec, storeys, u_y, alpha, effects=None, **kw):
+        h = {"yield_drift_in": u_y, "post_yield_ratio": alpha}
+        if spec == "3storey":
+            h["storeys"] = storeys
+        return Case21(name, "in_catalog", effects or {}, specimen=spec,
+                      hysteresis=tuple((k, tuple(v) if isinstance(v, list) else v)
+                                       for k, v in h.items()), **kw)
+
+    out = [
+        y("yield_sdof_1", "sdof", [1], 0.3, 0.10, fs=200.0, noise=0.02, seed=61),
+        y("yield_sdof_2", "sdof", [1], 0.5, 0.05, fs=256.0, noise=0.01, seed=62,
+          record="synthetic", perturb=(0.02, 1.44, 0.04)),
+        y("yield_sdof_3", "sdof", [1], 0.25, 0.15, fs=500.0, noise=0.03, seed=63,
+          perturb=(0.04, 2.0, 0.08)),
+        y("yield_sdof_4", "sdof", [1], 0.4, 0.03, fs=200.0, noise=0.02, seed=64,
+          record="synthetic"),
+        y("yield_3storey_s1", "3storey", [1], 0.25, 0.05, fs=256.0, noise=0.02, seed=65),
+        y("yield_3storey_s2", "3storey", [2], 0.2, 0.05, fs=200.0, noise=0.03, seed=66,
+          record="synthetic"),
+        y("yield_3storey_s3", "3storey", [3], 0.2, 0.08, fs=500.0, noise=0.01, seed=67,
+          perturb=(0.02, 1.44, 0.04)),
+        y("yield_sdof+friction", "sdof", [1], 0.3, 0.10,
+          {"actuator_friction": {"friction": 3.0}}, fs=200.0, noise=0.02, seed=68),
+        y("yield_3storey_s2+pitch", "3storey", [2], 0.25, 0.05, {"pitch_flexibility": {}},
+          pitch="hybrid", fs=200.0, noise=0.02, seed=69, record="synthetic"),
+        y("yield_3storey_s1s2", "3storey", [1, 2], 0.25, 0.05, fs=200.0, noise=0.02,
+          seed=70),
+    ]
+    for name in ("null_sdof_elcentro", "null_3storey_synthetic", "misdeclared_sdof_elcentro",
+                 "misdeclared_3storey_elcentro", "amplitude_dependent_damping_2",
+                 "actuator_friction_2", "backlash_2", "pump_drop"):
+        c = BY_NAME[name]
+        kw = {f.name: getattr(c, f.name) for f in dataclasses.fields(Case)}
+        out.append(Case21(**{**kw, "name": f"{name}+sy"}))
+    return out
+
+
+CASES_21: list[Case21] = _cases_21()
+BY_NAME_21: dict[str, Case21] = {c.name: c for c in CASES_21}
+
+
+def expected_storeys(case: Case21) -> list[int]:
+    h = case.yielding or {}
+    return list(h.get("storeys", [1]))
+
+
+def judge21(case: Case21, r: dict) -> dict:
+    """Issue 21's rule: a yielding case's final set is exactly the hidden one with
+    storey_yield on the storey that yields (a case of two: both) and its yield drift within
+    20 %; an elastic case adds no storey_yield and follows issue 12's rule; an outside one
+    stays unexplained. {"ok", "why", "false_storey_yield"}."""
+    found = sorted(r["found"])
+    false_yield = case.hysteresis is None and "storey_yield" in found
+    if case.hysteresis is not None:
+        p = r.get("storey_yield") or {}
+        want = expected_storeys(case)
+        u_y = (case.yielding or {})["yield_drift_in"]
+        why = []
+        if found != case.hidden:
+            why.append(f"found {found or 'nothing'}, hidden {case.hidden}")
+        if p and [int(p.get("storey", 0))] != want:
+            why.append(f"storey {p.get('storey')}, the truth's {want}")
+        if p and abs(p["yield_drift"] / u_y - 1) > 0.2:
+            why.append(f"yield drift {p['yield_drift']:.3g} in, the truth's {u_y:g}")
+        return {"ok": not why, "why": "; ".join(why), "false_storey_yield": False}
+    base = judge(Case(**{f.name: getattr(case, f.name) for f in dataclasses.fields(Case)}), r)
+    why = "; ".join(w for w in (base["why"], "a storey_yield on an elastic specimen"
+                                if false_yield else "") if w)
+    return {"ok": base["ok"] and not false_yield, "why": why,
+            "false_storey_yield": false_yield}
+
+
+def totals21(results: list[tuple[Case21, dict]]) -> dict[str, Any]:
+    """Issue 21's figures: the yielding cases right (storey and yield drift), the false
+    storey_yield on elastic cases, the outside ones unexplained."""
+    yl = [bool(r["ok"]) for c, r in results if c.hysteresis is not None]
+    fy = sorted(c.name for c, r in results if r.get("false_storey_yield"))
+    out_ok = [bool(r["ok"]) for c, r in results if c.kind == "outside"]
+    el = [bool(r["ok"]) for c, r in results if c.hysteresis is None and c.kind != "outside"]
+    frac = sum(yl) / len(yl) if yl else None
+    return {"yielding": (sum(yl), len(yl)), "yielding_fraction": frac,
+            "false_storey_yield": fy, "elastic": (sum(el), len(el)),
+            "outside": (sum(out_ok), len(out_ok)),
+            "accepted": frac is not None and frac >= 0.9 and not fy and all(out_ok),
             "time_s": sum(r["time_s"] for _, r in results)}
