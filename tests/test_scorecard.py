@@ -164,6 +164,44 @@ def test_the_rules_of_issue_18():
     assert not tot["accepted"] and tot["time_s"] == 5.0
 
 
+def test_issue_21_yielding_cases_and_their_rule():
+    """The yielding set covers one storey (the frame, each storey of the building), two
+    storeys, yielding with another effect, declarations off (elastic, frequency, damping and
+    weight moved), rates and noise levels; beside them elastic and outside cases diagnosed
+    with the same catalog. judge21 on hand-made results."""
+    cases = sc.CASES_21
+    yielding = [c for c in cases if c.hysteresis is not None]
+    assert len(yielding) >= 10 and len({c.key() for c in cases}) == len(cases)
+    storeys = {(c.specimen, tuple(sc.expected_storeys(c))) for c in yielding}
+    assert {("sdof", (1,)), ("3storey", (1,)), ("3storey", (2,)), ("3storey", (3,)),
+            ("3storey", (1, 2))} <= storeys
+    assert any(len(c.hidden) > 1 for c in yielding)  # with another effect
+    for c in yielding:  # the truth yields; the declaration is elastic and off
+        assert c.true_specimen().hysteresis is not None
+        assert c.declared_specimen().hysteresis is None and c.perturb is not None
+    assert {c.fs for c in yielding} == {200.0, 256.0, 500.0}
+    assert {c.noise for c in yielding} == {0.01, 0.02, 0.03}
+    assert {c.kind for c in cases if c.hysteresis is None} == {
+        "null", "misdeclared_null", "in_catalog", "outside"}
+    frame = sc.BY_NAME_21["yield_sdof_1"]
+    r = {"found": ["storey_yield"], "unexplained": None,
+         "storey_yield": {"storey": 1.0, "yield_drift": 0.33, "post_yield_ratio": 0.1}}
+    assert sc.judge(frame, r)["ok"]
+    assert not sc.judge(frame, {**r, "storey_yield": {**r["storey_yield"],
+                                                      "yield_drift": 0.37}})["ok"]
+    two = sc.BY_NAME_21["yield_3storey_s1s2"]
+    assert not sc.judge(two, {**r, "found": ["storey_yield"]})["ok"]  # one of the two
+    null = sc.BY_NAME_21["null_sdof_elcentro+sy"]
+    j = sc.judge(null, r)
+    assert not j["ok"] and j["false_storey_yield"]
+    out = sc.BY_NAME_21["backlash_2+sy"]
+    assert sc.judge(out, {"found": [], "unexplained": {"ratio_to_floor": 3.0}})["ok"]
+    tot = sc.totals21([(frame, {**r, "ok": True, "time_s": 1.0}),
+                       (null, {**r, **j, "time_s": 1.0})])
+    assert tot["yielding"] == (1, 1) and tot["false_storey_yield"] == [null.name]
+    assert not tot["accepted"]
+
+
 def test_issue_18_cases_have_keys_and_expectations():
     keys = {c.key() for c in sc.CASES_18}
     assert len(keys) == len(sc.CASES_18) == 30  # every definition hashes apart

@@ -51,6 +51,12 @@ def simulation_summary(exp, fam: str = "imperial") -> dict[str, Any]:
              for k, u in PEAK_CHANNELS if k in ch}
     notes = list(exp.notes)
     h = getattr(exp.specimen, "hysteresis", None)
+    if getattr(exp.specimen, "kind", "") == "opensees":  # every storey of the model
+        k = 1
+        while f"floor{k}_drift" in ch:
+            for c, u in ((f"floor{k}_drift", "in"), (f"floor{k}_shear", "kip")):
+                peaks[c] = {"peak": float(units.from_si(np.max(np.abs(ch[c])), u)), "unit": u}
+            k += 1
     for k in (h.storeys if h is not None else ()):
         for c, u in ((f"floor{k}_drift", "in"), (f"floor{k}_shear", "kip")):
             if c in ch:
