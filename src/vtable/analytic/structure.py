@@ -130,7 +130,10 @@ def building_matrices(b: ShearBuilding) -> tuple[np.ndarray, np.ndarray, np.ndar
 
 
 def modal_damping(b: ShearBuilding) -> np.ndarray:
-    """The damping ratio of each fixed-base mode of `b`, lowest mode first."""
+    """The damping ratio of each fixed-base mode of `b`, lowest mode first (the modes are
+    computed only for Rayleigh damping, whose ratios depend on them)."""
+    if b.rayleigh is None:
+        return b.damping_ratios(np.ones(b.n))
     M = np.diag(b.masses)
     w, _ = fixed_base_modes(M, stiffness_matrix(building_stiffnesses(b)))
     return b.damping_ratios(w)

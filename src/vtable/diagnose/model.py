@@ -162,7 +162,17 @@ class TableModel:
 
     @classmethod
     def _unpack(cls, x: np.ndarray, ph: Physics, lay) -> Physics:
+        """`ph` with every parameter of `lay` at `x`. One at a time, a parameter can meet
+        a state the others have not reached yet (a Rayleigh building's mode damping computed
+        with the new frequencies and the old masses: no shear building has them); such a
+        parameter is set again once the others are."""
+        later = []
         for xi, p in zip(x, lay, strict=True):
+            try:
+                ph = cls._set(ph, p, xi)
+            except VtableError:
+                later.append((xi, p))
+        for xi, p in later:
             ph = cls._set(ph, p, xi)
         return ph
 
