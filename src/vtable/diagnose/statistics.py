@@ -132,3 +132,20 @@ def standard_errors(z: float) -> str:
         return f"{z:.1f} standard errors of the noise"
     return (f"{'more' if z > 0 else 'less'} than {'+' if z > 0 else '-'}10^6 standard errors "
             "of the noise (the runs are nearly noise-free: the model's resolution decides)")
+
+
+def correlations(jac: np.ndarray, n: int) -> np.ndarray:
+    """Correlation matrix of the fitted parameters (Gauss-Newton: cov ∝ (JᵀJ)⁻¹); a
+    parameter the residual does not depend on gets NaN on its diagonal."""
+    J = np.asarray(jac, dtype=float)
+    JtJ = J.T @ J
+    d = np.sqrt(np.diag(JtJ))
+    R = np.full((n, n), np.nan)
+    ok = d > 1e-12 * max(float(d.max()) if d.size else 0.0, 1e-300)
+    if not ok.any():
+        return R
+    cov = np.linalg.pinv(JtJ[np.ix_(ok, ok)] / np.outer(d[ok], d[ok]))
+    s = np.sqrt(np.abs(np.diag(cov)))
+    sub = cov / np.outer(s, s)
+    R[np.ix_(ok, ok)] = sub
+    return R

@@ -24,6 +24,7 @@ from vtable.controllers import (
     ServoController,
     quadratic_damper,
 )
+from vtable.controllers.opensees_specimen import OpenSeesSpecimen
 from vtable.effects.table import TableView
 from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.hydraulics.law import group_law
@@ -130,8 +131,6 @@ class VirtualAssembly:
 
     def add_opensees(self, spec) -> None:
         """An OpenSees specimen stepped with the platen (`controllers.opensees_specimen`)."""
-        from vtable.controllers.opensees_specimen import OpenSeesSpecimen
-
         depth = self.vt.table.geometry.actuator_line_depth
         self.controllers.append(OpenSeesSpecimen(spec.built, depth,
                                                  float(self.ts.spec.option.timestep)))

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vtable.analytic.structure import building_matrices, building_stiffnesses, fixed_base_modes
 from vtable.errors import VtableError
 from vtable.opensees.library import explain, opensees
 from vtable.opensees.model import OpenSeesModel, build, read
@@ -80,12 +81,9 @@ def equivalent_building(spec: OpenSeesSpecimen, depth: float) -> tuple[ShearBuil
           "title": f"{spec.title} (as a shear building)", "source": str(model.path)}
     try:
         b = ShearBuilding(frequencies=tuple(map(float, freqs)), **kw)
-        from vtable.analytic.structure import building_stiffnesses
         building_stiffnesses(b)
         how = "its first " + ", ".join(f"{f:.3g}" for f in freqs) + " Hz lateral modes"
     except VtableError:
-        from vtable.analytic.structure import building_matrices, fixed_base_modes
-
         unit = ShearBuilding(stiffnesses=(1.0,) * len(weights), **kw)
         M, K, _ = building_matrices(unit)
         w, _ = fixed_base_modes(M, K)

@@ -15,6 +15,7 @@ import functools
 import importlib.util
 import os
 import sys
+import tempfile
 from pathlib import Path
 from types import ModuleType
 
@@ -62,8 +63,6 @@ def opensees() -> ModuleType:
 @functools.cache
 def log_path() -> Path:
     """Where this process's OpenSees writes its messages (not to the terminal)."""
-    import tempfile
-
     fd, name = tempfile.mkstemp(prefix="vtable-opensees-", suffix=".log")
     os.close(fd)
     atexit.register(lambda: Path(name).unlink(missing_ok=True))

@@ -38,7 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from vtable.errors import VtableError
-from vtable.opensees.library import last_message
+from vtable.opensees.library import last_message, opensees
 from vtable.opensees.model import OpenSeesModel, build, read
 from vtable.units import G
 
@@ -69,8 +69,6 @@ class OpenSeesStepper:
     def start(self) -> None:
         """Build the model afresh (`build(ops)`), apply gravity statically, and set up the
         platen loads and the transient analysis."""
-        from vtable.opensees.library import opensees
-
         ops = self.ops = opensees()
         m = self.model
         read(m.path, ops, build(m.path, ops))  # the same model, checked again

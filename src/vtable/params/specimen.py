@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from vtable.errors import VtableError
+from vtable.opensees.model import load_model
 from vtable.params.base import Params, check_number, plain, quantity
 from vtable.params.hysteresis import Hysteresis, parse_hysteresis
 from vtable.units import G
@@ -298,8 +299,6 @@ class OpenSeesSpecimen(Params):
     @property
     def built(self):
         """The model as vtable reads it (`vtable.opensees.model.OpenSeesModel`)."""
-        from vtable.opensees.model import load_model
-
         return load_model(self.model)
 
     @property

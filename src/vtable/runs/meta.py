@@ -16,12 +16,14 @@ from typing import Any
 from vtable import units
 from vtable.analytic.structure import specimen_frequencies
 from vtable.errors import VtableError, did_you_mean
+from vtable.opensees.equivalent import equivalent_building
 from vtable.params.specimen import (
     OpenSeesSpecimen,
     Specimen,
     specimen_from_dict,
     specimen_hints,
 )
+from vtable.params.virtual import virtual_table_for
 from vtable.runs.channels import channel_dimension
 from vtable.runs.format import FORMAT, CommandDescription, check_control, command_from_dict
 from vtable.runs.table import TableDescription, table_from_dict
@@ -96,9 +98,7 @@ def declare(meta: dict[str, Any], where: str, folder: Path | None = None) -> Dec
 def as_building(spec: OpenSeesSpecimen, table) -> tuple[Specimen, str]:
     """An OpenSees specimen as the shear building identification and diagnosis read
     (`vtable.opensees.equivalent`), on the run's table."""
-    from vtable.opensees.equivalent import equivalent_building
     from vtable.params.lab import lab_table
-    from vtable.params.virtual import virtual_table_for
 
     depth = virtual_table_for(lab_table(table)).pivot_depth
     return equivalent_building(spec, depth)

@@ -27,8 +27,10 @@ from scipy.integrate import solve_ivp
 from vtable.controllers.force_law import law_argument, law_params
 from vtable.errors import VtableError
 from vtable.models.hysteresis import bouc_wen
+from vtable.models.reduced import ReducedModel
 from vtable.params.specimen import SDOFSpecimen
 from vtable.params.virtual import VirtualTable
+from vtable.sim.run import standard_physics
 
 TAIL = 5.0  # s of rest after the record, for the residual drift
 SETTLED = 1.0  # s at the end over which the residual drift is averaged
@@ -90,9 +92,6 @@ def sweep(spec: SDOFSpecimen, t: np.ndarray, x_c: np.ndarray, acc: np.ndarray,
           periods, vt: VirtualTable | None = None) -> DuctilitySweep:
     """`DuctilitySweep` of the yielding SDOF `spec` under the command x_c (m) with its
     acceleration `acc` (m/s²) on the uniform grid t, over `periods` (s)."""
-    from vtable.models.reduced import ReducedModel
-    from vtable.sim.run import standard_physics
-
     if not isinstance(spec, SDOFSpecimen) or spec.hysteresis is None:
         raise VtableError("the ductility sweep needs a sdof specimen with [specimen.hysteresis]")
     tt, xx = _with_tail(t, x_c)
