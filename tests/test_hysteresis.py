@@ -311,3 +311,23 @@ def test_ductility_on_the_table_matches_the_virtual_table():
     assert y.ductility_table[0] == pytest.approx(mu_virtual, rel=0.03)
     assert y.ductility_table[1] == pytest.approx(y.ductility_fixed[1], rel=0.05)
     assert y.held == "yield drift"
+
+
+def test_a_yield_drift_that_no_run_reaches_blocks_the_candidate():
+    """Selection criterion 5 (`Effect.unseen`): a storey_yield fitted with a yield drift
+    beyond the storey's largest predicted drift (an elastic specimen's smooth softening
+    bought with an extrapolated u_y, as on the scorecard's pump_drop case) is flagged on
+    its own parameter, which blocks it; one the runs reach is not."""
+    from vtable.diagnose.result import Candidate
+    from vtable.effects import get
+
+    e = get("storey_yield")
+    pred = {"r1": {"floor1_drift": np.array([0.0, 0.01, -0.02]), "floor2_drift": np.ones(3)},
+            "r2": {"floor1_drift": np.array([0.005])}}  # m: storey 1 peaks at 0.787 in
+    assert e.unseen({"storey": 1.0, "yield_drift": 0.7, "post_yield_ratio": 0.1}, pred) is None
+    why = e.unseen({"storey": 1.0, "yield_drift": 0.8, "post_yield_ratio": 0.1}, pred)
+    assert why == ("storey_yield.yield_drift 0.8 in is never reached (storey 1's largest "
+                   "drift in the model's prediction is 0.787 in): no run shows it yield")
+    assert e.unseen({"storey": 2.0, "yield_drift": 20.0, "post_yield_ratio": 0.1}, pred) is None
+    c = Candidate("storey_yield", {}, 0.0, 0.0, "", 3, None, [why], None)
+    assert c.blocking == [why]

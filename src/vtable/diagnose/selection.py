@@ -36,7 +36,9 @@ verdict names the declaration (`engine`);
 
 and (5) its fit is sound: no fitted effect parameter within 1 % of a bound (fitted scale),
 correlated beyond 0.95 with a base parameter, or without influence on the data
-(Gauss-Newton covariance at the solution). A candidate failing (5) is flagged in the
+(Gauss-Newton covariance at the solution), and the effect acts in the fitted model's own
+predictions of the runs (`Effect.unseen`: a storey_yield whose yield drift no run reaches
+is a smooth softening bought with an extrapolated u_y). A candidate failing (5) is flagged in the
 ranking and not added on that evidence; the next sound one may be. Base parameters at a
 bound are flagged too but do not block: they say the model still lacks something.
 """
@@ -80,8 +82,10 @@ SELECTION = (f"an effect is added when, on the held-out last 40 % of every run a
              "effect's measured agreement with the virtual table beyond the base's: the most "
              "a patch of that model-form difference can remove); and its fit is sound: none "
              "of its own parameters within 1 % of a bound, correlated beyond 0.95 with a base "
-             "parameter, or without influence on the data. When the calibrated starting "
-             "model leans on a bound of its declared values, the gain must also pass (1)-(4) "
+             "parameter, or without influence on the data, and the effect acts within what "
+             "the runs reach (a yield drift that no run reaches is not a yield). When the "
+             "calibrated starting model leans on a bound of its declared values, the gain "
+             "must also pass (1)-(4) "
              "over the starting model refitted with those bounds widened: an effect is not "
              "added where a wrong declaration explains as much. The best such candidate "
              "(largest gain) is added. After each addition every effect added earlier is "

@@ -34,6 +34,7 @@ from vtable.controllers import kinds
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.model import TableModel
+from vtable.effects.registry import get as effect
 from vtable.effects.registry import load_file
 from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
@@ -94,7 +95,11 @@ def fitted(model, campaign: Campaign) -> tuple:
         pred: Any = m.predictions(campaign)
     except VtableError as exc:  # the fit found no model it could build
         pred = exc
-    return (m.physics_, m.train_error_, m.flags_, m.cost_, m.screened_, pred,
+    flags = list(m.flags_)
+    if not isinstance(pred, Exception):  # an effect fitted beyond what the runs reach
+        flags += [why for name, v in m.physics_.effects.items()
+                  if (why := effect(name).unseen(v, pred))]
+    return (m.physics_, m.train_error_, flags, m.cost_, m.screened_, pred,
             time.thread_time() - t0)
 
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import inspect
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Protocol
 
 from vtable import units
@@ -185,6 +185,15 @@ class Effect:
     def virtual(self, v: Assembly, p: dict[str, float]) -> None:
         """How the effect enters the virtual table (default: `apply`)."""
         self.apply(v, p)
+
+    def unseen(self, values: dict[str, float],
+               predictions: Mapping[str, Mapping[str, Any]]) -> str | None:
+        """Why the effect at its fitted `values` (its units) does not act in the fitted
+        model's own predictions of the runs (run -> channel -> SI array), or None (the
+        default). A reason flags the candidate (`vtable.diagnose.selection`, criterion 5):
+        its fit extrapolated beyond what the runs reach, so it is not added on that
+        evidence."""
+        return None
 
     # -- parameters ----------------------------------------------------------------------
     def param(self, name: str) -> Param:

@@ -11,10 +11,13 @@ amplitude-dependent (ch. 3, §5.3's loops); this is that dependence as a yieldin
 
 from __future__ import annotations
 
+import numpy as np
+
 from vtable.analytic.structure import storey_masses
 from vtable.effects.base import Effect, Param
 from vtable.errors import VtableError
 from vtable.models.hysteresis import add_yielding_storey
+from vtable.units import from_si
 
 
 class StoreyYield(Effect):
@@ -47,6 +50,20 @@ class StoreyYield(Effect):
             raise VtableError(f"storey_yield: storey {k} is declared yielding already "
                               "([specimen.hysteresis])")
         add_yielding_storey(m, m.specimen, k, p["yield_drift"], p["post_yield_ratio"])
+
+    def unseen(self, values, predictions):
+        """A yield drift beyond the storey's largest drift in the model's own prediction
+        of every run (ductility below 1): no run shows the storey yield, and the fit has
+        bought a smooth softening with an extrapolated u_y."""
+        k = round(values["storey"])
+        peaks = [float(np.max(np.abs(ch[f"floor{k}_drift"]))) for ch in predictions.values()
+                 if f"floor{k}_drift" in ch]
+        u_y = self.param("yield_drift").to_si(values["yield_drift"])
+        if not peaks or max(peaks) >= u_y:
+            return None
+        return (f"storey_yield.yield_drift {values['yield_drift']:.3g} in is never reached "
+                f"(storey {k}'s largest drift in the model's prediction is "
+                f"{from_si(max(peaks), 'in'):.3g} in): no run shows it yield")
 
 
 EFFECT = StoreyYield()
