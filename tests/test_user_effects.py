@@ -114,11 +114,15 @@ def test_without_the_file_the_residual_is_unexplained():
 
     _, runs = backlash_campaign()
     # the catalog diagnose tries by default (storey_yield is asked for by name)
-    d = Diagnoser(runs, catalog=[e for e in BUILT_IN if get(e).default_candidate]).diagnose()
+    catalog = [e for e in BUILT_IN if get(e).default_candidate]
+    d = Diagnoser(runs, catalog=catalog).diagnose()
     assert d.final_effects == []
     assert d.unexplained is not None and d.unexplained["ratio_to_floor"] > 5
     assert "a residual remains unexplained" in d.verdict
     assert "smallest spans" in d.unexplained["where"]
+    # the effects left out of the default catalog are named, with how to ask for them
+    assert "not tried (tried only when asked for): storey_yield (a storey of the" in d.verdict
+    assert f" — --effects {','.join(catalog)},storey_yield;" in d.verdict, d.verdict
 
 
 def test_with_the_file_it_ranks_first_and_closes_the_gap():

@@ -57,7 +57,7 @@ from vtable.diagnose.compare import compare
 from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
 from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
-from vtable.diagnose.prose import unexplained
+from vtable.diagnose.prose import unexplained, untried
 from vtable.diagnose.result import (
     ERROR_DEFINITION,
     Candidate,
@@ -461,6 +461,10 @@ class Diagnoser:
                              f"{err:.2%} is {unexp['ratio_to_floor']:.1f} x the noise floor "
                              f"({floor:.2%}), above the {NOISE_FACTOR:g} x noise alone explains;"
                              f" it lives in {unexp['where']}")
+                left = untried(self.catalog, current,
+                               lambda ph: not self._inapplicable(ph))
+                if left:
+                    parts.append(left)
                 for c in self.campaign.sensors:  # what no effect on the platen can fit
                     parts.append(c.text())
                 if st.stages:  # what no time-invariant model of the command can fit
