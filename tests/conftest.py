@@ -3,9 +3,22 @@
 from __future__ import annotations
 
 import functools
+import shutil
+import tempfile
 
 import numpy as np
 import pytest
+
+#: every temporary file and folder of the session (the campaigns tests make once with
+#: tempfile.mkdtemp, pytest's tmp_path, the diagnosis workers' campaign files) lives in one
+#: folder, removed when the session ends: a run leaves nothing in the system's /tmp
+SESSION_TMP = tempfile.mkdtemp(prefix="vtable-tests-")
+tempfile.tempdir = SESSION_TMP
+
+
+def pytest_sessionfinish(session, exitstatus):
+    tempfile.tempdir = None
+    shutil.rmtree(SESSION_TMP, ignore_errors=True)
 
 PERIOD = 20.48  # s: 4096 samples at the 200 Hz output rate
 RMS_IN = 0.0003  # small-signal periodic random: the linear regime of the multibody table
