@@ -139,8 +139,8 @@ def _table_keys() -> set[str]:
 def _specimen_keys() -> set[str]:
     keys = {"stiffness_kip_per_in", "damping_lb_s_per_in"} | set(sp.KINDS)
     for cls in sp._BY_KIND.values():
-        keys |= {_key(f) for f in dataclasses.fields(cls)}
-    return keys
+        keys |= {_key(f) for f in dataclasses.fields(cls) if f.metadata.get("toml", True)}
+    return keys | set(sp.OPENSEES_DATA_KEYS)
 
 
 def test_every_accepted_run_key_is_in_run_format_md():
@@ -179,9 +179,12 @@ def test_the_readers_refuse_what_run_format_md_says_they_do_not_read_yet():
     assert table_from_dict({"preset": "lnec-st1d", "controller": {
         "kind": "tvc", "displacement_gain_v_per_m": 130.0, "p": 1.0}}).controller.kind == "tvc"
     assert "tvc" not in text
-    # OpenSees specimens are read now (issue 21): a missing model file names the key
-    with pytest.raises(VtableError, match=r"\[specimen\]\.model: .*frame\.py: no such file"):
-        specimen_from_dict({"kind": "opensees", "model": "frame.py"}, "[specimen]")
+    # OpenSees specimens are read now (issue 21), as data (issue 30): a run that holds
+    # only the model's file is one line saying how to get the data, the file not run
+    from vtable.runs.meta import declare
+    with pytest.raises(VtableError, match=r"run\.toml \[specimen\]: the OpenSees model's "
+                       r"floors, .*vtable simulate"):
+        declare({"specimen": {"kind": "opensees", "model": "frame.py"}}, "run.toml")
     assert "`opensees`" in _text("run-format.md") and "opensees" not in text
     # one damping ratio per mode is read now (issue 18), and the page no longer lists it
     b = specimen_from_dict({"kind": "shear_building", "weights_kip": [10, 10],

@@ -20,7 +20,7 @@ from vtable.opensees.stepper import OpenSeesStepper
 from vtable.params.specimen import ShearBuilding, specimen_from_dict
 from vtable.params.virtual import virtual_table
 from vtable.signals.command import make_command
-from vtable.sim.experiment import run_experiment
+from vtable.sim.experiment import load_specimen, run_experiment
 from vtable.units import G
 
 HERE = Path(__file__).parent / "opensees"
@@ -66,9 +66,9 @@ def test_fixed_floors_are_welded():
 def test_bad_model_files_are_one_line(tmp_path, body, message):
     f = tmp_path / "m.py"
     f.write_text(body)
+    (tmp_path / "run.toml").write_text('[specimen]\nkind = "opensees"\nmodel = "m.py"\n')
     with pytest.raises(VtableError, match=re.escape(message)) as e:
-        specimen_from_dict({"kind": "opensees", "model": "m.py"}, "run.toml [specimen]",
-                           tmp_path)
+        load_specimen(str(tmp_path / "run.toml"))  # simulate's: it builds the model
     assert "\n" not in str(e.value) and "run.toml [specimen].model" in str(e.value)
 
 
@@ -197,7 +197,7 @@ def test_opensees_run_reads_back_as_a_building(fibre_run):
     spec = run.declared.specimen
     assert isinstance(spec, ShearBuilding) and spec.n == 3
     np.testing.assert_allclose(units.from_si(np.array(spec.weights), "kip"), 15.0, rtol=1e-5)
-    assert any("read as a 3-storey shear building" in n for n in run.reports)
+    assert any("read as the 3-storey shear building the run holds" in n for n in run.reports)
 
 
 def test_the_recording_draws_the_deformed_frame_and_its_loops(fibre_run, tmp_path):

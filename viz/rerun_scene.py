@@ -16,6 +16,7 @@ from rerun.chunk import RrdReader
 from scipy.spatial.transform import Rotation
 
 from vtable.mjcf.meshes import braced_frame, slab_with_ribs
+from vtable.opensees.model import load_model
 from vtable.params.bodies import MASS_BLOCK
 from vtable.runs.model import FORMAT_UNITS
 from vtable.units import from_si, to_si
@@ -74,7 +75,7 @@ def storey_loops(rec: rr.RecordingStream, times, channels: dict[str, np.ndarray]
 def _log_opensees(rec: rr.RecordingStream, res, times, depth: float, scale: float) -> None:
     """An OpenSees model's elements as lines on the slab, its nodes displaced by `scale`
     times their displacement relative to the platen."""
-    model = res.built.specimen.built
+    model = load_model(res.built.specimen.model)
     nodes = res.specimen.get("nodes") if res.specimen else None
     if nodes is None or not model.elements:
         return

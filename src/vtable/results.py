@@ -94,11 +94,14 @@ class Margins:
                          "f_gain_crossover_hz": self.f_gain_crossover_hz})
 
     def report(self) -> str:
-        return "\n".join([
-            f"{self.model}: {self.loop}",
-            f"  gain margin  {self.gain_margin:.3f}   at {self.f_phase_crossover_hz:.3f} Hz",
-            f"  phase margin {self.phase_margin_deg:.2f} deg at "
-            f"{self.f_gain_crossover_hz:.3f} Hz"])
+        gm = (f"  gain margin  {self.gain_margin:.4g}   at {self.f_phase_crossover_hz:.3f} Hz"
+              if np.isfinite(self.gain_margin) else
+              "  gain margin  none: the phase of L never reaches -180 deg (0.001-1000 Hz)")
+        pm = (f"  phase margin {self.phase_margin_deg:.2f} deg at "
+              f"{self.f_gain_crossover_hz:.3f} Hz" if np.isfinite(self.phase_margin_deg) else
+              "  phase margin none: |L| never reaches 1 (0.001-1000 Hz): the loop gain is "
+              "below unity everywhere")
+        return "\n".join([f"{self.model}: {self.loop}", gm, pm])
 
 
 @dataclass

@@ -100,6 +100,11 @@ PLAUSIBLE_MAX: dict[str, float] = {
     "dimensionless": 1e15, "inverse length": 1e6,
 }
 
+#: the smallest magnitude a non-zero value of these dimensions may have: a loop gain or a
+#: frequency of 1e-300 1/s is a slip (its time constant outlives the universe) that would
+#: otherwise pass as "> 0" and end as a 300-digit margin or a pole read as unstable
+PLAUSIBLE_MIN: dict[str, float] = {"frequency": 1e-6}
+
 #: how a quantity of each dimension is called in messages ("avg_hdisp is a displacement")
 _NOUN = {"length": "displacement", "angle": "rotation"}
 

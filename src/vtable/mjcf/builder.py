@@ -23,6 +23,7 @@ import numpy as np
 from vtable import units
 from vtable.errors import VtableError
 from vtable.mjcf import meshes
+from vtable.opensees.model import load_model
 from vtable.params.bodies import (
     MASS_BLOCK,
     slab_body,
@@ -155,7 +156,8 @@ def table_spec(vt: VirtualTable, specimen: Specimen | None = None, *, timestep: 
         t.width = 0.05 if a.kind == "horizontal" else 0.04
         names.append(a.name)
     joints, heights, masses = _add_specimen(s, slab, specimen, pivot, with_meshes, add_mesh)
-    rigid = specimen.mass if isinstance(specimen, RigidBlock | OpenSeesSpecimen) else 0.0
+    rigid = (specimen.mass if isinstance(specimen, RigidBlock) else load_model(specimen.model).mass
+             if isinstance(specimen, OpenSeesSpecimen) else 0.0)
     weight = (g.mass + sum(masses) + rigid) * G
     top = None
     if joints:
@@ -268,7 +270,7 @@ def _add_opensees_body(slab, spec: OpenSeesSpecimen, pivot: float) -> None:
     motion changes (`vtable.opensees.stepper`). Inertia about x and z from the masses'
     spread (the model is planar: none across it), the nodes' rotational masses added to
     all three axes."""
-    built = spec.built
+    built = load_model(spec.model)
     mass, c, _ = built.rigid_body()
     if mass <= 0:
         return
@@ -325,7 +327,8 @@ def check_specimen(vt: VirtualTable, spec: Specimen) -> None:
     line = vt.table.geometry.actuator_line_depth
     if isinstance(spec, NoSpecimen):
         return
-    weight = spec.mass * G
+    weight = (load_model(spec.model).mass if isinstance(spec, OpenSeesSpecimen) else
+              spec.mass) * G
     if weight > specs.weight_capacity:
         raise VtableError(f"specimen weighs {units.from_si(weight, 'kip'):.1f} kips, above the "
                           f"table's capacity of {units.from_si(specs.weight_capacity, 'kip'):g} "
@@ -333,7 +336,7 @@ def check_specimen(vt: VirtualTable, spec: Specimen) -> None:
     tops = {RigidBlock: lambda: spec.height + (spec.size[1] / 2 if spec.size else 0.0),
             SDOFSpecimen: lambda: spec.height,
             ShearBuilding: lambda: max(spec.heights),
-            OpenSeesSpecimen: lambda: spec.built.top + line}
+            OpenSeesSpecimen: lambda: load_model(spec.model).top + line}
     top = tops[type(spec)]() - line
     if top > top_clear:
         raise VtableError(f"specimen reaches {units.from_si(top, 'ft'):.1f} ft above the table "

@@ -33,6 +33,7 @@ from vtable.mjcf import edit
 from vtable.mjcf.builder import BuiltModel, compile_table, table_spec
 from vtable.models import physics as phys
 from vtable.models.stiffness import needed_stiffness
+from vtable.opensees.model import load_model
 from vtable.params.virtual import VirtualTable, with_rocking
 
 MAX_STEP = 1e-3  # s: the virtual table's largest MuJoCo/control step
@@ -132,7 +133,7 @@ class VirtualAssembly:
     def add_opensees(self, spec) -> None:
         """An OpenSees specimen stepped with the platen (`controllers.opensees_specimen`)."""
         depth = self.vt.table.geometry.actuator_line_depth
-        self.controllers.append(OpenSeesSpecimen(spec.built, depth,
+        self.controllers.append(OpenSeesSpecimen(load_model(spec.model), depth,
                                                  float(self.ts.spec.option.timestep)))
 
     def add_output_filter(self, fn: Callable) -> None:

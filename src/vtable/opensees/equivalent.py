@@ -6,13 +6,18 @@ fixed-base frequencies of the model's first lateral modes (OpenSees' eigen analy
 modes whose kinetic energy is mostly the floors' horizontal motion), so its storey
 stiffnesses are those of the shear building with those masses and frequencies
 (`analytic.structure.storey_stiffnesses`). A frame whose frequencies no shear building
-with its masses can have keeps its first frequency, with equal storey stiffnesses. The
-model's damping is not read: 2 % of critical in every mode (`DAMPING`), which the
-diagnosis fits like any declared damping.
+with its masses can have keeps its first frequency, with equal storey stiffnesses. Each
+mode's damping ratio is the one the model declares (ops.rayleigh: ξ = α_M/(2ω) +
+(β_K + β_Kinit + β_Kcomm) ω/2; ops.modalDamping), or `DAMPING` when it declares none.
+
+This is the only place that runs a model file, and only for `vtable simulate`
+(`realised`): the building is then written into the run as data, and readers take it
+from there (`vtable.params.specimen.OpenSeesSpecimen.building`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from pathlib import Path
@@ -22,11 +27,11 @@ import numpy as np
 from vtable.analytic.structure import building_matrices, building_stiffnesses, fixed_base_modes
 from vtable.errors import VtableError
 from vtable.opensees.library import explain, opensees
-from vtable.opensees.model import OpenSeesModel, build, read
+from vtable.opensees.model import OpenSeesModel, build, load_model, read
 from vtable.params.specimen import OpenSeesSpecimen, ShearBuilding
 from vtable.units import G
 
-DAMPING = 0.02  # of critical, every mode: assumed (the model's own is not read)
+DAMPING = 0.02  # of critical, every mode: assumed when the model declares no damping
 
 
 def lateral_frequencies(model: OpenSeesModel) -> np.ndarray:
@@ -70,14 +75,34 @@ def _lateral(ops, model: OpenSeesModel, lam, n: int) -> list[float]:
     return out
 
 
+def modal_damping(model: OpenSeesModel, freqs: np.ndarray) -> tuple[np.ndarray, str]:
+    """Each lateral mode's damping ratio as the model declares it, and how it was had."""
+    w = 2 * math.pi * np.asarray(freqs, dtype=float)
+    if model.damping is None:
+        return np.full(len(w), DAMPING), f"{DAMPING:.0%} of critical assumed (the model " \
+            "declares no ops.rayleigh or ops.modalDamping)"
+    how, v = model.damping
+    if how == "rayleigh":
+        a_m, b_k = v[0], sum(v[1:4])
+        return a_m / (2 * w) + b_k * w / 2, "its Rayleigh damping (ops.rayleigh)"
+    xi = np.array(v[:len(w)] if len(v) > 1 else v * len(w), dtype=float)
+    if len(xi) < len(w):
+        xi = np.concatenate([xi, np.full(len(w) - len(xi), xi[-1])])
+    return xi, "its modal damping (ops.modalDamping)"
+
+
 def equivalent_building(spec: OpenSeesSpecimen, depth: float) -> tuple[ShearBuilding, str]:
     """The shear building standing for `spec` on a table whose actuator line is `depth`
-    (m) below its top, and a note saying what was read and assumed."""
-    model = spec.built
+    (m) below its top, and a note saying what was read and assumed. Runs the model file
+    (`load_model`)."""
+    model = load_model(spec.model)
     freqs = lateral_frequencies(model)
     weights = tuple(float(w) for w in model.floor_masses * G)
     heights = tuple(float(h) for h in model.floor_heights + depth)
-    kw = {"weights": weights, "heights": heights, "damping": DAMPING,
+    xi, damped = modal_damping(model, freqs)
+    xi = np.clip(xi, 0.0, 1.0)
+    damping = float(xi[0]) if np.allclose(xi, xi[0], rtol=1e-9) else tuple(map(float, xi))
+    kw = {"weights": weights, "heights": heights, "damping": damping,
           "title": f"{spec.title} (as a shear building)", "source": str(model.path)}
     try:
         b = ShearBuilding(frequencies=tuple(map(float, freqs)), **kw)
@@ -93,6 +118,13 @@ def equivalent_building(spec: OpenSeesSpecimen, depth: float) -> tuple[ShearBuil
                f"building with its masses has its modes {', '.join(f'{f:.3g}' for f in freqs)}"
                " Hz)")
     note = (f"the OpenSees model {model.path.name} is read as a {len(weights)}-storey shear "
-            f"building: its floors' masses and heights and {how}; damping {DAMPING:.0%} "
-            "of critical assumed (the model's own is not read)")
+            f"building: its floors' masses and heights, {how}, {damped}")
     return b, note
+
+
+def realised(spec: OpenSeesSpecimen, depth: float) -> tuple[OpenSeesSpecimen, str]:
+    """`spec` with its model as data (`OpenSeesSpecimen.building`: `equivalent_building`
+    on a table whose actuator line is `depth` m below its top), for `vtable simulate` to
+    write into its run; and the note saying what was read."""
+    b, note = equivalent_building(spec, depth)
+    return dataclasses.replace(spec, building=b), note

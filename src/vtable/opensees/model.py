@@ -45,6 +45,9 @@ class OpenSeesModel:
     base: tuple[int, ...]
     floors: tuple[tuple[int, ...], ...]
     units: str
+    #: the damping build(ops) declared: ("rayleigh", (α_M, β_K, β_Kinit, β_Kcomm)) from
+    #: ops.rayleigh, ("modal", (ξ, ...)) from ops.modalDamping, or None (none declared)
+    damping: tuple[str, tuple[float, ...]] | None = None
 
     @property
     def force_unit(self) -> float:
@@ -119,15 +122,42 @@ def _load(p: Path, mtime: int) -> OpenSeesModel:
     return read(p, ops, out)
 
 
+class _Recorder:
+    """``openseespy.opensees`` as build(ops) sees it: every call passed on, the damping it
+    declares (ops.rayleigh, ops.modalDamping) kept, so that the model's damping can be
+    written into a run as data (`vtable.opensees.equivalent`)."""
+
+    def __init__(self, ops) -> None:
+        self._ops = ops
+        self.damping: tuple[str, tuple[float, ...]] | None = None
+
+    def __getattr__(self, name: str):
+        fn = getattr(self._ops, name)
+        if name not in ("rayleigh", "modalDamping"):
+            return fn
+
+        def kept(*args):
+            out = fn(*args)
+            try:
+                values = tuple(float(a) for a in args)
+            except (TypeError, ValueError):
+                return out
+            self.damping = ("rayleigh" if name == "rayleigh" else "modal", values)
+            return out
+        return kept
+
+
 def build(p: Path, ops) -> dict:
-    """Run the file's ``build(ops)`` on a wiped OpenSees domain; its returned dict."""
+    """Run the file's ``build(ops)`` on a wiped OpenSees domain; its returned dict, with
+    the damping it declared under the key ``"damping"`` (`_Recorder`)."""
     module = user_module(p, "vtable_opensees_", "[specimen] model")
     fn = getattr(module, "build", None)
     if not callable(fn):
         raise VtableError(f"{p}: defines no build(ops) function (see docs/opensees.md)")
     ops.wipe()
+    rec = _Recorder(ops)
     try:
-        out = fn(ops)
+        out = fn(rec)
     except VtableError:
         raise
     except Exception as e:
@@ -139,7 +169,7 @@ def build(p: Path, ops) -> dict:
         if k not in RETURN_KEYS:
             raise VtableError(f"{p}: build(ops) returned unknown key {k!r}"
                               + did_you_mean(k, RETURN_KEYS))
-    return out
+    return {**out, "damping": rec.damping}
 
 
 def _tags(v, what: str, p: Path) -> tuple[int, ...]:
@@ -191,7 +221,8 @@ def read(p: Path, ops, out: dict) -> OpenSeesModel:
         ns = [int(t) for t in ops.eleNodes(e)]
         ring = ns if len(ns) <= 2 else [*ns, ns[0]]
         lines += [(a, b) for a, b in itertools.pairwise(ring) if a != b]
-    model = OpenSeesModel(p, nodes, coords, mass, fixed, tuple(lines), base, floors, units)
+    model = OpenSeesModel(p, nodes, coords, mass, fixed, tuple(lines), base, floors, units,
+                          out.get("damping"))
     fm = model.floor_masses
     if np.any(fm <= 0):
         k = int(np.argmax(fm <= 0)) + 1

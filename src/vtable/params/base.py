@@ -40,9 +40,12 @@ def quantity(unit: str, key: str, *, default: Any = _MISSING, minimum: float | N
     return dataclasses.field(default=default, metadata=meta)
 
 
-def plain(key: str | None = None, *, default: Any = _MISSING, doc: str = "") -> Any:
-    """A non-physical field (names, knob settings, nested parameter objects)."""
-    meta = {"key": key, "doc": doc}
+def plain(key: str | None = None, *, default: Any = _MISSING, doc: str = "",
+          toml: bool = True) -> Any:
+    """A non-physical field (names, knob settings, nested parameter objects); `toml`
+    False: not a key of the TOML table (held by the object, read and written by its own
+    `from_dict`/`to_dict`)."""
+    meta = {"key": key, "doc": doc, "toml": toml}
     if default is _MISSING:
         return dataclasses.field(metadata=meta)
     if isinstance(default, list | dict | set):
@@ -75,7 +78,8 @@ class Params:
         where = where or cls.__name__
         if not isinstance(d, dict):
             raise VtableError(f"{where}: expected a table, got {type(d).__name__}")
-        fields = {_key(f): f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+        fields = {_key(f): f for f in dataclasses.fields(cls)  # type: ignore[arg-type]
+                  if f.metadata.get("toml", True)}
         unknown = sorted(set(d) - set(fields))
         if unknown:
             raise VtableError(f"{where}: unknown key {unknown[0]!r}"
@@ -98,7 +102,7 @@ class Params:
         out: dict[str, Any] = {}
         for f in dataclasses.fields(self):  # type: ignore[arg-type]
             v = getattr(self, f.name)
-            if v is None:
+            if v is None or not f.metadata.get("toml", True):
                 continue
             if "unit" in f.metadata:
                 v = _to_plain(units.from_si(v, f.metadata["unit"]))
@@ -170,6 +174,11 @@ def check_number(v: Any, where: str, unit: str = "1") -> float:
         shown = f"{x:.6g}" if math.isfinite(x) else _show(v)
         raise VtableError(f"{where}: {shown} {unit} is not a plausible {units.noun(dim)} (the "
                           f"limit is {units.from_si(limit, unit):g} {unit})")
+    low = units.PLAUSIBLE_MIN.get(dim, 0.0)
+    if 0 < abs(si) < low:
+        raise VtableError(f"{where}: {x:.6g} {unit} is not a plausible {units.noun(dim)} "
+                          f"(non-zero values start at {units.from_si(low, unit):g} {unit}; "
+                          "write 0 if none is meant)")
     return si
 
 

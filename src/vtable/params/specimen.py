@@ -21,7 +21,6 @@ from typing import Any
 import numpy as np
 
 from vtable.errors import VtableError
-from vtable.opensees.model import load_model
 from vtable.params.base import Params, check_number, plain, quantity
 from vtable.params.hysteresis import Hysteresis, parse_hysteresis
 from vtable.units import G
@@ -284,26 +283,55 @@ def _rayleigh_anchors(v: Any, where: str) -> tuple[tuple[float, float], tuple[fl
     return out[0], out[1]
 
 
+#: the keys of an OpenSees specimen's model as data (`OpenSeesSpecimen.building`): its
+#: equivalent shear building's, written into a run by `vtable simulate`
+OPENSEES_DATA_KEYS = ("weights_kip", "heights_in", "frequencies_hz", "damping")
+
+
 @dataclass(frozen=True)
 class OpenSeesSpecimen(Params):
     """Any openseespy model (`model`: a Python file defining ``build(ops)``, see
     `vtable.opensees.model`), stepped by the virtual table with the platen
-    (`vtable.opensees.stepper`). Its masses, floors and heights are read from the model it
-    builds (openseespy needed: the ``opensees`` extra)."""
+    (`vtable.opensees.stepper`) when `vtable simulate` runs it.
+
+    `building` is the model as data: its floors' masses and heights, its first lateral
+    fixed-base modes and their damping, as the equivalent shear building a run file holds
+    (`OPENSEES_DATA_KEYS` beside `model` in [specimen]). `vtable simulate` writes it
+    (`vtable.opensees.equivalent`); every reader of a run takes it from there and never
+    runs the model file. None: not known yet (a specimen file that only names the model).
+    """
 
     model: str = plain(doc="the model's Python file (relative to the TOML file)")
     kind: str = plain(default="opensees")
     title: str = plain(default="OpenSees model")
     source: str = plain(default="")
-
-    @property
-    def built(self):
-        """The model as vtable reads it (`vtable.opensees.model.OpenSeesModel`)."""
-        return load_model(self.model)
+    building: ShearBuilding | None = plain(default=None, toml=False)
 
     @property
     def mass(self) -> float:
-        return self.built.mass
+        if self.building is None:
+            raise VtableError(f"the OpenSees specimen {Path(self.model).name}: its masses "
+                              "are not known until the model is built (vtable simulate)")
+        return self.building.mass
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any], where: str = "") -> OpenSeesSpecimen:
+        """`model`, `title`, `source` and, when present, the model as data
+        (`OPENSEES_DATA_KEYS`, all of them: a shear building's keys)."""
+        where = where or cls.__name__
+        d = dict(d)
+        data = {k: d.pop(k) for k in OPENSEES_DATA_KEYS if k in d}
+        base = super().from_dict(d, where)
+        if not data:
+            return base
+        missing = [k for k in OPENSEES_DATA_KEYS if k not in data]
+        if missing:
+            raise VtableError(f"{where}: the model as data needs {', '.join(missing)} too "
+                              f"(with {', '.join(data)}; vtable simulate writes all "
+                              f"{len(OPENSEES_DATA_KEYS)})")
+        b = ShearBuilding.from_dict({**data, "title": f"{base.title} (as a shear building)",
+                                     "source": base.model}, where)
+        return dataclasses.replace(base, building=b)
 
 
 Specimen = NoSpecimen | RigidBlock | SDOFSpecimen | ShearBuilding | OpenSeesSpecimen
@@ -342,7 +370,8 @@ def specimen_hints(specimen: Specimen, where: str = "specimen") -> list[str]:
 def specimen_from_dict(d: dict[str, Any], where: str = "specimen",
                        folder: Path | None = None) -> Specimen:
     """A specimen from a TOML table whose `kind` picks the class (run-format names); an
-    OpenSees model's file is found relative to `folder` (the TOML file's), and loaded."""
+    OpenSees model's file is found relative to `folder` (the TOML file's), never run
+    (reading is data only: `vtable.opensees.equivalent.realised` runs it, for simulate)."""
     if not isinstance(d, dict):
         raise VtableError(f"{where}: expected a table")
     kind = d.get("kind")
@@ -354,16 +383,12 @@ def specimen_from_dict(d: dict[str, Any], where: str = "specimen",
         raise VtableError(f"{where}.hysteresis: only a sdof or shear_building specimen has "
                           f"storeys that yield, not {kind!r}")
     spec = _specimen(kind, d, where)
-    if isinstance(spec, OpenSeesSpecimen):
+    if isinstance(spec, OpenSeesSpecimen):  # found, never run: only `simulate` runs it
         path = Path(spec.model)
         if folder is not None and not path.is_absolute():
             path = folder / path
         spec = dataclasses.replace(spec, model=str(path.resolve()) if path.is_file()
                                    else str(path))
-        try:
-            spec.built  # noqa: B018 - loads and checks the model now, naming the key
-        except VtableError as e:
-            raise VtableError(f"{where}.model: {e}") from None
     if hyst is None:
         return spec
     h = parse_hysteresis(hyst, len(spec.weights) if isinstance(spec, ShearBuilding) else 1,

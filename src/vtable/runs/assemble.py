@@ -61,6 +61,26 @@ def _channel_reports(name: str, v: np.ndarray, unit: str, where: Path | str,
     return out
 
 
+#: Hz: the range of a lab acquisition's sampling rate; a declared time unit that puts a
+#: run outside it, when seconds would not, is asked about (`_time_unit_hint`)
+LAB_RATES_HZ = (50.0, 20000.0)
+
+
+def _time_unit_hint(time: np.ndarray, unit: str, where: str) -> list[str]:
+    """A note asking whether 'time' is really in `unit` ([units] time), when that unit
+    puts the sampling rate outside `LAB_RATES_HZ` and seconds would put it inside."""
+    if len(time) < 2 or not time[-1] > time[0]:
+        return []
+    fs = (len(time) - 1) / (time[-1] - time[0])
+    fs_s = fs * un.factor(unit)  # the rate if the stamps were seconds
+    lo, hi = LAB_RATES_HZ
+    if lo <= fs <= hi or not lo <= fs_s <= hi:
+        return []
+    return [f"{where}: [units] time = {unit!r} makes the run sampled at {fs:.6g} Hz; its "
+            f"stamps read in seconds would be {fs_s:.6g} Hz: is 'time' in {unit}? (taken "
+            "as declared)"]
+
+
 def assemble(name: str, header: list[str], data: np.ndarray, decl: Declaration,
              reports: list[str], toml_where: str, data_where: Path | str, source: Path,
              first_line: int, what: str, file_units: dict[str, str] | None = None) -> Run:
@@ -81,6 +101,8 @@ def assemble(name: str, header: list[str], data: np.ndarray, decl: Declaration,
                        "grid t0 + k·dt is used")
     elif t_unit != "s":
         time = t.copy()
+    if t_unit != "s":
+        reports += _time_unit_hint(time, t_unit, toml_where)
     channels, units, extra = {}, {}, []
     for j, h in enumerate(header[1:], start=1):
         unit = overrides.get(h, FORMAT_UNITS.get(h))

@@ -15,6 +15,7 @@ from vtable import units
 from vtable.analytic.structure import building_matrices, fixed_base_modes
 from vtable.errors import VtableError, did_you_mean
 from vtable.params.base import check_number
+from vtable.params.specimen import OPENSEES_DATA_KEYS
 from vtable.params.table import DIRECTIONS, KNOBS
 
 FORMAT = "vtable-run/1"
@@ -37,6 +38,9 @@ def specimen_table(spec) -> dict[str, Any]:
         M, K, _ = building_matrices(spec)
         w, _ = fixed_base_modes(M, K)
         out["frequencies_hz"] = (w / (2 * np.pi)).tolist()
+    if kind == "opensees" and spec.building is not None:  # the model as data
+        b = specimen_table(spec.building)
+        out.update({k: b[k] for k in OPENSEES_DATA_KEYS})
     return out
 
 

@@ -89,6 +89,7 @@ def read_hdf5(path: str | Path) -> Run:
         raise VtableError(f"{p}: damaged or not a vtable run file ({why})") from None
     decl = check_meta(meta, str(p), p.parent)  # [units] names every channel's unit
     units = meta.pop("units", {})
+    unnamed = [h for h in order if h in FORMAT_UNITS and h not in units]
     override = {h: u for h, u in units.items() if FORMAT_UNITS.get(h) != u and u != "1"}
     if override:
         meta["units"] = override
@@ -99,6 +100,11 @@ def read_hdf5(path: str | Path) -> Run:
     notes = [*decl.notes, *(f"{p}: attribute {a!r} not read (a run file's attributes are "
                             f"{' and '.join(map(repr, ATTRIBUTES))}; its units are the "
                             "[units] table in 'toml')" for a in extra)]
+    if unnamed:
+        notes.append(f"{p}: the [units] table in 'toml' names no unit for {len(unnamed)} of "
+                     f"{len(order)} channels ({', '.join(unnamed[:4])}"
+                     f"{', ...' if len(unnamed) > 4 else ''}): read in the format's units "
+                     "(a run file in HDF5 names every channel's)")
     return assemble(str(_stem_h5(p)), ["time", *order], data, decl, notes, str(p),
                     p, p, 0, "sample", file_units=file_units)
 

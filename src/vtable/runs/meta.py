@@ -16,14 +16,13 @@ from typing import Any
 from vtable import units
 from vtable.analytic.structure import specimen_frequencies
 from vtable.errors import VtableError, did_you_mean
-from vtable.opensees.equivalent import equivalent_building
 from vtable.params.specimen import (
+    OPENSEES_DATA_KEYS,
     OpenSeesSpecimen,
     Specimen,
     specimen_from_dict,
     specimen_hints,
 )
-from vtable.params.virtual import virtual_table_for
 from vtable.runs.channels import channel_dimension
 from vtable.runs.format import FORMAT, CommandDescription, check_control, command_from_dict
 from vtable.runs.table import TableDescription, table_from_dict
@@ -78,8 +77,8 @@ def declare(meta: dict[str, Any], where: str, folder: Path | None = None) -> Dec
     if "specimen" in meta:
         specimen = specimen_from_dict(meta["specimen"], f"{where} [specimen]", folder)
         notes += specimen_hints(specimen, f"{where} [specimen]")
-        if isinstance(specimen, OpenSeesSpecimen):  # the models read its floors
-            specimen, note = as_building(specimen, table)
+        if isinstance(specimen, OpenSeesSpecimen):  # its model as data, never run
+            specimen, note = as_building(specimen, f"{where} [specimen]")
             notes.append(f"{where} [specimen]: {note}")
     else:
         notes.append(f"{where}: no [specimen]: treated as a bare table")
@@ -95,13 +94,21 @@ def declare(meta: dict[str, Any], where: str, folder: Path | None = None) -> Dec
                        notes=tuple(notes), meta=meta)
 
 
-def as_building(spec: OpenSeesSpecimen, table) -> tuple[Specimen, str]:
-    """An OpenSees specimen as the shear building identification and diagnosis read
-    (`vtable.opensees.equivalent`), on the run's table."""
-    from vtable.params.lab import lab_table
-
-    depth = virtual_table_for(lab_table(table)).pivot_depth
-    return equivalent_building(spec, depth)
+def as_building(spec: OpenSeesSpecimen, where: str) -> tuple[Specimen, str]:
+    """An OpenSees specimen as the shear building identification and diagnosis read: the
+    model as data the run holds (`OpenSeesSpecimen.building`, written by `vtable simulate`).
+    The model file is never run here: a run without that data is refused, saying how to
+    get it."""
+    name = Path(spec.model).name
+    if spec.building is None:
+        raise VtableError(f"{where}: the OpenSees model's floors, modes and damping are not "
+                          f"in the run ({', '.join(OPENSEES_DATA_KEYS)}); a reader never "
+                          f"runs {name}: make the run again with vtable simulate, which "
+                          "writes them")
+    n = spec.building.n
+    return spec.building, (f"the OpenSees model {name} is read as the {n}-storey shear "
+                           "building the run holds (its floors' masses and heights, "
+                           f"modes and damping; {name} is not run)")
 
 
 def check_meta(meta: dict[str, Any], where: str, folder: Path | None) -> Declaration:

@@ -7,6 +7,7 @@ import mujoco
 import numpy as np
 
 from vtable.analytic.structure import storey_channels, storey_masses
+from vtable.opensees.model import load_model
 from vtable.params.specimen import ShearBuilding
 from vtable.runs.model import FORMAT_UNITS, Run
 from vtable.sim.simulator import SimResult
@@ -96,7 +97,7 @@ def opensees_channels(res: SimResult) -> dict[str, np.ndarray]:
     """An OpenSees specimen's floors as a building's (floorK_acc, floorK_disp, floorK_drift,
     floorK_shear, the top floor's instruments) from its recorded relative motion u, ü and
     the platen's: a floor at η above the actuator line moves x_t + θ η + u (small θ)."""
-    model = res.built.specimen.built
+    model = load_model(res.built.specimen.model)
     h = res.specimen
     eta = model.floor_heights + res.built.vt.table.geometry.actuator_line_depth
     x_t, a_t = res.joint("x"), res.joint("x", "qacc")

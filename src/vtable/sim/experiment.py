@@ -14,10 +14,11 @@ import numpy as np
 from vtable import units
 from vtable.errors import VtableError
 from vtable.models.physics import Physics
+from vtable.opensees.model import load_model
 from vtable.params import presets
 from vtable.params.base import read_toml
 from vtable.params.lab import lab_table
-from vtable.params.specimen import NoSpecimen, Specimen, specimen_from_dict
+from vtable.params.specimen import NoSpecimen, OpenSeesSpecimen, Specimen, specimen_from_dict
 from vtable.params.virtual import VirtualTable, virtual_table
 from vtable.runs import write_run
 from vtable.runs.table import table_from_dict
@@ -72,13 +73,20 @@ def load_table(name_or_path: str | None):
 
 def load_specimen(name_or_path: str | None) -> Specimen:
     """A specimen preset name (none, concrete_blocks, sdof_frame, table5_1, table8_1) or a
-    TOML file with a run-format [specimen] table."""
+    TOML file with a run-format [specimen] table, for the verbs that step it (simulate,
+    study, export-mjcf): an OpenSees model file is run (built) here."""
     if name_or_path in (None, "", "none"):
         return NoSpecimen()
     p = Path(name_or_path)
     if name_or_path.endswith(".toml") or p.is_file():
         d = read_toml(p)
-        return specimen_from_dict(d.get("specimen", d), f"{p} [specimen]", p.parent)
+        spec = specimen_from_dict(d.get("specimen", d), f"{p} [specimen]", p.parent)
+        if isinstance(spec, OpenSeesSpecimen):  # simulate steps it: built and checked now
+            try:
+                load_model(spec.model)
+            except VtableError as e:
+                raise VtableError(f"{p} [specimen].model: {e}") from None
+        return spec
     return presets.specimen(name_or_path)
 
 
@@ -140,6 +148,9 @@ def run_experiment(specimen: Specimen, command: Command, *, vt: VirtualTable | N
     rate = 1.0 / output_dt
     dt, _ = simulation_step(ph, rate, vt)
     notes = [*command.notes, *check_playable(command, vt, dt, output_dt)]
+    if isinstance(specimen, OpenSeesSpecimen):  # the one verb that runs a model file
+        notes.append(f"runs {Path(specimen.model).name}, Python (its build(ops), to step the "
+                     "model; the run holds the model as data, so its readers do not run it)")
     added = {k: v for k, v in ph.effects.items()
              if k not in standard_physics(specimen, None, vt).effects}
     if added:

@@ -21,7 +21,8 @@ from vtable.errors import VtableError
 from vtable.mjcf.builder import BuiltModel
 from vtable.models import physics as phys
 from vtable.models.virtual import MAX_STEP, VirtualAssembly
-from vtable.params.specimen import Specimen
+from vtable.opensees.equivalent import realised
+from vtable.params.specimen import OpenSeesSpecimen, Specimen
 from vtable.params.virtual import VirtualTable, virtual_table
 from vtable.runs import specimen_table
 from vtable.runs.model import COMMAND_CHANNELS, Run, with_noise
@@ -136,12 +137,15 @@ def simulate(physics: phys.Physics, command: Command, rate: float = OUTPUT_FS, *
     built, ctl, filters = setup(physics, vt, dt)
     res = Simulator(built, ctl).run(command.t, {"x": command.x},
                                     output_dt=dt if filters else k * dt, check=check)
+    spec = physics.specimen
+    if isinstance(spec, OpenSeesSpecimen) and spec.building is None:
+        spec, _ = realised(spec, vt.pivot_depth)  # the model as data, for the run's readers
     meta = {"title": title or f"{command.name}, {physics.specimen.title} (vtable virtual "
                               f"table: {physics.label})",
             "table": built.vt.declared or {"preset": built.vt.name},
             **({"control": {d: s.to_dict() for d, s in vt.settings.items()}} if vt.knobs
                else {}),
-            "specimen": specimen_table(physics.specimen), "command": command.table}
+            "specimen": specimen_table(spec), "command": command.table}
     run = result_run(res, meta, name or command.name, full_state=full_state)
     for fn in filters:  # the effects' output filters, once, on the measured channels
         run.channels = {c: v if c in COMMAND_CHANNELS or c.startswith("state_")
