@@ -71,6 +71,11 @@ def load_file(path: str | Path) -> list[str]:
     return added
 
 
+def loaded(path: str | Path) -> bool:
+    """Whether this process has loaded the file at `path` (`load_file`)."""
+    return str(Path(path).resolve()) in set(_FILES.values())
+
+
 def source_file(name: str) -> str | None:
     """The file a lab's kind was loaded from (`load_file`); None for the catalog's and for
     one registered from code (another process cannot load it again)."""

@@ -131,5 +131,39 @@ class Campaign:
         return self._vt
 
     @property
+    def target_channels(self) -> list[tuple[Run, list[str]]]:
+        """Each run with the channels its training targets' groups average (`targets`)."""
+        if not hasattr(self, "_target_channels"):
+            out: dict[str, tuple[Run, list[str]]] = {}
+            for r, g, *_ in self.targets:
+                names = out.setdefault(r.name, (r, []))[1]
+                names += [c for c in run_groups(r).get(g, ())
+                          if r.has(c) and not r.missing.get(c) and c not in names]
+            self._target_channels = list(out.values())
+        return self._target_channels
+
+    @property
+    def target_groups(self) -> list[list[str]]:
+        """Each target's channels (`targets`): the model's prediction of the group is their
+        mean (`groups.group_prediction`)."""
+        if not hasattr(self, "_target_groups"):
+            self._target_groups = [[c for c in run_groups(r).get(g, ())
+                                    if r.has(c) and not r.missing.get(c)]
+                                   for r, g, *_ in self.targets]
+        return self._target_groups
+
+    @property
+    def target_vectors(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The training targets end to end: (the measured samples, 1/norm of each sample's
+        target, the residual a non-finite prediction gets: 10/√n of its target)."""
+        if not hasattr(self, "_target_vectors"):
+            self._target_vectors = (
+                np.concatenate([y for _, _, y, _ in self.targets]),
+                np.concatenate([np.full(len(y), 1.0 / norm) for _, _, y, norm in self.targets]),
+                np.concatenate([np.full(len(y), 10.0 / np.sqrt(len(y)))
+                                for _, _, y, _ in self.targets]))
+        return self._target_vectors
+
+    @property
     def n_target(self) -> int:
         return sum(len(t[2]) for t in self.targets)

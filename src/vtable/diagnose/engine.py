@@ -68,6 +68,7 @@ from vtable.diagnose.result import (
     evidence,
     localise,
 )
+from vtable.diagnose.screen import nonlinearity_evidence
 from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE, failing
 from vtable.diagnose.stationarity import stationarity_check
 from vtable.diagnose.statistics import Comparison, held_out_gain
@@ -103,9 +104,10 @@ class _State:
 
 
 class Diagnoser:
-    """fit/score on a campaign; `diagnose()` runs the loop. `workers`: the processes the
-    candidates are fitted in (default `WORKERS`, two on this project's machines; 1 fits
-    them one after the other in the loop's thread).
+    """fit/score on a campaign; `diagnose()` runs the loop. `workers`: the processes of the
+    local Dask cluster the candidates are fitted in (default `WORKERS`, two on this
+    project's machines; 1 fits them one after the other in the loop's thread);
+    `scheduler`: a Dask scheduler's address (a lab's cluster) to fit them on instead.
 
     `runs` are the campaign as read; `self.runs` the same at the analysis rate, and
     `self.notes` what the readers reported, the resampling done and the channels left out.
@@ -115,7 +117,7 @@ class Diagnoser:
                  catalog: Sequence[str] | None = None,
                  progress: Callable[[int, int, str], None] | None = None,
                  max_rounds: int = 4, calibration: Calibration | None = None,
-                 workers: int | None = None) -> None:
+                 workers: int | None = None, scheduler: str | None = None) -> None:
         self.campaign = Campaign.of(runs)
         self.workers = WORKERS if workers is None else max(1, int(workers))
         self.source_runs, self.runs = self.campaign.source_runs, self.campaign.runs
@@ -135,8 +137,10 @@ class Diagnoser:
         self.floor = self.campaign.floor
         self.calibration = calibration or Calibration()
         self.fits = Fits(self.campaign, self.catalog, self.workers, self.calibration,
-                         self.model)
+                         self.model, scheduler)
         self._stop = self.fits.stop
+        #: each round's nonlinearity screen (`vtable.diagnose.screen`)
+        self.screens: list = []
 
     def model(self, start: Physics, multistart: str | None = None,
               baseline: float | None = None, seed: dict[str, float] | None = None
@@ -220,6 +224,7 @@ class Diagnoser:
         self._stop.clear()
         st = _State()
         try:
+            self.fits.start()  # the workers, forked from this thread (Ctrl-C ignored there)
             in_thread(lambda post: self._loop(st, post), self.progress, self.fits.halt)
         except KeyboardInterrupt:
             self._stop.clear()
@@ -257,7 +262,6 @@ class Diagnoser:
         steps = 1 + self.max_rounds * len(self.catalog)
         done = 0
         progress(done, steps, "fitting the starting model")
-        self.fits.pool()  # the workers start while this process fits the starting model
         fitted = self.fit(self.start)
         current, cost = fitted.physics_, fitted.cost_
         self.notes += [f"starting model: {f}" for f in fitted.flags_]
@@ -305,10 +309,10 @@ class Diagnoser:
                                  cost_, gain, self.table_view)
 
             def task(name: str, base: Physics = current, baseline: float = cost) -> tuple:
-                start = base.with_effect(name)
-                # linear models fit in a second: only the costly nonlinear ones are screened
-                return (start, name, None if self._linear(start) else baseline,
-                        seeds.get(name))
+                # every candidate is screened: a fit whose first steps lower the training
+                # cost by less than 1 % cannot gain the 5 % of the noise's cost SELECTION
+                # asks of it (criterion 3)
+                return (base.with_effect(name), name, baseline, seeds.get(name))
 
             # the backward step for the last addition (each earlier effect left out, the
             # model refitted) runs beside this round's candidates: a removal, rare, makes
@@ -320,6 +324,17 @@ class Diagnoser:
             jobs = [(("without", e), (current.without(e), None, None, None)) for e in backward]
             jobs += [(("add", e), task(e)) for e in todo]
             ranking: list[Candidate] = []
+            # a nonlinear candidate is fitted only where the runs show amplitude
+            # dependence the current model misses (`screen`)
+            screen = nonlinearity_evidence(self.campaign, st.stages[-1].predictions)
+            if not screen.present:
+                for e in [e for e in todo if not self._linear(current.with_effect(e))]:
+                    todo.remove(e)
+                    ranking.append(self._not_fitted(current.with_effect(e), e, cost, st,
+                                                    screen.text()))
+                    done += 1
+                jobs = [j for j in jobs if j[0][0] == "without" or j[0][1] in todo]
+            self.screens.append(screen)
             left: dict[str, tuple] = {}
             for (kind, name), fitted in self.fits.dispatch(jobs):
                 if kind == "without":
@@ -397,6 +412,16 @@ class Diagnoser:
         st.pushed = self._pushed_beyond(st)
         progress(steps, steps, "done")
         return self._diagnosis(st, final_cmp, reason)
+
+    def _not_fitted(self, ph: Physics, name: str, cost: float, st: _State,
+                    why: str) -> Candidate:
+        """A candidate the screen keeps from being fitted: at its defaults, credited with
+        the current model's predictions (no gain claimed), marked screened."""
+        pred = st.stages[-1].predictions
+        gain = held_out_gain(pred, pred, self.runs, self.campaign.noise)
+        return Candidate(name, dict(ph.effects[name]), st.err, float("nan"), "",
+                         len(effect(name).params), ph, [], pred, True, cost, gain,
+                         self.table_view, not_fitted=why)
 
     def _backward(self, st: _State, names: list[str], fitted: dict[str, tuple],
                   progress, done: int, steps: int, k: int):

@@ -28,7 +28,7 @@ from threadpoolctl import threadpool_limits
 
 from vtable.diagnose.calibration import LOOP, BaseParam, Calibration, base_params
 from vtable.diagnose.campaign import Campaign
-from vtable.diagnose.compare import Comparison, compare, group_prediction, segments
+from vtable.diagnose.compare import Comparison, compare, segments
 from vtable.diagnose.reuse import model_at
 from vtable.diagnose.statistics import correlations
 from vtable.effects.registry import get as effect
@@ -212,25 +212,43 @@ class TableModel:
             out[r.name] = model.simulate(*self._commands[key])
         return out
 
+    def _train_outputs(self, ph: Physics, campaign: Campaign
+                       ) -> dict[str, dict[str, np.ndarray]]:
+        """The channels the training targets need, at their samples (every other one of
+        each run's training segment: `Campaign.targets`), of the model `ph`
+        (`ReducedModel.outputs`)."""
+        model = ReducedModel(ph, self.vt or campaign.table)
+        out = {}
+        for r, names in campaign.target_channels:
+            if self.stop is not None and self.stop.is_set():
+                raise StopRequestedError
+            n = segments(r)[0].stop
+            key = (r.name, n)
+            if key not in self._commands:  # one array per segment: its interpolation is kept
+                self._commands[key] = (r.time[:n], r.channel("h_span")[:n])
+            out[r.name] = model.outputs(*self._commands[key], names, step=2)
+        return out
+
     def _residuals(self, ph: Physics, campaign: Campaign) -> np.ndarray:
         try:
-            pred = self._predict(ph, campaign, train_only=True)
+            pred = self._train_outputs(ph, campaign)
         except VtableError:
             return np.full(campaign.n_target, 10.0)
         out = np.empty(campaign.n_target)
         k = 0
-        for (r, g, y, norm), stop in zip(campaign.targets, self._stops(campaign), strict=True):
-            yhat = group_prediction(pred[r.name], r, g)[:stop:2]
-            e = (yhat - y) / norm
-            out[k:k + len(e)] = np.where(np.isfinite(e), e, 10.0 / math.sqrt(len(e)))
-            k += len(e)
+        for (r, _, y, _), chans in zip(campaign.targets, campaign.target_groups, strict=True):
+            p = pred[r.name]
+            arrays = [p[c] for c in chans if c in p]
+            out[k:k + len(y)] = arrays[0] if all(a is arrays[0] for a in arrays) \
+                else np.mean(arrays, axis=0)
+            k += len(y)
+        y, scale, fill = campaign.target_vectors
+        out -= y
+        out *= scale
+        bad = ~np.isfinite(out)
+        if bad.any():
+            out[bad] = fill[bad]
         return out
-
-    def _stops(self, campaign: Campaign) -> list[int]:
-        """Each target's end of training (samples), worked out once per campaign."""
-        if getattr(self, "_stops_of", (None,))[0] is not campaign:
-            self._stops_of = (campaign, [segments(r)[0].stop for r, *_ in campaign.targets])
-        return self._stops_of[1]
 
     def _cost(self, x, start, lay, campaign) -> np.ndarray:
         return np.concatenate([self._residuals(self._unpack_fast(x, start, lay), campaign),
@@ -374,12 +392,19 @@ class TableModel:
                 lambda x: self._cost(x, start, lay, campaign), x, bounds=(lo, hi),
                 diff_step=1e-4, xtol=1e-6, ftol=1e-8, max_nfev=nfev)
 
-        if len(rivals) > 1:  # a few steps from each rival; the best goes on
+        if len(rivals) > 1 and self.baseline is not None:
+            # screening: `SCREEN_STEPS` from every rival first; only a candidate that lowers
+            # the cost by `SCREEN` there has its longer starts run to the end
+            first = [(solve(x, min(n, SCREEN_STEPS)), n) for x, n in rivals]
+            sol = min((f for f, _ in first), key=lambda s: float(np.sum(s.fun**2)))
+            if float(np.sum(sol.fun**2)) >= self.baseline * (1 - SCREEN):
+                return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac, screened=True)
+            sol = min([f if n <= SCREEN_STEPS else solve(f.x, n - SCREEN_STEPS)
+                       for f, n in first], key=lambda s: float(np.sum(s.fun**2)))
+            x0 = sol.x
+        elif len(rivals) > 1:  # a few steps from each rival; the best goes on
             sol = min((solve(x, n) for x, n in rivals),
                       key=lambda s: float(np.sum(s.fun**2)))
-            if self.baseline is not None and \
-                    float(np.sum(sol.fun**2)) >= self.baseline * (1 - SCREEN):
-                return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac, screened=True)
             x0 = sol.x
         elif self.baseline is not None:  # screening: a few steps first
             sol = solve(x0, SCREEN_STEPS)

@@ -66,6 +66,9 @@ class Candidate:
     #: the SELECTION criteria its gain fails over the starting model refitted with its
     #: leaning bounds widened (empty: it beats a wrong declaration too, or none leaned)
     stand_in: list[str] = field(default_factory=list)
+    #: why it was not fitted at all (`vtable.diagnose.screen`: a nonlinear candidate on
+    #: runs that show no amplitude dependence); its prediction is the current model's
+    not_fitted: str = ""
 
     @property
     def blocking(self) -> list[str]:
@@ -267,6 +270,8 @@ def _gain_json(c: Candidate) -> dict[str, float] | None:
 def evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
     if not np.isfinite(c.error_after):
         return "; ".join(c.flags)
+    if c.not_fitted:
+        return f"screened out, not fitted: {c.not_fitted}"
     if c.screened:
         return (f"screened out: its first least-squares steps from the best start on its "
                 f"grid lowered the training cost by less than {SCREEN:.0%} (held-out error "

@@ -1,87 +1,119 @@
-"""Candidate fits in worker processes: the diagnosis's candidates are independent, and a
-fit's Python parts (least squares, building the model, residuals) hold the GIL, so threads
-share one core for them; processes use every core.
+"""Candidate fits as tasks on Dask: the diagnosis's candidates are independent, and a fit's
+Python parts (least squares, building the model, residuals) hold the GIL, so threads share
+one core for them; Dask's worker processes use every core, on this machine or a lab's
+cluster.
 
-`CandidatePool(n, files)` keeps `n` spawned workers for the life of the interpreter (one
-pool per set of user effect files, made on first use): each loads those files, ignores
-Ctrl-C (the parent sets the shared stop event instead, which every fit checks between
-simulations) and keeps the last campaign it read (`CampaignFile`: pickled once by the
-parent, so a task carries a path, not the runs). `fit(...)` returns a future of
-(physics, train error, flags, cost, screened, predictions or the error that prevented
-them, CPU seconds).
+`cluster(n, scheduler)` is the Dask client the fits are submitted to: the scheduler at
+`scheduler` (a lab's cluster: `vtable diagnose --scheduler tcp://host:8786`), or a local
+cluster of `n` single-threaded worker processes, made once per process and kept. Locally
+the workers are forked from this process (`distributed.worker.multiprocessing-method`
+"fork"): they start in a tenth of a second with vtable imported and its compiled kernels
+loaded, where spawned ones would import everything again; they ignore Ctrl-C (the
+disposition they are forked with), which the parent handles.
+
+A diagnosis scatters its campaign to every worker once (`Tasks.campaign`) and submits
+`_fit` tasks: each returns what `fitted` does — (physics, train error, flags, cost,
+screened, predictions or the error that prevented them, CPU seconds). User files (effects
+and controller kinds registered with `--effects-from`, `--controller-from`) are sent to
+the workers as text and loaded there (`_load_files`), so a remote worker needs vtable
+installed, not the user's files. A stop (Ctrl-C) sets a Dask `Event` each fit polls
+between simulations (`StopFlag`), and cancels what has not started.
 """
 
 from __future__ import annotations
 
 import atexit
 import contextlib
-import importlib.machinery
-import multiprocessing
-import multiprocessing.util
-import os
-import pickle
+import hashlib
+import logging
 import signal
-import sys
 import tempfile
+import threading
 import time
 import uuid
-from concurrent.futures import Future, ProcessPoolExecutor
+from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from vtable.controllers import kinds
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.model import TableModel
+from vtable.effects import registry as effects_registry
 from vtable.effects.registry import get as effect
-from vtable.effects.registry import load_file
 from vtable.errors import VtableError
-from vtable.models.physics import Physics, nominal_open_loop
-from vtable.models.reduced import ReducedModel
-from vtable.params.specimen import NoSpecimen
+from vtable.models.physics import Physics
 
-_POOLS: dict[tuple[int, tuple[tuple[str, str], ...]], CandidatePool] = {}
+#: seconds between two looks at a diagnosis's stop event from a running fit
+POLL_S = 0.2
+
+
+class StopFlag:
+    """A Dask `Event` read as a `threading.Event` by the fits (`is_set`), looked at no more
+    often than every `POLL_S` seconds (each look is a message to the scheduler)."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self._event = None
+        self._next = 0.0
+        self._set = False
+
+    def is_set(self) -> bool:
+        if self._set:
+            return True
+        now = time.monotonic()
+        if now >= self._next:
+            self._next = now + POLL_S
+            if self._event is None:
+                from distributed import Event
+
+                self._event = Event(self.name)
+            self._set = bool(self._event.is_set())
+        return self._set
+
+    def __getstate__(self) -> dict:
+        return {"name": self.name}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(state["name"])
+
 
 # -- in the worker ----------------------------------------------------------------------
-_STOP: Any = None
-_CAMPAIGN: tuple[str, Campaign] | None = None
+_LOADED: set[str] = set()
 
 
-def _init(files: tuple[tuple[str, str], ...], stop) -> None:
-    """A worker's start: Ctrl-C is the parent's to handle, the user's files are loaded
-    (("effects", path) and ("controller", path) pairs), the kernels warmed up."""
-    global _STOP
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _STOP = stop
-    for what, f in files:
-        (load_file if what == "effects" else kinds.load_file)(f)
-    _warm_up()
+def _load_files(files: tuple[tuple[str, str, str], ...]) -> None:
+    """Load a diagnosis's user files in this worker, once each: (kind, path, text), kind
+    "effects" or "controller"; from `path` where this machine holds it with that text (the
+    module keeps the name it has in the parent), else from a copy of the text."""
+    for what, path, text in files:
+        digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+        if digest in _LOADED:
+            continue
+        p = Path(path)
+        try:
+            same = p.read_text() == text
+        except OSError:
+            same = False
+        if not same:
+            folder = Path(tempfile.gettempdir()) / f"vtable-user-{digest}"
+            folder.mkdir(exist_ok=True)
+            p = folder / p.name
+            if not p.exists():
+                p.write_text(text)
+        registry = effects_registry if what == "effects" else kinds
+        if not registry.loaded(p):  # a forked worker holds what the parent had loaded
+            registry.load_file(p)
+        _LOADED.add(digest)
 
 
-def _warm_up() -> None:
-    """Load the reduced model's compiled kernels (linear and nonlinear) from numba's cache
-    while the parent fits its starting model."""
-    t = np.arange(4) * 0.005
-    for effects in ({}, {"actuator_friction": {}}):
-        ReducedModel(Physics(nominal_open_loop(), NoSpecimen(), effects)).simulate(t, 0 * t)
-
-
-def _ping() -> None:
-    """A task that starts a worker."""
-
-
-def _fit(path: str, start: Physics, name: str | None, baseline: float | None,
-         seed: dict[str, float] | None, calibration: Calibration) -> tuple:
-    """`TableModel(start=start, multistart=name, ...)` fitted on the campaign pickled at
-    `path`, and its predictions (the module docstring's tuple)."""
-    global _CAMPAIGN
-    if _CAMPAIGN is None or _CAMPAIGN[0] != path:
-        with open(path, "rb") as f:
-            _CAMPAIGN = (path, pickle.load(f))
-    return fitted(TableModel(start=start, multistart=name, stop=_STOP,
-                             calibration=calibration, baseline=baseline, seed=seed),
-                  _CAMPAIGN[1])
+def _fit(campaign: Campaign, start: Physics, name: str | None, baseline: float | None,
+         seed: dict[str, float] | None, calibration: Calibration, stop: StopFlag,
+         files: tuple[tuple[str, str, str], ...]) -> tuple:
+    """`TableModel(start=start, multistart=name, ...)` fitted on `campaign` (the module
+    docstring's tuple)."""
+    _load_files(files)
+    return fitted(TableModel(start=start, multistart=name, stop=stop, calibration=calibration,
+                             baseline=baseline, seed=seed), campaign)
 
 
 def fitted(model, campaign: Campaign) -> tuple:
@@ -104,80 +136,90 @@ def fitted(model, campaign: Campaign) -> tuple:
 
 
 # -- in the parent ----------------------------------------------------------------------
-class CandidatePool:
-    """`n` worker processes for candidate fits (see the module docstring)."""
-
-    def __init__(self, n: int, files: tuple[tuple[str, str], ...]) -> None:
-        ctx = multiprocessing.get_context("spawn")
-        self.stop = ctx.Event()
-        self.executor = ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_init,
-                                            initargs=(files, self.stop))
-        # start every worker now (each submit starts one), without the caller's main module:
-        # a spawned process runs the main script again unless it is guarded by
-        # `if __name__ == "__main__"`, and nothing the workers are sent needs it (vtable's
-        # functions and objects; a user's effects come from their files)
-        main = sys.modules["__main__"]
-        spec = getattr(main, "__spec__", None)
-        main.__spec__ = importlib.machinery.ModuleSpec("vtable.__main__", None)
-        try:
-            for _ in range(n):
-                self.executor.submit(_ping)
-        finally:
-            main.__spec__ = spec
-
-    @classmethod
-    def get(cls, n: int, files: tuple[tuple[str, str], ...]) -> CandidatePool:
-        key = (n, files)
-        pool = _POOLS.get(key)
-        if pool is None:
-            if not _POOLS:
-                # multiprocessing's own exit hook runs this before it waits for child
-                # processes (in a process that is itself a worker, atexit never runs)
-                multiprocessing.util.Finalize(None, shutdown, exitpriority=100)
-            pool = _POOLS[key] = cls(n, files)
-        return pool
-
-    def fit(self, campaign: str, start: Physics, name: str | None, baseline: float | None,
-            seed: dict[str, float] | None, calibration: Calibration) -> Future:
-        """A candidate fit on the campaign pickled at `campaign` (`CampaignFile`)."""
-        return self.executor.submit(_fit, campaign, start, name, baseline, seed, calibration)
-
-    def shutdown(self) -> None:
-        self.executor.shutdown(wait=True, cancel_futures=True)
+_CLIENTS: dict[tuple[int, str | None], Any] = {}
+_LOCK = threading.Lock()
 
 
-class CampaignFile:
-    """A campaign pickled once into a temporary file the workers read (each keeps the last
-    one it read): a task carries its path, not the runs. `close()` removes it."""
+def cluster(n: int, scheduler: str | None = None):
+    """The Dask client candidate fits run on (module docstring): the scheduler at
+    `scheduler`, or this process's local cluster of `n` forked workers (made on first
+    use). Ctrl-C is ignored while the local workers are forked (they keep that
+    disposition), where this thread may set it."""
+    key = (n, scheduler)
+    with _LOCK:
+        client = _CLIENTS.get(key)
+        if client is not None and client.status == "running":
+            return client
+        import dask
+        from distributed import Client, LocalCluster
 
-    def __init__(self, campaign: Campaign) -> None:
-        # a unique name: a worker recognises the campaign it holds by its path
-        fd, self.path = tempfile.mkstemp(prefix=f"vtable-campaign-{uuid.uuid4().hex}-",
-                                         suffix=".pickle")
-        with os.fdopen(fd, "wb") as f:
-            pickle.dump(campaign, f, protocol=pickle.HIGHEST_PROTOCOL)
-        _FILES.add(self.path)
-
-    def close(self) -> None:
-        _FILES.discard(self.path)
-        with contextlib.suppress(OSError):
-            os.remove(self.path)
-
-
-_FILES: set[str] = set()
+        if scheduler:
+            try:
+                client = Client(scheduler, timeout=10)
+            except OSError as e:
+                raise VtableError(f"--scheduler {scheduler}: no Dask scheduler answers there "
+                                  f"({e})") from None
+        else:
+            main = threading.current_thread() is threading.main_thread()
+            old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+            try:
+                with dask.config.set({"distributed.worker.multiprocessing-method": "fork",
+                                      "distributed.worker.daemon": True,
+                                      "distributed.scheduler.work-stealing": False}):
+                    lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                      dashboard_address=None, silence_logs=logging.CRITICAL)
+                    client = Client(lc)
+            finally:
+                if main:
+                    signal.signal(signal.SIGINT, old)
+        _CLIENTS[key] = client
+        return client
 
 
 def shutdown() -> None:
-    """End every worker pool (a later diagnosis starts new workers)."""
-    for pool in _POOLS.values():
-        pool.stop.set()
-        pool.shutdown()
-    _POOLS.clear()
+    """End every cluster this process made (a later diagnosis starts new workers)."""
+    with _LOCK:
+        for client in _CLIENTS.values():
+            with contextlib.suppress(Exception):
+                lc = client.cluster
+                client.close()
+                if lc is not None:
+                    lc.close()
+        _CLIENTS.clear()
 
 
-@atexit.register
-def _close() -> None:
-    for path in list(_FILES):
-        with contextlib.suppress(OSError):
-            os.remove(path)
-    shutdown()
+atexit.register(shutdown)
+
+
+class Tasks:
+    """One diagnosis's fits on a Dask client: the campaign scattered once, its stop event,
+    its user files (`submit`, `halt`, `close`)."""
+
+    def __init__(self, client, campaign: Campaign,
+                 files: tuple[tuple[str, str, str], ...]) -> None:
+        self.client, self.files = client, files
+        self.stop = StopFlag(f"vtable-stop-{uuid.uuid4().hex}")
+        self._campaign = client.scatter(campaign, broadcast=True, hash=False)
+        self._futures: list = []
+
+    def submit(self, start: Physics, name: str | None, baseline: float | None,
+               seed: dict[str, float] | None, calibration: Calibration):
+        fut = self.client.submit(_fit, self._campaign, start, name, baseline, seed,
+                                 calibration, self.stop, self.files, pure=False)
+        self._futures.append(fut)
+        return fut
+
+    def halt(self) -> None:
+        """Stop the running fits at their next look at the event; cancel the rest."""
+        from distributed import Event
+
+        with contextlib.suppress(Exception):
+            Event(self.stop.name, client=self.client).set()
+        with contextlib.suppress(Exception):
+            self.client.cancel([f for f in self._futures if not f.done()])
+
+    def close(self) -> None:
+        """Release the scattered campaign and the results the workers hold."""
+        with contextlib.suppress(Exception):
+            self.client.cancel([*self._futures, self._campaign])
+        self._futures = []

@@ -153,6 +153,11 @@ def load_file(path: str | Path) -> list[str]:
 _FILES: dict[str, str] = {}  # user effect -> the file that registered it
 
 
+def loaded(path: str | Path) -> bool:
+    """Whether this process has loaded the file at `path` (`load_file`)."""
+    return str(Path(path).resolve()) in set(_FILES.values())
+
+
 def source_file(name: str) -> str | None:
     """The file a user's effect was loaded from (`load_file`); None for the catalog's and
     for one registered from code (another process cannot load it again)."""

@@ -21,6 +21,7 @@ each DOF loop reduces to eq 6.5a with the mass per actuator M_d/ΣT_ij².
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
@@ -98,7 +99,7 @@ class ServoLaw:
 
     @property
     def Tp(self) -> np.ndarray:
-        return np.linalg.pinv(self.T)
+        return _pinv(self.T.tobytes(), self.T.shape).copy()
 
     def kernel(self) -> tuple[np.ndarray, ...]:
         """(T, T⁺, g, k_p, k_v) for `element.servo_rates`."""
@@ -156,13 +157,34 @@ class ServoLaw:
         j = self.dofs.index(dof)
         if self.stages:
             raise ValueError(f"the {dof} loop has stages: not a single-state loop")
+        key = (dof, self.dofs, self.T.tobytes(), self.T.shape, self.g.tobytes(),
+               self.k_p.tobytes(), self.k_v.tobytes(), self.hydraulics)
+        hit = _DOF_LOOPS.get(key)
+        if hit is not None:
+            return hit
         b = self.linear_blocks()
         t, tp = self.T[:, j], self.Tp[j]
-        return (float(tp @ b.A @ t), float(tp @ b.Bx @ t), float(tp @ b.Bv @ t),
-                float(t @ b.C @ t))
+        out = (float(tp @ b.A @ t), float(tp @ b.Bx @ t), float(tp @ b.Bv @ t),
+               float(t @ b.C @ t))
+        if len(_DOF_LOOPS) >= 64:  # a fit asks for the same few loops thousands of times
+            _DOF_LOOPS.pop(next(iter(_DOF_LOOPS)))
+        _DOF_LOOPS[key] = out
+        return out
 
     def with_hydraulics(self, hydraulics: ServoConstants) -> ServoLaw:
         return replace(self, hydraulics=hydraulics)
+
+
+_DOF_LOOPS: dict[tuple, tuple[float, float, float, float]] = {}
+
+
+@functools.lru_cache(maxsize=64)
+def _pinv(data: bytes, shape: tuple[int, ...]) -> np.ndarray:
+    """T⁺ of the actuator matrix T (given by value: a fit builds the same few T's
+    thousands of times); read-only."""
+    out = np.linalg.pinv(np.frombuffer(data).reshape(shape))
+    out.flags.writeable = False
+    return out
 
 
 def dof_matrix(vt, kind: str) -> tuple[tuple[str, ...], np.ndarray]:

@@ -271,3 +271,34 @@ def simulate_linear(xc, nq, A, B, fy, fu, Phi, G0, G1):
             PL[k + 1:] = np.nan
             break
     return Q, Qd, Qdd, F, PL
+
+
+@njit(cache=True, nogil=True)
+def simulate_modal(xc, phi, g0, g1, C, D, every):
+    """A stable linear model's outputs stepped in its modal coordinates z (A = V Λ V⁻¹,
+    z = V⁻¹ y): z_{k+1} = e^{λh} z_k + γ₀ x_k + γ₁ (x_{k+1} - x_k), the first-order hold
+    of `simulate_linear` mode by mode (`g0`, `g1`: γ₀, γ₁ with V⁻¹B folded in); the
+    outputs Re(C z) + D x at every `every`-th step (C: the output rows times V, each
+    conjugate pair once, doubled). Returns (outputs, samples)."""
+    n = xc.shape[0]
+    m = phi.shape[0]
+    no = C.shape[0]
+    n_out = (n - 1) // every + 1
+    Y = np.empty((no, n_out))
+    z = np.zeros(m, dtype=np.complex128)
+    j = 0
+    for k in range(n):
+        u = xc[k]
+        if k % every == 0:
+            for o in range(no):
+                s = D[o] * u
+                for i in range(m):
+                    s += (C[o, i] * z[i]).real
+                Y[o, j] = s
+            j += 1
+        if k == n - 1:
+            break
+        du = xc[k + 1] - u
+        for i in range(m):
+            z[i] = phi[i] * z[i] + g0[i] * u + g1[i] * du
+    return Y

@@ -11,6 +11,7 @@ inf) and below the plausible magnitude of its dimension (`vtable.units.PLAUSIBLE
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import tomllib
 from pathlib import Path
@@ -61,15 +62,17 @@ class Params:
     """Mixin for frozen dataclasses declared with `quantity` and `plain` fields."""
 
     def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):  # type: ignore[arg-type]
-            lo, hi = f.metadata.get("minimum"), f.metadata.get("maximum")
+        for f, lo, hi, exclusive in _bounded(type(self)):
             v = getattr(self, f.name)
-            if v is None or (lo is None and hi is None):
+            if v is None:
                 continue
-            unit = f.metadata["unit"]
             for x in (v if isinstance(v, tuple) else (v,)):
-                _check_bounds(x, lo, f.metadata["exclusive"], hi, unit,
-                              f"{type(self).__name__}.{_key(f)}", f.metadata.get("fraction"))
+                if (lo is not None and not (math.isfinite(x)
+                                            and (x > lo if exclusive else x >= lo))) or \
+                        (hi is not None and not x <= hi):
+                    _check_bounds(x, lo, exclusive, hi, f.metadata["unit"],
+                                  f"{type(self).__name__}.{_key(f)}",
+                                  f.metadata.get("fraction"))
 
     # -- TOML edge -------------------------------------------------------------------
     @classmethod
@@ -133,6 +136,17 @@ class Params:
         """Field name -> the report table/equation its preset value comes from."""
         return {f.name: f.metadata.get("source", "")
                 for f in dataclasses.fields(cls) if "unit" in f.metadata}  # type: ignore[arg-type]
+
+
+@functools.cache
+def _bounded(cls: type) -> tuple[tuple[dataclasses.Field, float | None, float | None, bool],
+                                 ...]:
+    """The fields of a `Params` class that carry bounds: (field, minimum, maximum,
+    exclusive), worked out once per class (every parameter object checks them)."""
+    return tuple((f, f.metadata.get("minimum"), f.metadata.get("maximum"),
+                  f.metadata.get("exclusive", True))
+                 for f in dataclasses.fields(cls)
+                 if f.metadata.get("minimum") is not None or f.metadata.get("maximum") is not None)
 
 
 def _check_bounds(v: float, lo: float | None, exclusive: bool, hi: float | None, unit: str,

@@ -1,0 +1,163 @@
+"""Whether the runs show any nonlinearity the current model misses: the screen that decides
+if a nonlinear candidate is worth fitting.
+
+A missing linear effect leaves the same residual transfer function in every run, whatever
+its amplitude; a nonlinear effect the model lacks (friction, a rated flow, orifice flow,
+entrained air, amplitude-dependent damping, a yielding storey, a user's force law) does
+not. On the current (calibrated) model's residual r = y − ŷ of each channel group, driven
+by the command x, the residual's H1 R = S_xr / S_xx (Welch frames common to the campaign;
+Bendat & Piersol, *Random Data*, §9.2) is compared between every pair of runs:
+
+    χ² = Σ |R_a − R_b|² / (Var R_a + Var R_b),   Var R ≈ (1 − γ²_xr) S_rr / (n_d S_xx),
+
+over the lines where both commands have power in the analysis bands; a linear model gives
+χ² ≈ L (one per line), so z = (χ² − L) / √(c L) (c = `LINE_CORRELATION`: the lines of
+half-overlapping Hann frames are not independent) measures the amplitude dependence in
+standard deviations.
+
+z above `Z_SCREEN` anywhere, or runs whose commands do not differ in amplitude enough to
+tell (`AMPLITUDES`; one run), and every nonlinear candidate is fitted as before; z below
+it everywhere, and a nonlinear candidate could only add its equivalent linear part, which
+the calibrated base and the linear candidates hold: it is not fitted
+(`NonlinearityEvidence.text` says why, with the numbers). The screen errs towards
+fitting: a false alarm costs time, never a finding. Measured (README campaigns and the
+benchmark's, 1 % noise): a model missing a linear effect (the table's pitch) z 2.7-4.2;
+missing friction, orifice flow, a rated flow, entrained air or amplitude-dependent damping,
+z 20-166.
+
+The residual's power incoherent with the command (distortion) is not used: on a model
+still missing a resonant linear effect the residual is sharp, and its coherence is biased
+at every resolution a few-second run allows (`vtable.diagnose.stationarity`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.signal
+
+from vtable.diagnose.campaign import Campaign
+from vtable.diagnose.groups import group_prediction, group_signal, run_groups
+from vtable.diagnose.sampling import BANDS
+
+#: Hz: the band the screen reads (the analysis bands', above the lowest lines)
+BAND_HZ = (0.3, BANDS[-1][1])
+#: Welch averages the shortest run must give (its frames set everyone's)
+MIN_AVERAGES = 8
+#: lines of half-overlapping Hann frames are not independent: each counts this many times
+LINE_CORRELATION = 1.5
+#: amplitude dependence: standard deviations of the statistic above its mean
+Z_SCREEN = 8.0
+#: runs whose commands' RMS differ by less than this factor are at one amplitude
+AMPLITUDES = 1.2
+#: a line is read where the command has at least this share of its peak power
+COMMAND_SHARE = 1e-4
+
+
+@dataclass
+class NonlinearityEvidence:
+    """The screen's reading: the largest amplitude statistic z over the pairs of runs and
+    channel groups (where), how many pairs were compared and whether the runs' amplitudes
+    differ enough to tell; `present`: the nonlinear candidates are worth fitting."""
+
+    amplitude: float = 0.0
+    amplitude_at: str = ""
+    pairs: int = 0
+    spread: float = 1.0  # the largest ratio of two runs' command RMS
+    why_not: str = ""  # what kept the screen from reading the runs
+
+    @property
+    def present(self) -> bool:
+        return bool(self.why_not) or self.spread < AMPLITUDES or self.amplitude > Z_SCREEN
+
+    def text(self) -> str:
+        """Why the nonlinear candidates are (not) fitted, with the numbers."""
+        if self.why_not:
+            return f"nonlinear candidates are fitted: {self.why_not}"
+        if self.spread < AMPLITUDES:
+            return ("nonlinear candidates are fitted: the runs' commands are all at one "
+                    f"amplitude (RMS within x{self.spread:.2f}), so amplitude dependence "
+                    "cannot be ruled out")
+        stat = (f"the residual's transfer function from the command differs between runs "
+                f"of different amplitude (up to x{self.spread:.1f}) by at most "
+                f"{self.amplitude:.1f} standard deviations of its estimates"
+                + (f", {self.amplitude_at}" if self.amplitude_at else "")
+                + f" (needs {Z_SCREEN:g})")
+        if self.present:
+            return f"amplitude dependence: nonlinear candidates are fitted ({stat})"
+        return ("no amplitude dependence beyond the noise: a nonlinear candidate could "
+                "only add its equivalent linear part, which the calibrated base holds; not "
+                f"fitted ({stat})")
+
+
+def _frames(campaign: Campaign) -> int | None:
+    """The Welch frame (samples) every run can average `MIN_AVERAGES` times, as fine as
+    the shortest run allows; None when a run is too short for 64-sample frames."""
+    n = min(len(r.time) for r in campaign.runs)
+    nper = 1 << math.floor(math.log2(2 * n / (MIN_AVERAGES + 1)))
+    return nper if nper >= 64 else None
+
+
+def nonlinearity_evidence(campaign: Campaign,
+                          predictions: dict[str, dict[str, np.ndarray]]
+                          ) -> NonlinearityEvidence:
+    """The screen (module docstring) on the current model's `predictions` of every run
+    (analysis rate, whole runs)."""
+    ev = NonlinearityEvidence()
+    runs = campaign.runs
+    if len(runs) < 2:
+        ev.why_not = "one run: no amplitudes to compare"
+        return ev
+    nper = _frames(campaign)
+    fs = runs[0].fs
+    if nper is None or any(abs(r.fs - fs) > 1e-6 * fs for r in runs):
+        ev.why_not = "the runs are too short or at different rates to compare"
+        return ev
+    rms = [float(np.std(r.channel("h_span"))) for r in runs]
+    ev.spread = max(rms) / min(rms) if min(rms) > 0 else math.inf
+    est: dict[str, dict[str, tuple]] = {}
+    for run in runs:
+        pred = predictions.get(run.name)
+        if pred is None:
+            ev.why_not = f"{run.name} has no prediction"
+            return ev
+        x = run.channel("h_span")
+        f, s_xx = scipy.signal.welch(x, fs, nperseg=nper)
+        band = (f >= BAND_HZ[0]) & (f <= min(BAND_HZ[1], 0.45 * fs)) & \
+            (s_xx > COMMAND_SHARE * s_xx.max())
+        n_d = (len(x) - nper) // (nper // 2) + 1
+        est[run.name] = {}
+        for g in run_groups(run):
+            y, yh = group_signal(run, g), group_prediction(pred, run, g)
+            if y is None or yh is None or not np.all(np.isfinite(yh)):
+                continue
+            r = y - yh
+            _, s_rr = scipy.signal.welch(r, fs, nperseg=nper)
+            _, s_xr = scipy.signal.csd(x, r, fs, nperseg=nper)
+            k = band & (s_rr > 0)
+            if k.sum() < 4:
+                continue
+            coh = np.abs(s_xr[k]) ** 2 / (s_xx[k] * s_rr[k])
+            R = s_xr[k] / s_xx[k]
+            var = (1 - coh) * s_rr[k] / (n_d * s_xx[k])
+            est[run.name][g] = (f[k], R, var)
+    for (a, ea), (b, eb) in itertools.combinations(est.items(), 2):
+        for g in ea.keys() & eb.keys():
+            (fa, ra, va), (fb, rb, vb) = ea[g], eb[g]
+            _, ia, ib = np.intersect1d(fa, fb, return_indices=True)
+            v = va[ia] + vb[ib]
+            ok = v > 0
+            lines = int(ok.sum())
+            if lines < 4:
+                continue
+            ev.pairs += 1
+            chi = float(np.sum(np.abs(ra[ia][ok] - rb[ib][ok]) ** 2 / v[ok]))
+            z = (chi - lines) / math.sqrt(LINE_CORRELATION * lines)
+            if z > ev.amplitude:
+                ev.amplitude, ev.amplitude_at = z, f"{a} against {b}, {g}"
+    if not ev.pairs:
+        ev.why_not = "no channel group to compare between runs"
+    return ev
