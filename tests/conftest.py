@@ -17,6 +17,9 @@ tempfile.tempdir = SESSION_TMP
 
 
 def pytest_sessionfinish(session, exitstatus):
+    from vtable.diagnose import workers
+
+    workers.shutdown()  # the Dask workers' scratch folders live in SESSION_TMP too
     tempfile.tempdir = None
     shutil.rmtree(SESSION_TMP, ignore_errors=True)
 

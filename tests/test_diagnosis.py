@@ -439,9 +439,9 @@ def test_resampling_keeps_missing_samples_out():
 
 
 def test_workers_run_a_script_without_a_main_guard(tmp_path):
-    """The candidate fits run in spawned worker processes; a script that diagnoses at its
-    top level (no `if __name__ == "__main__"`) is not run again by them, and the result is
-    the one fitting in this process gives."""
+    """The candidate fits run as Dask tasks in worker processes; a script that diagnoses at
+    its top level (no `if __name__ == "__main__"`) is not run again by them, and the result
+    is the one fitting in this process gives."""
     import subprocess
     import sys
 
@@ -458,7 +458,7 @@ def test_workers_run_a_script_without_a_main_guard(tmp_path):
         "print('script body ran')\n"
         f"runs = [read_run(p) for p in sorted(glob.glob({str(tmp_path)!r} + '/run*.toml'))]\n"
         "d = Diagnoser(runs, catalog=['valve_dynamics', 'force_feedback_filter'], workers=2)\n"
-        "print('found', d.diagnose().final_effects, d.fits.procs is not None)\n")
+        "print('found', d.diagnose().final_effects, d.fits.on_dask)\n")
     out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
                          timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]

@@ -30,6 +30,7 @@ from vtable.diagnose.calibration import LOOP, BaseParam, Calibration, base_param
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare, segments
 from vtable.diagnose.reuse import model_at
+from vtable.diagnose.secant import Secant
 from vtable.diagnose.statistics import correlations
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
@@ -388,9 +389,12 @@ class TableModel:
 
         def solve(x, nfev):
             x = np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-            return scipy.optimize.least_squares(
-                lambda x: self._cost(x, start, lay, campaign), x, bounds=(lo, hi),
-                diff_step=1e-4, xtol=1e-6, ftol=1e-8, max_nfev=nfev)
+            secant = Secant(lambda x: self._cost(x, start, lay, campaign), lo, hi)
+            sol = scipy.optimize.least_squares(secant.fun, x, jac=secant.jac,
+                                               bounds=(lo, hi), xtol=1e-6, ftol=1e-8,
+                                               max_nfev=nfev)
+            sol.secant = secant
+            return sol
 
         if len(rivals) > 1 and self.baseline is not None:
             # screening: `SCREEN_STEPS` from every rival first; only a candidate that lowers
@@ -412,7 +416,8 @@ class TableModel:
                 return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac, screened=True)
             x0 = sol.x
         sol = solve(x0, 40)
-        return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac)
+        # the covariance the flags read: forward differences where the fit ended
+        return self._done(campaign, start, lay, sol.x, sol.fun, sol.secant.at(sol.x))
 
     def _refine(self, x: np.ndarray, eff: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                 start: Physics, lay, campaign: Campaign) -> tuple[float, np.ndarray]:

@@ -52,6 +52,7 @@ class Fits:
         self.calibration, self.model, self.scheduler = calibration, model, scheduler
         self.stop = threading.Event()
         self.tasks: Tasks | None = None  # this diagnosis's tasks on Dask, once started
+        self.on_dask = False  # whether its fits ran as Dask tasks
 
     def here(self, start: Physics, name: str | None, baseline: float | None,
              seed: dict[str, float] | None) -> tuple:
@@ -90,6 +91,7 @@ class Fits:
             return None
         if self.tasks is None:
             self.tasks = Tasks(cluster(self.workers, self.scheduler), self.campaign, files)
+            self.on_dask = True
         return self.tasks
 
     def dispatch(self, jobs: list[tuple[Any, tuple]]) -> Iterator[tuple[Any, tuple]]:

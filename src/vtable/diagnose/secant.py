@@ -1,0 +1,83 @@
+"""The Jacobian the diagnosis's least-squares fits use: forward differences where they must,
+rank-one (Broyden) updates in between.
+
+A forward-difference Jacobian of the reduced model's residuals costs one simulation of every
+run per parameter (a dozen or more) at every iteration of `scipy.optimize.least_squares`;
+the residual's own evaluation costs one. Between two iterations the Jacobian changes little:
+Broyden's update J ← J + (Δr − J Δx) Δxᵀ / (Δxᵀ Δx) (Dennis & Schnabel, *Numerical Methods
+for Unconstrained Optimization*, §8.1) makes it agree with the last step's change of the
+residual at no cost, and the trust region of `least_squares` ('trf') keeps a step honest
+when it is not exact. The Jacobian is taken by forward differences again every `REFRESH`
+iterations, and always where the fit ends (`at`), for the Gauss-Newton covariance the fit's
+flags read (`vtable.diagnose.statistics.correlations`).
+
+Forward differences as `least_squares`' '2-point' takes them: steps of `diff_step` ×
+max(1, |x_i|), turned back where they would leave the bounds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+#: iterations between two forward-difference Jacobians (the first is one)
+REFRESH = 4
+
+
+class Secant:
+    """`fun` (x -> residuals) and a `jac` for `scipy.optimize.least_squares` that takes
+    forward differences every `refresh` calls and Broyden updates in between; `evals`
+    counts the residual evaluations."""
+
+    def __init__(self, fun: Callable[[np.ndarray], np.ndarray], lo: np.ndarray,
+                 hi: np.ndarray, diff_step: float = 1e-4, refresh: int = REFRESH) -> None:
+        self._fun, self.lo, self.hi = fun, lo, hi
+        self.diff_step, self.refresh = diff_step, refresh
+        self._seen: dict[bytes, np.ndarray] = {}
+        self._J: np.ndarray | None = None
+        self._x: np.ndarray | None = None
+        self._f: np.ndarray | None = None
+        self._calls = 0
+        self.evals = 0
+
+    def fun(self, x: np.ndarray) -> np.ndarray:
+        f = self._fun(x)
+        self.evals += 1
+        if len(self._seen) > 8:
+            self._seen.pop(next(iter(self._seen)))
+        self._seen[np.asarray(x, dtype=float).tobytes()] = f
+        return f
+
+    def _value(self, x: np.ndarray) -> np.ndarray:
+        f = self._seen.get(np.asarray(x, dtype=float).tobytes())
+        return self.fun(x) if f is None else f
+
+    def at(self, x: np.ndarray) -> np.ndarray:
+        """The forward-difference Jacobian at `x`."""
+        x = np.asarray(x, dtype=float)
+        f0 = self._value(x)
+        J = np.empty((len(f0), len(x)))
+        for i in range(len(x)):
+            h = self.diff_step * max(1.0, abs(x[i])) * (1.0 if x[i] >= 0 else -1.0)
+            if not self.lo[i] <= x[i] + h <= self.hi[i]:
+                h = -h
+            xi = x.copy()
+            xi[i] += h
+            J[:, i] = (self.fun(xi) - f0) / h
+        return J
+
+    def jac(self, x: np.ndarray) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        f = self._value(x)
+        if self._J is None or self._calls % self.refresh == 0:
+            J = self.at(x)
+        else:
+            J = self._J.copy()
+            dx = x - self._x
+            dd = float(dx @ dx)
+            if dd > 0:
+                J += np.outer(f - self._f - J @ dx, dx / dd)
+        self._calls += 1
+        self._J, self._x, self._f = J, x.copy(), f
+        return J
