@@ -57,6 +57,7 @@ from vtable.diagnose.compare import compare
 from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
 from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
+from vtable.diagnose.projected import Frame
 from vtable.diagnose.prose import unexplained, untried
 from vtable.diagnose.result import (
     ERROR_DEFINITION,
@@ -79,6 +80,11 @@ from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
 from vtable.models.reduced import ReducedModel
 from vtable.runs.model import Run
+
+#: a candidate that passed the screen is refined (fitted in full) unless its screened
+#: training cost is above this many times that of an admissible refined candidate: its
+#: fit would have to fall by as much to win the round
+REFINE_FACTOR = 3.0
 
 __all__ = ["BASE_PARAMS", "ERROR_DEFINITION", "MIN_SHARE", "NOISE_SHARE", "SELECTION",
            "WORKERS", "Z_NOISE", "Candidate", "Diagnoser", "Diagnosis", "DiagnosisInterrupted",
@@ -142,19 +148,15 @@ class Diagnoser:
         #: each round's nonlinearity screen (`vtable.diagnose.screen`)
         self.screens: list = []
 
-    def model(self, start: Physics, multistart: str | None = None,
-              baseline: float | None = None, seed: dict[str, float] | None = None
-              ) -> TableModel:
-        """The estimator the loop fits (sharing this diagnosis's stop flag)."""
-        return TableModel(start=start, multistart=multistart, stop=self._stop,
-                          calibration=self.calibration, baseline=baseline, seed=seed)
+    def model(self, start: Physics, **kw) -> TableModel:
+        """The estimator the loop fits (sharing this diagnosis's stop flag; `kw`:
+        `TableModel`'s multistart, baseline, seed, frame, screen_only, begin)."""
+        return TableModel(start=start, stop=self._stop, calibration=self.calibration, **kw)
 
-    def fit(self, ph: Physics, multistart: str | None = None,
-            baseline: float | None = None, seed: dict[str, float] | None = None
-            ) -> TableModel:
+    def fit(self, ph: Physics, **kw) -> TableModel:
         """Fit `ph` (see `TableModel`): the fitted estimator (`physics_`, `train_error_`,
         `flags_`, `cost_`, `screened_`)."""
-        return self.model(ph, multistart, baseline, seed).fit(self.campaign)
+        return self.model(ph, **kw).fit(self.campaign)
 
     def _widened_start(self, start: Physics) -> tuple | None:
         """When the calibrated starting model leans on bounds (`base_at_bounds`): the
@@ -292,57 +294,8 @@ class Diagnoser:
                 reason = "every catalog effect is in the model"
                 break
             cmp_cur = self._detail(st)
-
-            def judged(name: str, fitted: tuple) -> Candidate:
-                """The candidate a fit (`workers._fit`'s tuple) makes, scored held out."""
-                cand, train, flags, cost_, screened, pred, secs = fitted
-                spent[name] = secs
-                if isinstance(pred, Exception):  # the fit found no model it could build
-                    return Candidate(name, dict(cand.effects[name]), float("inf"), train, "",
-                                     len(effect(name).params), cand,
-                                     [f"no valid model found: {pred}"], None)
-                err = compare(pred, self.runs, scored="held", floor=self.floor).error
-                gain = held_out_gain(st.stages[-1].predictions, pred, self.runs,
-                                     self.campaign.noise)
-                return Candidate(name, dict(cand.effects[name]), err, train, "",
-                                 len(effect(name).params), cand, flags, pred, screened,
-                                 cost_, gain, self.table_view)
-
-            def task(name: str, base: Physics = current, baseline: float = cost) -> tuple:
-                # every candidate is screened: a fit whose first steps lower the training
-                # cost by less than 1 % cannot gain the 5 % of the noise's cost SELECTION
-                # asks of it (criterion 3)
-                return (base.with_effect(name), name, baseline, seeds.get(name))
-
-            # the backward step for the last addition (each earlier effect left out, the
-            # model refitted) runs beside this round's candidates: a removal, rare, makes
-            # the round start again from the smaller model. The costliest fits go first
-            # (what each took last round; nonlinear ones before linear ones in the first),
-            # so that no long fit starts last on an idle core.
-            todo.sort(key=lambda e: -spent.get(e, 0.0 if self._linear(current.with_effect(e))
-                                               else 1.0))
-            jobs = [(("without", e), (current.without(e), None, None, None)) for e in backward]
-            jobs += [(("add", e), task(e)) for e in todo]
-            ranking: list[Candidate] = []
-            # a nonlinear candidate is fitted only where the runs show amplitude
-            # dependence the current model misses (`screen`)
-            screen = nonlinearity_evidence(self.campaign, st.stages[-1].predictions)
-            if not screen.present:
-                for e in [e for e in todo if not self._linear(current.with_effect(e))]:
-                    todo.remove(e)
-                    ranking.append(self._not_fitted(current.with_effect(e), e, cost, st,
-                                                    screen.text()))
-                    done += 1
-                jobs = [j for j in jobs if j[0][0] == "without" or j[0][1] in todo]
-            self.screens.append(screen)
-            left: dict[str, tuple] = {}
-            for (kind, name), fitted in self.fits.dispatch(jobs):
-                if kind == "without":
-                    left[name] = fitted
-                    continue
-                ranking.append(judged(name, fitted))
-                done += 1
-                progress(done, steps, f"round {k}: tried {name}")
+            ranking, left, done = self._candidates(st, current, cost, todo, backward, seeds,
+                                                   spent, widened, progress, done, steps, k)
             dropped = self._backward(st, backward, left, progress, done, steps, k)
             backward = []
             if dropped is not None:
@@ -357,14 +310,7 @@ class Diagnoser:
             # SELECTION: the candidate with the largest held-out gain that passes the
             # statistical criteria and whose fit is sound (no parameter at a bound, none
             # entangled with the base) is added
-            if widened is not None:  # a candidate must also beat a wrong declaration
-                for c in ranking:
-                    if c.predictions is not None:
-                        c.stand_in = failing(held_out_gain(
-                            widened[2], c.predictions, self.runs, self.campaign.noise),
-                            c.physics, c.effect, self.table_view)
-            best = next((c for c in ranking if not c.failing() and not c.blocking
-                         and not c.stand_in), None)
+            best = next((c for c in ranking if self._admissible(c, widened)), None)
             for c in ranking:
                 c.evidence = evidence(c, err, self.floor, cmp_cur)
                 if c is not best:
@@ -403,7 +349,7 @@ class Diagnoser:
                 break
         if backward:  # the rounds ran out right after an addition
             left = dict((name, fitted) for (_, name), fitted in self.fits.dispatch(
-                [(("without", e), (current.without(e), None, None, None)) for e in backward]))
+                [(("without", e), {"start": current.without(e)}) for e in backward]))
             self._backward(st, backward, left, progress, done, steps, k)
         if not reason:
             reason = f"stopped after {self.max_rounds} rounds"
@@ -412,6 +358,102 @@ class Diagnoser:
         st.pushed = self._pushed_beyond(st)
         progress(steps, steps, "done")
         return self._diagnosis(st, final_cmp, reason)
+
+    def _admissible(self, c: Candidate, widened: tuple | None) -> bool:
+        """Whether SELECTION would add `c`: its gain passes the statistical criteria, its
+        fit is sound, and (when the starting model leans on its bounds, `widened`) it
+        beats the starting model refitted with them widened too (sets `c.stand_in`)."""
+        if widened is not None and c.predictions is not None:
+            c.stand_in = failing(held_out_gain(widened[2], c.predictions, self.runs,
+                                               self.campaign.noise),
+                                 c.physics, c.effect, self.table_view)
+        return not c.failing() and not c.blocking and not c.stand_in
+
+    def _judged(self, st: _State, name: str, fitted: tuple, spent: dict[str, float],
+                unrefined: str = "") -> Candidate:
+        """The candidate a fit (`workers.fitted`'s tuple) makes, scored held out."""
+        cand, train, flags, cost_, screened, pred, secs, _ = fitted
+        spent[name] = spent.get(name, 0.0) + secs if unrefined else secs
+        if isinstance(pred, Exception):  # the fit found no model it could build
+            return Candidate(name, dict(cand.effects[name]), float("inf"), train, "",
+                             len(effect(name).params), cand,
+                             [f"no valid model found: {pred}"], None)
+        err = compare(pred, self.runs, scored="held", floor=self.floor).error
+        gain = held_out_gain(st.stages[-1].predictions, pred, self.runs, self.campaign.noise)
+        return Candidate(name, dict(cand.effects[name]), err, train, "",
+                         len(effect(name).params), cand, flags, pred, screened, cost_, gain,
+                         self.table_view, unrefined=unrefined)
+
+    def _candidates(self, st: _State, current: Physics, cost: float, todo: list[str],
+                    backward: list[str], seeds: dict, spent: dict, widened,
+                    progress, done: int, steps: int, k: int
+                    ) -> tuple[list[Candidate], dict[str, tuple], int]:
+        """A round's candidates, and the backward step's refits beside them: (the ranking,
+        unsorted; the refits without each effect of `backward`; the progress count).
+
+        Every candidate is screened on the current model linearised once for all of them
+        (`projected`): a fit that does not lower the training cost by `SCREEN` cannot
+        gain the 5 % of the noise's cost SELECTION asks (criterion 3). A nonlinear one is
+        not even tried where the runs show no amplitude dependence (`screen`). Those that
+        pass are refined (fitted in full) best first, the costliest first on the cores;
+        one whose screened training cost is above `REFINE_FACTOR` times that of an
+        admissible refined candidate cannot win the round and is kept as screened."""
+        frame = Frame.of(self._model(), current, self.campaign, cost)
+        ranking: list[Candidate] = []
+        screen = nonlinearity_evidence(self.campaign, st.stages[-1].predictions)
+        self.screens.append(screen)
+        if not screen.present:
+            for e in [e for e in todo if not self._linear(current.with_effect(e))]:
+                todo = [t for t in todo if t != e]
+                ranking.append(self._not_fitted(current.with_effect(e), e, cost, st,
+                                                screen.text()))
+                done += 1
+        # the costliest fits go first (what each took last round; nonlinear ones before
+        # linear ones in the first), so that no long fit starts last on an idle core
+        todo.sort(key=lambda e: -spent.get(e, 0.0 if self._linear(current.with_effect(e))
+                                           else 1.0))
+
+        def job(e: str, **kw) -> dict:
+            return {"start": current.with_effect(e), "multistart": e, "seed": seeds.get(e),
+                    "frame": frame, **kw}
+
+        jobs = [(("without", e), {"start": current.without(e)}) for e in backward]
+        jobs += [(("screen", e), job(e, baseline=cost, screen_only=True)) for e in todo]
+        left: dict[str, tuple] = {}
+        passed: dict[str, tuple] = {}
+        for (kind, name), fitted in self.fits.dispatch(jobs):
+            if kind == "without":
+                left[name] = fitted
+                continue
+            done += 1
+            if fitted[-1] is None:  # screened out, or no valid model
+                ranking.append(self._judged(st, name, fitted, spent))
+                progress(done, steps, f"round {k}: tried {name}")
+            else:
+                passed[name] = fitted
+                spent[name] = fitted[-2]
+        order = sorted(passed, key=lambda e: passed[e][3])
+        best: Candidate | None = None
+        while order:
+            if best is not None and passed[order[0]][3] > REFINE_FACTOR * best.cost:
+                break
+            batch, order = order[:max(1, self.workers)], order[max(1, self.workers):]
+            batch.sort(key=lambda e: -spent.get(e, 0.0))
+            refits = [(("add", e), job(e, begin=passed[e][-1])) for e in batch]
+            for (_, name), fitted in self.fits.dispatch(refits):
+                c = self._judged(st, name, fitted, spent)
+                ranking.append(c)
+                progress(done, steps, f"round {k}: tried {name}")
+                if self._admissible(c, widened) and (best is None or c.score < best.score):
+                    best = c
+        for e in order:  # cannot win: kept where their screen left them
+            ranking.append(self._judged(
+                st, e, passed[e], spent,
+                unrefined=f"its training cost after the screen ({passed[e][3]:.4g}) is above "
+                          f"{REFINE_FACTOR:g} x that of {best.effect} refined "
+                          f"({best.cost:.4g}): not refined further"))
+            progress(done, steps, f"round {k}: tried {e}")
+        return ranking, left, done
 
     def _not_fitted(self, ph: Physics, name: str, cost: float, st: _State,
                     why: str) -> Candidate:
@@ -431,7 +473,7 @@ class Diagnoser:
         None."""
         pred_cur = st.stages[-1].predictions
         for name in names:
-            physics, _, _, cost, _, pred, _ = fitted[name]
+            physics, _, _, cost, _, pred, _, _ = fitted[name]
             if isinstance(pred, Exception):
                 continue
             fails = failing(held_out_gain(pred, pred_cur, self.runs, self.campaign.noise),

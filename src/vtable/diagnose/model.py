@@ -29,6 +29,7 @@ from threadpoolctl import threadpool_limits
 from vtable.diagnose.calibration import LOOP, BaseParam, Calibration, base_params
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare, segments
+from vtable.diagnose.projected import Frame, projected_start
 from vtable.diagnose.reuse import model_at
 from vtable.diagnose.secant import Secant
 from vtable.diagnose.statistics import correlations
@@ -123,13 +124,28 @@ class TableModel:
     seed
         The `multistart` effect's parameters where an earlier fit of it ended (its units):
         one more start (the diagnosis passes the previous round's).
+    frame
+        The current model's linearisation (`vtable.diagnose.projected.Frame`): with a
+        `baseline`, the `multistart` effect is screened on the projected cost
+        (`projected.projected_start`), which also gives its fit one more start.
+    screen_only
+        Stop where a screen that passed stopped (`passed_`: the fitted-scale vector, the
+        model done there unrefined; the diagnosis refines the candidates that can still
+        win, `begin`).
+    begin
+        The fitted-scale vector a screen that passed stopped at (`passed_`): the fit's
+        projected start, the screen not run again.
     """
 
     def __init__(self, effects: Sequence[str] = (), *, start: Physics | None = None,
                  multistart: str | None = None, stop: threading.Event | None = None,
                  calibration: Calibration | None = None,
-                 baseline: float | None = None, seed: dict[str, float] | None = None) -> None:
+                 baseline: float | None = None, seed: dict[str, float] | None = None,
+                 frame: Frame | None = None, screen_only: bool = False,
+                 begin: np.ndarray | None = None) -> None:
         self.effects = tuple(effects)
+        self.frame, self.screen_only, self.begin = frame, screen_only, begin
+        self.passed_: np.ndarray | None = None  # where a screen that passed stopped
         self.start, self.multistart, self.stop = start, multistart, stop
         self.seed = seed
         self.calibration = calibration or Calibration()
@@ -344,10 +360,24 @@ class TableModel:
                 v = np.array([math.log(self.seed[lay[i].key.split(".", 1)[1]]) if lay[i].log
                               else self.seed[lay[i].key.split(".", 1)[1]] for i in idx])
                 points.append(v)
+            projected = self.begin
+            if projected is None and self.frame is not None and self.baseline is not None:
+                projected = projected_start(self, campaign, start, lay, x0, self.frame,
+                                            points, idx, SCREEN)
+                if projected is self:  # screened out on the projected cost
+                    return self
+                if self.screen_only:  # passed: the diagnosis decides whether to refine it
+                    self.passed_ = projected
+                    return self._done(campaign, start, lay, projected,
+                                      self._cost(projected, start, lay, campaign), None)
             starts: list[tuple[float, np.ndarray]] = []  # the best of each base start
             # (a fitted loop within 2 % of the declared one is a start of its own already)
             near = not loop.any() or np.max(np.abs(mixed - x0[base])[loop]) < 0.02
-            for base_x in (x0[base],) if near else (x0[base], mixed):
+            far = not near and np.max(np.abs(mixed - x0[base])[loop]) > FAR
+            bases = (x0[base],) if near else (x0[base], mixed)
+            if projected is not None:  # its screen explored the grid from the fitted base
+                bases = (mixed,) if far else ()
+            for base_x in bases:
                 best, best_x = np.inf, x0
                 for v in points:
                     x = x0.copy()
@@ -357,8 +387,7 @@ class TableModel:
                     if c < best:
                         best, best_x = c, x
                 starts.append((best, best_x))
-        lo = np.array([math.log(p.lower) if p.log else p.lower for p in lay])
-        hi = np.array([math.log(p.upper) if p.log else p.upper for p in lay])
+        lo, hi = self.bounds(lay)
         if self.multistart:
             # a grid on the effect alone is coarse (an effect the loop absorbed has a sharp
             # valley across it): each base start's best grid point is refined in the
@@ -367,10 +396,14 @@ class TableModel:
             eff = np.zeros(len(lay), dtype=bool)
             eff[idx] = True
             grid = [x for _, x in starts]
-            starts = [self._refine(x, eff, lo, hi, start, lay, campaign) for _, x in starts]
-            c_min = min(c for c, _ in starts)
-            rivals = [(x, SCREEN_STEPS) for c, x in sorted(starts, key=lambda s: s[0])
-                      if c <= RIVAL * c_min]
+            if projected is None:
+                starts = [self._refine(x, eff, lo, hi, start, lay, campaign)
+                          for _, x in starts]
+                c_min = min(c for c, _ in starts)
+                rivals = [(x, SCREEN_STEPS) for c, x in sorted(starts, key=lambda s: s[0])
+                          if c <= RIVAL * c_min]
+            else:
+                rivals = []
             # and two starts whatever their cost before their steps in every parameter:
             # where an earlier fit's base absorbed part of the effect (a free loop taking
             # up an RC filter or entrained air), the effect refined with the base held
@@ -378,12 +411,14 @@ class TableModel:
             # the effect at its defaults with the base as fitted, and with the loop as
             # declared the best of its grid (its defaults among them: an effect the
             # fitted loop stood in for must take up the whole departure at once)
-            if self.baseline is not None:  # a screened (costly) candidate: the best start
+            if projected is not None:  # it passed the projected screen: fitted in full,
+                rivals.append((projected, SCREEN_STEPS))  # from its projected start too
+            elif self.baseline is not None:  # a screened (costly) candidate: the best start
                 rivals = rivals[:1]
             rivals.append((x0.copy(), AS_IS_STEPS))
-            if not near and np.max(np.abs(mixed - x0[base])[loop]) > FAR:
-                rivals.append((grid[1], DECLARED_STEPS))
-            x0 = min(starts, key=lambda s: s[0])[1]
+            if far:
+                rivals.append((grid[-1], DECLARED_STEPS))
+            x0 = min(starts, key=lambda s: s[0])[1] if starts else projected
         else:
             rivals = []
 
@@ -396,7 +431,7 @@ class TableModel:
             sol.secant = secant
             return sol
 
-        if len(rivals) > 1 and self.baseline is not None:
+        if len(rivals) > 1 and self.baseline is not None and projected is None:
             # screening: `SCREEN_STEPS` from every rival first; only a candidate that lowers
             # the cost by `SCREEN` there has its longer starts run to the end
             first = [(solve(x, min(n, SCREEN_STEPS)), n) for x, n in rivals]
@@ -418,6 +453,12 @@ class TableModel:
         sol = solve(x0, 40)
         # the covariance the flags read: forward differences where the fit ended
         return self._done(campaign, start, lay, sol.x, sol.fun, sol.secant.at(sol.x))
+
+    @staticmethod
+    def bounds(lay) -> tuple[np.ndarray, np.ndarray]:
+        """The layout's bounds on the fitted scale (the logarithm for log parameters)."""
+        return (np.array([math.log(p.lower) if p.log else p.lower for p in lay]),
+                np.array([math.log(p.upper) if p.log else p.upper for p in lay]))
 
     def _refine(self, x: np.ndarray, eff: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                 start: Physics, lay, campaign: Campaign) -> tuple[float, np.ndarray]:
@@ -444,9 +485,9 @@ class TableModel:
         self.train_error_ = float(np.sqrt(np.sum(fun[:n_data] ** 2) / len(campaign.targets)))
         self.layout_ = lay
         self.screened_ = screened
-        if screened:
+        if screened or jac is None:  # not refined: no covariance at a solution
             self.correlations_ = np.full((len(lay), len(lay)), np.nan)
-            self.flags_ = []
+            self.flags_ = [] if screened else self.at_bounds(self.physics_)
         else:
             self.correlations_ = correlations(jac, len(lay))
             self.flags_ = self.at_bounds(self.physics_) + self._unidentified(lay)

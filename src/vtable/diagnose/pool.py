@@ -30,7 +30,6 @@ from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.model import TableModel
 from vtable.diagnose.workers import Tasks, cluster, fitted
 from vtable.effects.registry import is_user, source_file
-from vtable.models.physics import Physics
 
 #: the processes the candidates are fitted in by default (two on this project's machines)
 WORKERS = min(2, os.cpu_count() or 1)
@@ -40,24 +39,22 @@ class Fits:
     """The fits of one diagnosis: `dispatch` runs them where `workers` and `scheduler`
     say, `halt` stops them, `close` releases what the workers hold for it.
 
-    `model(start, multistart, baseline, seed)` makes the estimator a fit runs in this
-    process (`Diagnoser.model`, sharing `stop`).
+    `model(**job)` makes the estimator a fit runs in this process (`Diagnoser.model`,
+    sharing `stop`).
     """
 
     def __init__(self, campaign: Campaign, catalog: Sequence[str], workers: int,
                  calibration: Calibration,
-                 model: Callable[[Physics, str | None, float | None, dict | None],
-                                 TableModel], scheduler: str | None = None) -> None:
+                 model: Callable[..., TableModel], scheduler: str | None = None) -> None:
         self.campaign, self.catalog, self.workers = campaign, list(catalog), workers
         self.calibration, self.model, self.scheduler = calibration, model, scheduler
         self.stop = threading.Event()
         self.tasks: Tasks | None = None  # this diagnosis's tasks on Dask, once started
         self.on_dask = False  # whether its fits ran as Dask tasks
 
-    def here(self, start: Physics, name: str | None, baseline: float | None,
-             seed: dict[str, float] | None) -> tuple:
-        """`workers.fitted` in this process."""
-        return fitted(self.model(start, name, baseline, seed), self.campaign)
+    def here(self, job: dict[str, Any]) -> tuple:
+        """`workers.fitted` of `job` (the estimator's keywords) in this process."""
+        return fitted(self.model(**job), self.campaign)
 
     def user_files(self) -> tuple[tuple[str, str, str], ...] | None:
         """The user files the workers must load for this diagnosis, (kind, path, text),
@@ -95,26 +92,26 @@ class Fits:
         return self.tasks
 
     def dispatch(self, jobs: list[tuple[Any, tuple]]) -> Iterator[tuple[Any, tuple]]:
-        """Run fits (key, (start, multistart effect, baseline, seed)) on every core and
+        """Run fits (key, the estimator's keywords: start, multistart, ...) on every core and
         yield (key, `workers.fitted`'s tuple) as each finishes: as Dask tasks, or in
         threads when a user's effect cannot be loaded in another process. On a stop,
         pending fits are cancelled and running ones end at their next simulation."""
         if not jobs:
             return
         if self.workers == 1 and not self.scheduler:  # one after the other, here
-            for key, args in jobs:
-                yield key, self.here(*args)
+            for key, job in jobs:
+                yield key, self.here(job)
             return
         tasks = self.start()
         if tasks is not None:
             from distributed import as_completed as dask_completed
 
-            futures = {tasks.submit(*args, self.calibration): key for key, args in jobs}
+            futures = {tasks.submit(job, self.calibration): key for key, job in jobs}
             for fut in dask_completed(list(futures)):
                 yield futures[fut], fut.result()
             return
         with ThreadPoolExecutor(max_workers=self.workers) as threads:
-            pending = {threads.submit(self.here, *args): key for key, args in jobs}
+            pending = {threads.submit(self.here, job): key for key, job in jobs}
             try:
                 for fut in as_completed(pending):
                     yield pending[fut], fut.result()

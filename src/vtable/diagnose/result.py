@@ -69,6 +69,9 @@ class Candidate:
     #: why it was not fitted at all (`vtable.diagnose.screen`: a nonlinear candidate on
     #: runs that show no amplitude dependence); its prediction is the current model's
     not_fitted: str = ""
+    #: why it passed the screen but was not refined (it cannot win the round: `engine`);
+    #: its values and prediction are where the screen left it
+    unrefined: str = ""
 
     @property
     def blocking(self) -> list[str]:
@@ -159,6 +162,7 @@ class Diagnosis:
                                      "train_error": c.train_error, "params": c.params,
                                      "n_params": c.n_params, "evidence": c.evidence,
                                      "flags": c.flags, "screened": c.screened,
+                                     "refined": not (c.screened or c.unrefined),
                                      "gain": _gain_json(c)}
                                     for c in r.ranking],
                         "added": r.added, "removed": r.removed, "error": r.error,
@@ -272,6 +276,9 @@ def evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
         return "; ".join(c.flags)
     if c.not_fitted:
         return f"screened out, not fitted: {c.not_fitted}"
+    if c.unrefined:
+        return (f"passed the screen (held-out error {err:.2%} -> {c.error_after:.2%} where it "
+                f"stopped), {c.unrefined}")
     if c.screened:
         return (f"screened out: its first least-squares steps from the best start on its "
                 f"grid lowered the training cost by less than {SCREEN:.0%} (held-out error "

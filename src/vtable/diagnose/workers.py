@@ -41,7 +41,6 @@ from vtable.diagnose.model import TableModel
 from vtable.effects import registry as effects_registry
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
-from vtable.models.physics import Physics
 
 #: seconds between two looks at a diagnosis's stop event from a running fit
 POLL_S = 0.2
@@ -106,21 +105,19 @@ def _load_files(files: tuple[tuple[str, str, str], ...]) -> None:
         _LOADED.add(digest)
 
 
-def _fit(campaign: Campaign, start: Physics, name: str | None, baseline: float | None,
-         seed: dict[str, float] | None, calibration: Calibration, stop: StopFlag,
+def _fit(campaign: Campaign, job: dict[str, Any], calibration: Calibration, stop: StopFlag,
          files: tuple[tuple[str, str, str], ...]) -> tuple:
-    """`TableModel(start=start, multistart=name, ...)` fitted on `campaign` (the module
-    docstring's tuple)."""
+    """`TableModel(**job)` fitted on `campaign` (the module docstring's tuple); `job` holds
+    the estimator's keywords (start, multistart, baseline, seed, frame, ...)."""
     _load_files(files)
-    return fitted(TableModel(start=start, multistart=name, stop=stop, calibration=calibration,
-                             baseline=baseline, seed=seed), campaign)
+    return fitted(TableModel(**job, stop=stop, calibration=calibration), campaign)
 
 
 def fitted(model, campaign: Campaign) -> tuple:
     """Fit `model` (a `TableModel`) on `campaign`: (physics, train error, flags, cost,
     screened, its predictions or the error that prevented them, CPU seconds of this
-    thread) — what a candidate's fit hands the diagnosis, in a worker or in its own
-    process."""
+    thread, where a screen that passed stopped or None) — what a candidate's fit hands the
+    diagnosis, in a worker or in its own process."""
     t0 = time.thread_time()
     m = model.fit(campaign)
     try:
@@ -132,7 +129,7 @@ def fitted(model, campaign: Campaign) -> tuple:
         flags += [why for name, v in m.physics_.effects.items()
                   if (why := effect(name).unseen(v, pred))]
     return (m.physics_, m.train_error_, flags, m.cost_, m.screened_, pred,
-            time.thread_time() - t0)
+            time.thread_time() - t0, m.passed_)
 
 
 # -- in the parent ----------------------------------------------------------------------
@@ -201,11 +198,18 @@ class Tasks:
         self.stop = StopFlag(f"vtable-stop-{uuid.uuid4().hex}")
         self._campaign = client.scatter(campaign, broadcast=True, hash=False)
         self._futures: list = []
+        self._frame: tuple[Any, Any] | None = None  # the round's frame and its future
 
-    def submit(self, start: Physics, name: str | None, baseline: float | None,
-               seed: dict[str, float] | None, calibration: Calibration):
-        fut = self.client.submit(_fit, self._campaign, start, name, baseline, seed,
-                                 calibration, self.stop, self.files, pure=False)
+    def submit(self, job: dict[str, Any], calibration: Calibration):
+        """A fit (`_fit`) of `job`; its frame, new to this round, scattered once."""
+        frame = job.get("frame")
+        if frame is not None:
+            if self._frame is None or self._frame[0] is not frame:
+                self._frame = (frame, self.client.scatter(frame, broadcast=True, hash=False))
+                self._futures.append(self._frame[1])
+            job = {**job, "frame": self._frame[1]}
+        fut = self.client.submit(_fit, self._campaign, job, calibration, self.stop,
+                                 self.files, pure=False)
         self._futures.append(fut)
         return fut
 

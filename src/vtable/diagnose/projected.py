@@ -1,0 +1,156 @@
+"""A candidate's fit with the current model's calibration linearised: where to start, and
+whether to go on.
+
+A candidate effect is tried on the current model, which is calibrated (its base and effects
+fitted: a least-squares minimum). Adding the effect at some values θ_e moves the training
+residual from r₀ to r(θ_e); the current parameters b can then move again and take up part
+of that (an RC filter the fitted loop had stood in for gives back the loop's departure).
+To first order they move by δb = −(JᵀJ)⁻¹Jᵀ r(θ_e), J the current model's Jacobian, and what
+is left is the projection of r(θ_e) off J's columns (variable projection: Golub & Pereyra,
+SIAM J. Numer. Anal. 10, 1973). So, with J worked out once per round for every candidate
+(`Frame`):
+
+1. the effect's values across its range (its grid, its defaults, where an earlier fit of
+   it ended) are each simulated once with the current parameters, and scored by the
+   projected cost ‖P⊥ r(θ_e)‖² (P⊥ = I − QQᵀ, J = QR);
+2. the best is refined in the effect's own parameters on that projected cost (a few
+   least-squares steps);
+3. a candidate whose projected cost does not fall `SCREEN` (1 %) below the current
+   model's cost takes `SCREEN_STEPS` least-squares steps in every parameter from its
+   defaults and the current parameters (one forward-difference Jacobian, then Broyden's
+   updates): an effect the fitted base had absorbed comes back only when both move
+   together, over several steps the linearisation cannot see (an RC filter behind
+   friction). Still not 1 % below, it is screened out — a gain of 1 % of the training
+   cost cannot reach the 5 % of the noise's cost the selection asks (criterion 3);
+4. otherwise every parameter is fitted by least squares, this start (the effect's best
+   values, the current parameters moved by δb within their bounds) one of the fit's
+   starts (`TableModel`'s `multistart`).
+
+A candidate screened out then costs a few simulations, where a few least-squares steps in
+every parameter from each of its starts cost tens of Jacobians. Parameters the
+candidate brings that the current model lacks (the platen's pitch inertia and the height of
+its centre of mass, when the effect lets it pitch) are held at their starting values in
+steps 1-3 and fitted in step 4.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+
+from vtable.diagnose.secant import Secant
+
+#: least-squares steps of the refinement in the effect's own parameters (step 2), and of
+#: the steps in every parameter a candidate takes before it is screened out (step 3)
+REFINE_STEPS = 3
+SCREEN_STEPS = 6
+
+
+@dataclass
+class Frame:
+    """The current model's linearisation, shared by a round's candidates: its parameters'
+    keys and values (fitted scale), the orthonormal basis Q and triangle R of its
+    Jacobian's data rows (J = QR), and its training cost."""
+
+    keys: tuple[str, ...]
+    x: np.ndarray
+    Q: np.ndarray
+    R: np.ndarray
+    cost: float
+    J: np.ndarray  # the data rows of the Jacobian itself
+
+    @classmethod
+    def of(cls, model, physics, campaign, cost: float) -> Frame:
+        """`physics` (the current, fitted model) linearised by forward differences with
+        `model` (a `TableModel` on the campaign's table: its layout and residuals)."""
+        lay = model._layout(physics)
+        x = model._pack(physics, lay)
+        lo, hi = model.bounds(lay)
+        secant = Secant(lambda z: model._cost(z, physics, lay, campaign), lo, hi)
+        J = secant.at(np.clip(x, lo, hi))[:campaign.n_target]
+        Q, R = scipy.linalg.qr(J, mode="economic")
+        return cls(tuple(p.key for p in lay), x, Q, R, cost, J)
+
+    def project(self, r: np.ndarray) -> np.ndarray:
+        """r with what the current parameters take up to first order removed: P⊥ r."""
+        return r - self.Q @ (self.Q.T @ r)
+
+    def move(self, r: np.ndarray) -> np.ndarray:
+        """The first-order move δb of the current parameters that takes up `r`."""
+        c = self.Q.T @ r
+        try:
+            return -scipy.linalg.solve_triangular(self.R, c, check_finite=False)
+        except (np.linalg.LinAlgError, ValueError):
+            return -np.linalg.lstsq(self.R, c, rcond=None)[0]
+
+
+def projected_start(model, campaign, start, lay, x0: np.ndarray, frame: Frame,
+                    points: list[np.ndarray], idx: list[int], screen: float):
+    """Steps 1-3 of the module docstring for `model` (a `TableModel` fitting candidate
+    `model.multistart` from `start`, layout `lay`, packed `x0`): `points` the effect's
+    values to try (fitted scale, at the indices `idx`), `screen` the relative gain it must
+    show. Returns `model` done and screened out, or the start of step 4 (every parameter,
+    fitted scale) for the caller's fit."""
+    lo, hi = model.bounds(lay)
+    n = campaign.n_target
+    shared = [(i, frame.keys.index(p.key)) for i, p in enumerate(lay) if p.key in frame.keys]
+    ci, fi = (np.array(v, dtype=int) for v in zip(*shared, strict=True)) if shared else \
+        (np.zeros(0, dtype=int), np.zeros(0, dtype=int))
+    base = x0.copy()
+    base[ci] = frame.x[fi]  # the current model's values where the candidate has them
+    rest = model._priors(base, lay, campaign)
+    rest2 = float(rest @ rest)
+
+    def residual(v: np.ndarray) -> np.ndarray:
+        x = base.copy()
+        x[idx] = v
+        return model._cost(np.clip(x, lo, hi), start, lay, campaign)[:n]
+
+    def projected(v: np.ndarray) -> np.ndarray:
+        return frame.project(residual(v))
+
+    best_v, best_c = None, math.inf
+    for v in points:
+        p = projected(v)
+        c = float(p @ p) + rest2
+        if c < best_c:
+            best_v, best_c = v, c
+    eff_lo, eff_hi = lo[idx], hi[idx]
+    v0 = np.clip(best_v, eff_lo + 1e-9 * (eff_hi - eff_lo), eff_hi - 1e-9 * (eff_hi - eff_lo))
+    sol = scipy.optimize.least_squares(projected, v0, bounds=(eff_lo, eff_hi), diff_step=1e-4,
+                                       max_nfev=REFINE_STEPS)
+    c = float(sol.fun @ sol.fun) + rest2
+    if c < best_c:
+        best_v, best_c = sol.x, c
+    x = base.copy()
+    x[idx] = best_v
+    x[ci] += frame.move(residual(best_v))[fi]
+    x = np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+    if best_c < frame.cost * (1 - screen):
+        return x
+    # not yet: a few steps in every parameter from the effect at its defaults and the
+    # current parameters (an effect the fitted base absorbed is given back only when both
+    # move together, over several steps: the linearised move cannot see it)
+    as_is = np.clip(base, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+    secant = Secant(lambda z: model._cost(z, start, lay, campaign), lo, hi, refresh=1 << 30)
+    sol = scipy.optimize.least_squares(secant.fun, as_is, jac=secant.jac, bounds=(lo, hi),
+                                       xtol=1e-6, ftol=1e-8, max_nfev=SCREEN_STEPS)
+    if float(sol.fun @ sol.fun) < frame.cost * (1 - screen):
+        return np.clip(sol.x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+    return model._done(campaign, start, lay, sol.x, sol.fun, None, screened=True)
+
+
+def _prior_jacobian(model, lay, campaign, x: np.ndarray) -> np.ndarray:
+    """The Jacobian of the calibration's prior rows (linear in x: forward differences of
+    the priors alone cost no simulation)."""
+    p0 = model._priors(x, lay, campaign)
+    J = np.empty((len(p0), len(x)))
+    for i in range(len(x)):
+        z = x.copy()
+        z[i] += 1.0
+        J[:, i] = model._priors(z, lay, campaign) - p0
+    return J
