@@ -24,13 +24,16 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import functools
 import hashlib
 import logging
+import os
 import signal
 import tempfile
 import threading
 import time
 import uuid
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -160,6 +163,7 @@ def cluster(n: int, scheduler: str | None = None):
             main = threading.current_thread() is threading.main_thread()
             old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
             try:
+                _fork_safe()
                 with dask.config.set({"distributed.worker.multiprocessing-method": "fork",
                                       "distributed.worker.daemon": True,
                                       "distributed.scheduler.work-stealing": False}):
@@ -171,6 +175,21 @@ def cluster(n: int, scheduler: str | None = None):
                     signal.signal(signal.SIGINT, old)
         _CLIENTS[key] = client
         return client
+
+
+@functools.cache
+def _fork_safe() -> None:
+    """Forked workers inherit this process's module state, distributed's executor for
+    (de)serialising large messages among it: once its thread has run here, the child's
+    copy has a thread that does not exist, and a large campaign would wait for it forever.
+    Each forked child gets a new one."""
+    import distributed.utils
+
+    def fresh() -> None:
+        distributed.utils._offload_executor = ThreadPoolExecutor(
+            max_workers=1, thread_name_prefix="Dask-Offload")
+
+    os.register_at_fork(after_in_child=fresh)
 
 
 def shutdown() -> None:
