@@ -295,13 +295,9 @@ def diagnose_case(case: Case, root: Path | None = None, use_cache: bool = True,
     from vtable.runs import read_run
 
     t1, c1 = time.perf_counter(), time.process_time()
-    catalog = None
-    if isinstance(case, Case21):  # the catalog with the yielding storey asked for
-        from vtable.effects.registry import default_candidates
-        catalog = [*default_candidates(), *EXTRA_21]
     try:
         runs = [read_run(p) for p in paths]
-        d = Diagnoser(runs, workers=workers, catalog=catalog).diagnose()
+        d = Diagnoser(runs, workers=workers).diagnose()  # the whole catalog
     except VtableError as e:  # vtable refuses the campaign: a failure naming the refusal
         if not isinstance(case, Case18):
             raise
@@ -735,19 +731,16 @@ def totals18(results: list[tuple[Case18, dict]]) -> dict[str, Any]:
 # ---------------------------------------------------------------------------------------------
 # issue 21's yielding cases (CASES_21: in the benchmark with --set 21). The truth's specimen
 # has Bouc-Wen storeys (tests/truth: its own integration of the law from Wen 1976) that the
-# declaration does not (declared elastic, and off as in CASES), diagnosed with the catalog
-# plus storey_yield (`EXTRA_21`: the effect is asked for by name; it is not among the
-# default candidates). Beside them, elastic cases of CASES and two outside-catalog ones,
-# diagnosed with the same catalog: no storey_yield may be added to an elastic specimen, and
-# the outside stays unexplained.
-
-EXTRA_21 = ("storey_yield",)
+# declaration does not (declared elastic, and off as in CASES), diagnosed with the whole
+# catalog (storey_yield a default candidate since issue 31). Beside them, elastic cases of
+# CASES and two outside-catalog ones: no storey_yield may be added to an elastic specimen,
+# and the outside stays unexplained.
 
 
 @dataclass(frozen=True)
 class Case21(Case):
-    """A scorecard case diagnosed with `EXTRA_21` in the catalog. `hysteresis`: the truth's
-    yielding storeys (truth.sdof/building's dict; None: elastic), declared elastic."""
+    """A yielding scorecard case. `hysteresis`: the truth's yielding storeys
+    (truth.sdof/building's dict; None: elastic), declared elastic."""
 
     hysteresis: tuple[tuple[str, Any], ...] | None = None
 
@@ -763,7 +756,6 @@ class Case21(Case):
     def definition(self) -> dict[str, Any]:
         d = super().definition()
         d["hysteresis"] = self.yielding
-        d["catalog_extra"] = list(EXTRA_21)
         return d
 
     def elastic_specimen(self) -> truth.Specimen:

@@ -58,7 +58,7 @@ from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
 from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
 from vtable.diagnose.projected import Frame
-from vtable.diagnose.prose import unexplained, untried
+from vtable.diagnose.prose import unexplained
 from vtable.diagnose.result import (
     ERROR_DEFINITION,
     Candidate,
@@ -150,31 +150,37 @@ class Diagnoser:
 
     def model(self, start: Physics, **kw) -> TableModel:
         """The estimator the loop fits (sharing this diagnosis's stop flag; `kw`:
-        `TableModel`'s multistart, baseline, seed, frame, screen_only, begin)."""
-        return TableModel(start=start, stop=self._stop, calibration=self.calibration, **kw)
+        `TableModel`'s multistart, baseline, seed, frame, screen_only, begin, and a
+        calibration other than this diagnosis's)."""
+        kw.setdefault("calibration", self.calibration)
+        return TableModel(start=start, stop=self._stop, **kw)
 
     def fit(self, ph: Physics, **kw) -> TableModel:
         """Fit `ph` (see `TableModel`): the fitted estimator (`physics_`, `train_error_`,
         `flags_`, `cost_`, `screened_`)."""
         return self.model(ph, **kw).fit(self.campaign)
 
-    def _widened_start(self, start: Physics) -> tuple | None:
+    def _leaning(self, start: Physics) -> tuple | None:
         """When the calibrated starting model leans on bounds (`base_at_bounds`): the
-        calibration with them widened, the parameters, and the starting model refitted
-        with it — its held-out predictions, the baseline a candidate effect must also
-        beat (SELECTION: an effect is not added in place of a wrong declaration); None
-        when nothing leans or the bounds are at their widest."""
+        calibration with them widened and the parameters; the starting model refitted with
+        it (a job of the first round, `_candidates`) gives the baseline a candidate effect
+        must also beat (SELECTION: an effect is not added in place of a wrong declaration);
+        None when nothing leans or the bounds are at their widest."""
         lean = base_at_bounds(self.base_table(start), self.calibration)
         names = [bounding_setting(b["parameter"], b["side"]) for b in lean]
         wider = self.calibration.widened([n for n in names if n is not None])
         if not lean or wider == self.calibration:
             return None
-        refit = TableModel(start=self.start, stop=self._stop, calibration=wider,
-                           ).fit(self.campaign)
+        return wider, [b["parameter"] for b in lean]
+
+    def _widened(self, lean: tuple, fitted: tuple) -> tuple:
+        """(wider calibration, the parameters, the refit's held-out predictions) from the
+        starting model's refit with `lean`'s bounds (`_leaning`)."""
+        wider, names = lean
         self.notes.append(f"the calibrated starting model leans on its bounds "
-                          f"({', '.join(b['parameter'] for b in lean)}): candidates must "
-                          f"also beat it refitted with --calibrate {wider.text()}")
-        return wider, [b["parameter"] for b in lean], self.predict(refit.physics_)
+                          f"({', '.join(names)}): candidates must also beat it refitted with "
+                          f"--calibrate {wider.text()}")
+        return wider, names, self.predict(fitted[0])
 
     def _pushed_beyond(self, st: _State) -> list[dict[str, Any]]:
         """`bounds.pushed_beyond` of the final model."""
@@ -273,7 +279,8 @@ class Diagnoser:
         done += 1
         st.cmp0 = self._detail(st)
         st.err = st.start_err = err = st.cmp0.error
-        widened = self._widened_start(current)
+        self.widened = None  # the starting model refitted with its leaning bounds widened
+        lean = self._leaning(current)
         reason = ""
         seeds: dict[str, dict[str, float]] = {}  # each candidate's last fitted parameters
         spent: dict[str, float] = {}  # each candidate's last fit's CPU seconds
@@ -295,7 +302,9 @@ class Diagnoser:
                 break
             cmp_cur = self._detail(st)
             ranking, left, done = self._candidates(st, current, cost, todo, backward, seeds,
-                                                   spent, widened, progress, done, steps, k)
+                                                   spent, lean, progress, done, steps, k)
+            lean = None  # refitted in the first round
+            widened = self.widened
             dropped = self._backward(st, backward, left, progress, done, steps, k)
             backward = []
             if dropped is not None:
@@ -385,7 +394,7 @@ class Diagnoser:
                          self.table_view, unrefined=unrefined)
 
     def _candidates(self, st: _State, current: Physics, cost: float, todo: list[str],
-                    backward: list[str], seeds: dict, spent: dict, widened,
+                    backward: list[str], seeds: dict, spent: dict, lean: tuple | None,
                     progress, done: int, steps: int, k: int
                     ) -> tuple[list[Candidate], dict[str, tuple], int]:
         """A round's candidates, and the backward step's refits beside them: (the ranking,
@@ -418,22 +427,34 @@ class Diagnoser:
                     "frame": frame, **kw}
 
         jobs = [(("without", e), {"start": current.without(e)}) for e in backward]
+        if lean is not None:  # the starting model refitted with its leaning bounds widened
+            jobs.insert(0, (("widened", ""), {"start": self.start, "calibration": lean[0]}))
         jobs += [(("screen", e), job(e, baseline=cost, screen_only=True)) for e in todo]
         left: dict[str, tuple] = {}
         passed: dict[str, tuple] = {}
+        fitted_now: list[Candidate] = []
         for (kind, name), fitted in self.fits.dispatch(jobs):
             if kind == "without":
                 left[name] = fitted
                 continue
+            if kind == "widened":
+                self.widened = self._widened(lean, fitted)
+                continue
             done += 1
-            if fitted[-1] is None:  # screened out, or no valid model
-                ranking.append(self._judged(st, name, fitted, spent))
+            if fitted[-1] is None:  # screened out, refined at once, or no valid model
+                c = self._judged(st, name, fitted, spent)
+                ranking.append(c)
+                fitted_now.append(c)
                 progress(done, steps, f"round {k}: tried {name}")
             else:
                 passed[name] = fitted
                 spent[name] = fitted[-2]
         order = sorted(passed, key=lambda e: passed[e][3])
         best: Candidate | None = None
+        for c in fitted_now:  # a candidate refined in its screen's task may have won
+            if not c.screened and self._admissible(c, self.widened) and \
+                    (best is None or c.score < best.score):
+                best = c
         while order:
             if best is not None and passed[order[0]][3] > REFINE_FACTOR * best.cost:
                 break
@@ -444,7 +465,8 @@ class Diagnoser:
                 c = self._judged(st, name, fitted, spent)
                 ranking.append(c)
                 progress(done, steps, f"round {k}: tried {name}")
-                if self._admissible(c, widened) and (best is None or c.score < best.score):
+                if self._admissible(c, self.widened) and \
+                        (best is None or c.score < best.score):
                     best = c
         for e in order:  # cannot win: kept where their screen left them
             ranking.append(self._judged(
@@ -528,10 +550,6 @@ class Diagnoser:
                              f"{err:.2%} is {unexp['ratio_to_floor']:.1f} x the noise floor "
                              f"({floor:.2%}), above the {NOISE_FACTOR:g} x noise alone explains;"
                              f" it lives in {unexp['where']}")
-                left = untried(self.catalog, current,
-                               lambda ph: not self._inapplicable(ph))
-                if left:
-                    parts.append(left)
                 for c in self.campaign.sensors:  # what no effect on the platen can fit
                     parts.append(c.text())
                 if st.stages:  # what no time-invariant model of the command can fit

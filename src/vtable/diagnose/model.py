@@ -31,7 +31,7 @@ from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare, segments
 from vtable.diagnose.projected import Frame, projected_start
 from vtable.diagnose.reuse import model_at
-from vtable.diagnose.secant import Secant
+from vtable.diagnose.secant import REFRESH, Secant
 from vtable.diagnose.statistics import correlations
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
@@ -43,7 +43,11 @@ AT_BOUND = 0.01  # a fitted value within 1 % of its range (fitted scale) of a bo
 #: an effect parameter this correlated with a base parameter is not identifiable apart
 #: from the base (the fit could trade one for the other)
 MAX_CORRELATION = 0.95
+#: least-squares steps with forward-difference Jacobians that end every fit
+POLISH_STEPS = 10
 SCREEN = 0.01  # a candidate must lower the training cost by 1 % in its first steps ...
+#: ... and one whose screen halves it is refined at once (it is likely to win its round)
+STRONG = 0.5
 SCREEN_STEPS = 3  # ... (least-squares iterations from the best start) to be refined further
 #: the base loop's fitted parameters: name -> (JSON key "owner.param", unit, lower, upper)
 BASE_PARAMS = LOOP
@@ -131,7 +135,8 @@ class TableModel:
     screen_only
         Stop where a screen that passed stopped (`passed_`: the fitted-scale vector, the
         model done there unrefined; the diagnosis refines the candidates that can still
-        win, `begin`).
+        win, `begin`), unless the screen's point costs less than `STRONG` times the
+        baseline: such a candidate is refined at once.
     begin
         The fitted-scale vector a screen that passed stopped at (`passed_`): the fit's
         projected start, the screen not run again.
@@ -366,10 +371,10 @@ class TableModel:
                                             points, idx, SCREEN)
                 if projected is self:  # screened out on the projected cost
                     return self
-                if self.screen_only:  # passed: the diagnosis decides whether to refine it
-                    self.passed_ = projected
-                    return self._done(campaign, start, lay, projected,
-                                      self._cost(projected, start, lay, campaign), None)
+                f = self._cost(projected, start, lay, campaign)
+                if self.screen_only and float(f @ f) > STRONG * self.baseline:
+                    self.passed_ = projected  # the diagnosis decides whether to refine it
+                    return self._done(campaign, start, lay, projected, f, None)
             starts: list[tuple[float, np.ndarray]] = []  # the best of each base start
             # (a fitted loop within 2 % of the declared one is a start of its own already)
             near = not loop.any() or np.max(np.abs(mixed - x0[base])[loop]) < 0.02
@@ -422,9 +427,10 @@ class TableModel:
         else:
             rivals = []
 
-        def solve(x, nfev):
+        def solve(x, nfev, refresh=REFRESH):
             x = np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-            secant = Secant(lambda x: self._cost(x, start, lay, campaign), lo, hi)
+            secant = Secant(lambda x: self._cost(x, start, lay, campaign), lo, hi,
+                            refresh=refresh)
             sol = scipy.optimize.least_squares(secant.fun, x, jac=secant.jac,
                                                bounds=(lo, hi), xtol=1e-6, ftol=1e-8,
                                                max_nfev=nfev)
@@ -451,7 +457,10 @@ class TableModel:
                 return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac, screened=True)
             x0 = sol.x
         sol = solve(x0, 40)
-        # the covariance the flags read: forward differences where the fit ended
+        # Broyden's Jacobian may stop short of the minimum: the fit ends on steps with
+        # forward differences (one Jacobian and done where it had converged), whose last
+        # is the covariance the flags read
+        sol = solve(sol.x, POLISH_STEPS, refresh=1)
         return self._done(campaign, start, lay, sol.x, sol.fun, sol.secant.at(sol.x))
 
     @staticmethod

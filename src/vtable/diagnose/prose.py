@@ -4,16 +4,12 @@ amplitude trend, the worst time window, and whether a residual is left unexplain
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
 from typing import Any
 
 from vtable.diagnose.groups import short
 from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.statistics import Comparison
 from vtable.display import amplitude
-from vtable.effects.registry import get as effect
-from vtable.effects.registry import names
-from vtable.models.physics import Physics
 
 
 def mils(x_m: float) -> str:
@@ -90,14 +86,3 @@ def localisation_text(cmp: Comparison) -> str:
     return "; ".join(parts)
 
 
-def untried(catalog: Sequence[str], ph: Physics, buildable: Callable[[Physics], bool]) -> str:
-    """The effects tried only when asked for (`Effect.default_candidate` False), outside
-    `catalog`, that the model `ph` could hold (`buildable`): named with their physics and
-    the --effects that asks for them, or ''."""
-    left = [n for n in names() if n not in catalog and not ph.has(n)
-            and not effect(n).default_candidate and buildable(ph.with_effect(n))]
-    if not left:
-        return ""
-    return ("not tried (tried only when asked for): "
-            + "; ".join(f"{n} ({effect(n).physics})" for n in left)
-            + f" — --effects {','.join([*catalog, *left])}")

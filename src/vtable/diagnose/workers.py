@@ -113,7 +113,7 @@ def _fit(campaign: Campaign, job: dict[str, Any], calibration: Calibration, stop
     """`TableModel(**job)` fitted on `campaign` (the module docstring's tuple); `job` holds
     the estimator's keywords (start, multistart, baseline, seed, frame, ...)."""
     _load_files(files)
-    return fitted(TableModel(**job, stop=stop, calibration=calibration), campaign)
+    return fitted(TableModel(**{"calibration": calibration, **job}, stop=stop), campaign)
 
 
 def fitted(model, campaign: Campaign) -> tuple:
@@ -168,7 +168,7 @@ def cluster(n: int, scheduler: str | None = None):
                                       "distributed.worker.daemon": True,
                                       "distributed.scheduler.work-stealing": False}):
                     lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                      dashboard_address=None, silence_logs=logging.CRITICAL)
+                                      dashboard_address=":0", silence_logs=logging.CRITICAL)
                     client = Client(lc)
             finally:
                 if main:

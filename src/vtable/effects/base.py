@@ -172,8 +172,6 @@ class Effect:
     section: str = ""
     signature: str = ""
     params: tuple[Param, ...] = ()
-    #: whether `diagnose` tries it when not told which effects to try
-    default_candidate: bool = True
 
     def apply(self, m: Assembly, p: dict[str, float]) -> None:
         raise NotImplementedError(f"{type(self).__name__} must define apply(m, p)")

@@ -103,9 +103,8 @@ def names() -> list[str]:
 
 
 def default_candidates() -> list[str]:
-    """The effects `diagnose` tries when not told which (`names` but those whose
-    `Effect.default_candidate` is False: asked for by name, `--effects`)."""
-    return [n for n in names() if get(n).default_candidate]
+    """The effects `diagnose` tries when not told which: every registered one."""
+    return names()
 
 
 def parse_spec(text: str, where: str = "--effect") -> tuple[str, dict[str, float]]:

@@ -2,9 +2,10 @@
 `vtable.models.hysteresis` (Wen 1976; Baber & Wen 1981) on storey `storey`, with its yield
 drift u_y and post-yield stiffness ratio α fitted (n = 2, β = γ = 0.5, the usual shape).
 
-Not tried by `diagnose` unless asked (`--effects`, `default_candidate`). The storey is a
-choice, not a distance: the fit tries every storey the specimen has and
-keeps the best (`Param(discrete=True)`). A bare table or a rigid block has no storey, and
+A default candidate of `diagnose` like every catalog effect: it is fitted only where the
+runs show amplitude dependence the current model misses (`vtable.diagnose.screen`). The
+storey is a choice, not a distance: the fit tries every storey the specimen has and keeps
+the best (`Param(discrete=True)`). A bare table or a rigid block has no storey, and
 the effect cannot be built there. The report treats the fixed-base parameters as
 amplitude-dependent (ch. 3, §5.3's loops); this is that dependence as a yielding storey.
 """
@@ -37,7 +38,6 @@ class StoreyYield(Effect):
     #: tried when asked for (`vtable diagnose --effects ...,storey_yield`): its fits step
     #: the nonlinear model (RK4, every storey), a minute or more on each diagnosis of a
     #: framed specimen, until a cheap test of amplitude dependence screens it first
-    default_candidate = False
 
     def apply(self, m, p):
         n = len(storey_masses(m.specimen))
