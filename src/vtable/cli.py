@@ -81,7 +81,8 @@ def cmd_diagnose(a: argparse.Namespace) -> Result:
     verbs.load_effects(a.effects_from)
     try:
         return diagnose(a.runs, verbs.effect_names(a.with_), verbs.effect_names(a.effects),
-                        a.max_rounds, _Progress(), a.rerun, a.report, a.calibrate)
+                        a.max_rounds, _Progress(), a.rerun, a.report, a.calibrate,
+                        scheduler=a.scheduler)
     except interrupted as e:
         # Ctrl-C: the rounds finished are in the JSON; one line; exit code 130 (main)
         wrote = "nothing written (no --json)"

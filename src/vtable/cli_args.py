@@ -151,6 +151,9 @@ def parser() -> argparse.ArgumentParser:
     dg.add_argument("--max-rounds", type=_integer, default=4,
                     help="stop after this many rounds of adding an effect [4]")
     dg.add_argument("--calibrate", default="", metavar="SPEC", help=_CALIBRATE)
+    dg.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="a Dask scheduler's address (a lab's cluster, tcp://host:8786) to "
+                         "fit the candidates on [a local cluster of this machine's cores]")
     _add_json(dg)
     dg.add_argument("--rerun", default=None, help="write a Rerun recording (.rrd)")
     dg.add_argument("--report", default=None, help="write an HTML report")

@@ -365,10 +365,16 @@ class TableModel:
                 v = np.array([math.log(self.seed[lay[i].key.split(".", 1)[1]]) if lay[i].log
                               else self.seed[lay[i].key.split(".", 1)[1]] for i in idx])
                 points.append(v)
+            near = not loop.any() or np.max(np.abs(mixed - x0[base])[loop]) < 0.02
+            far = not near and np.max(np.abs(mixed - x0[base])[loop]) > FAR
             projected = self.begin
             if projected is None and self.frame is not None and self.baseline is not None:
+                declared_x = None
+                if far:  # the loop as declared: an effect the fitted loop absorbed
+                    declared_x = x0.copy()
+                    declared_x[base] = mixed
                 projected = projected_start(self, campaign, start, lay, x0, self.frame,
-                                            points, idx, SCREEN)
+                                            points, idx, SCREEN, declared_x)
                 if projected is self:  # screened out on the projected cost
                     return self
                 f = self._cost(projected, start, lay, campaign)
@@ -377,8 +383,6 @@ class TableModel:
                     return self._done(campaign, start, lay, projected, f, None)
             starts: list[tuple[float, np.ndarray]] = []  # the best of each base start
             # (a fitted loop within 2 % of the declared one is a start of its own already)
-            near = not loop.any() or np.max(np.abs(mixed - x0[base])[loop]) < 0.02
-            far = not near and np.max(np.abs(mixed - x0[base])[loop]) > FAR
             bases = (x0[base],) if near else (x0[base], mixed)
             if projected is not None:  # its screen explored the grid from the fitted base
                 bases = (mixed,) if far else ()

@@ -30,14 +30,17 @@ def compare(paths: Sequence[str], effects: Sequence[str] = (), calibrate: str = 
 
 def diagnose(paths: Sequence[str], with_: Sequence[str] = (), catalog: Sequence[str] = (),
              max_rounds: int = 4, progress: Callable | None = None, rerun: str | None = None,
-             report: str | None = None, calibrate: str = "") -> Diagnosis:
+             report: str | None = None, calibrate: str = "",
+             scheduler: str | None = None) -> Diagnosis:
     """The diagnosis loop on the runs; writes the Rerun recording (`rerun`) and the HTML
-    report (`report`) asked for (`Diagnosis.plot`, listed in its `files`). Ctrl-C raises
-    `DiagnosisInterrupted` carrying the rounds finished (`partial`, `interrupted` true)."""
+    report (`report`) asked for (`Diagnosis.plot`, listed in its `files`); the candidates
+    are fitted on a local Dask cluster, or on the one whose scheduler is at `scheduler`.
+    Ctrl-C raises `DiagnosisInterrupted` carrying the rounds finished (`partial`,
+    `interrupted` true)."""
     if max_rounds < 1:
         raise VtableError(f"--max-rounds must be at least 1, got {max_rounds}")
     d = Diagnoser([align(r) for r in campaign(paths)], list(with_), catalog=list(catalog) or None,
                   progress=progress, max_rounds=max_rounds,
-                  calibration=Calibration.parse(calibrate)).diagnose()
+                  calibration=Calibration.parse(calibrate), scheduler=scheduler).diagnose()
     d.plot(report=report, rerun=rerun)
     return d
