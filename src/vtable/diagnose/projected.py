@@ -16,17 +16,19 @@ SIAM J. Numer. Anal. 10, 1973). So, with J worked out once per round for every c
 2. the best is refined in the effect's own parameters on that projected cost (a few
    least-squares steps);
 3. a candidate whose projected cost does not fall `SCREEN` (1 %) below the current
-   model's cost takes `SCREEN_STEPS` least-squares steps in every parameter from its
-   defaults and the current parameters (one forward-difference Jacobian, then Broyden's
-   updates), and, when the fitted servo loop is far from the declared one, from the loop
-   as declared with the effect at its best there: an effect the fitted base had absorbed
-   comes back only when both move together, over several steps the linearisation cannot
-   see (an RC filter behind friction, entrained air). Still not 1 % below, it is screened
-   out — a gain of 1 % of the training
+   model's cost takes `SCREEN_STEPS` least-squares steps in every parameter from its best
+   values with the current parameters moved as the projection says, and from its defaults
+   with the current parameters (one forward-difference Jacobian, then Broyden's updates
+   carried from one start to the next), and, when the fitted servo loop is far from the
+   declared one, from the loop as declared with the effect at its best there: an effect
+   the fitted base had absorbed comes back only when both move together, over several
+   steps the linearisation cannot see (an RC filter behind friction, entrained air; the
+   table's pitch). Still not 1 % below, it is screened out — a gain of 1 % of the training
    cost cannot reach the 5 % of the noise's cost the selection asks (criterion 3);
-4. otherwise every parameter is fitted by least squares, this start (the effect's best
-   values, the current parameters moved by δb within their bounds) one of the fit's
-   starts (`TableModel`'s `multistart`).
+4. otherwise (the gain confirmed by a simulation where the move points: the linearisation
+   can promise what the model does not give) every parameter is fitted by least squares,
+   this start (the effect's best values, the current parameters moved by δb within their
+   bounds) one of the fit's starts (`TableModel`'s `multistart`).
 
 A candidate screened out then costs a few simulations, where a few least-squares steps in
 every parameter from each of its starts cost tens of Jacobians. Parameters the
@@ -134,12 +136,14 @@ def projected_start(model, campaign, start, lay, x0: np.ndarray, frame: Frame,
     x[idx] = best_v
     x[ci] += frame.move(residual(best_v))[fi]
     x = np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-    if best_c < frame.cost * (1 - screen):
-        return x
+    if best_c < frame.cost * (1 - screen):  # the linearised gain, confirmed where it points
+        f = model._cost(x, start, lay, campaign)
+        if float(f @ f) < frame.cost * (1 - screen):
+            return x
     # not yet: a few steps in every parameter from the effect at its defaults and the
     # current parameters (an effect the fitted base absorbed is given back only when both
     # move together, over several steps: the linearised move cannot see it)
-    starts = [base]
+    starts = [x, base]  # from where the projection points, and from the effect's defaults
     if declared is not None:  # and from the loop as declared, the effect at its best there
         trials = []
         for v in points:
@@ -148,13 +152,16 @@ def projected_start(model, campaign, start, lay, x0: np.ndarray, frame: Frame,
             f = model._cost(np.clip(z, lo, hi), start, lay, campaign)
             trials.append((float(f @ f), z))
         starts.append(min(trials, key=lambda t: t[0])[1])
-    best = None
+    best, J = None, None
     for z in starts:
         z = np.clip(z, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         secant = Secant(lambda q: model._cost(q, start, lay, campaign), lo, hi,
                         refresh=1 << 30)
+        if J is not None:  # the next start takes the last one's Jacobian (Broyden's)
+            secant.seed(z, J, np.ones(len(z), dtype=bool))
         sol = scipy.optimize.least_squares(secant.fun, z, jac=secant.jac, bounds=(lo, hi),
                                            xtol=1e-6, ftol=1e-8, max_nfev=SCREEN_STEPS)
+        J = secant.last_jacobian
         if float(sol.fun @ sol.fun) < frame.cost * (1 - screen):
             return np.clip(sol.x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         if best is None or float(sol.fun @ sol.fun) < float(best.fun @ best.fun):

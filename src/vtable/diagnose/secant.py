@@ -84,6 +84,11 @@ class Secant:
             J[:, i] = (self.fun(xi) - f0) / h
         self._J, self._x, self._f, self._calls = J, x.copy(), f0, 1
 
+    @property
+    def last_jacobian(self) -> np.ndarray | None:
+        """The Jacobian last handed out (at the last point `jac` was asked)."""
+        return self._J
+
     def jac(self, x: np.ndarray) -> np.ndarray:
         x = np.asarray(x, dtype=float)
         f = self._value(x)

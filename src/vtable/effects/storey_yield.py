@@ -35,9 +35,6 @@ class StoreyYield(Effect):
                     doc="u_y, the drift at which it yields"),
               Param("post_yield_ratio", "1", 0.1, 0.0, 1.0,
                     source="assumed", doc="α, the post-yield stiffness over the elastic one"))
-    #: tried when asked for (`vtable diagnose --effects ...,storey_yield`): its fits step
-    #: the nonlinear model (RK4, every storey), a minute or more on each diagnosis of a
-    #: framed specimen, until a cheap test of amplitude dependence screens it first
 
     def apply(self, m, p):
         n = len(storey_masses(m.specimen))

@@ -34,9 +34,9 @@ from vtable.params.table import ServoConstants
 
 _LAWS: dict[str, list[Callable]] = {}  # key -> the stages' laws, for the generated module
 _MODULES: dict[str, Composition] = {}
-#: compositions by the identity of their stages and kernels (held, so ids stay theirs):
-#: hashing the laws' source is slower than building a reduced model
-_SEEN: dict[tuple[int, ...], tuple[tuple, Composition]] = {}
+#: compositions by the identity of their stages and kernels (held, so ids stay theirs) and
+#: their element laws: hashing the laws' source is slower than building a reduced model
+_SEEN: dict[tuple, tuple[tuple, Composition]] = {}
 
 
 def laws_of(key: str) -> list[Callable]:
@@ -77,10 +77,26 @@ def ordered(stages: Sequence[Stage]) -> tuple[Stage, ...]:
     return tuple(sorted(stages, key=lambda s: (KINDS.index(s.kind), s.order, s.name)))
 
 
-def composition(stages: Sequence[Stage], extra: Sequence[Callable] = ()) -> Composition:
+@dataclass(frozen=True)
+class ElementLaw:
+    """A force element's law as the generated module calls it: the law (a plain Python
+    function f(d, v, z, p, dz) -> force, `vtable.models.reduced.ReducedAssembly.add_force`),
+    its states, its parameters' count and their names (None: the law reads an array)."""
+
+    law: Callable
+    states: int
+    n_params: int
+    names: tuple[str, ...] | None = None
+
+
+def composition(stages: Sequence[Stage], extra: Sequence[Callable] = (),
+                elements: Sequence[ElementLaw] = ()) -> Composition:
     """The compiled element of `stages` (see the module docstring); `extra`: kernels
     (njit-decorated functions of another module) written after the element's, calling its
-    `dof_drive`, `fed_back`, `actuator_rates` and its states per actuator `NS`."""
+    `dof_drive`, `fed_back`, `actuator_rates` and its states per actuator `NS`;
+    `elements`: force-element laws, called by the module's `elements(q, q̇, z, p, f, ż,
+    ia, ib)` on the relative motion of coordinates ia[k] and ib[k] (−1: none), given at run
+    time (one compiled module serves every coordinate, every storey)."""
     stages = ordered(stages)
     for kind in ("control", "feedback"):
         if sum(s.kind == kind for s in stages) > 1:
@@ -89,22 +105,26 @@ def composition(stages: Sequence[Stage], extra: Sequence[Callable] = ()) -> Comp
     if len({s.name for s in stages}) < len(stages):
         raise VtableError(f"a stage appears twice: {', '.join(s.name for s in stages)}")
     templates = [element.servo_rates, element.servo_step, *extra]
-    seen = _SEEN.get(tuple(map(id, (*stages, *templates))))
-    if seen is not None and seen[0] == (*stages, *templates):  # a model built again
+    held = (*stages, *templates)
+    elements = tuple(elements)  # frozen, compared by value: each model builds its own
+    ident = (tuple(map(id, held)), elements)
+    seen = _SEEN.get(ident)
+    if seen is not None and seen[0] == held:  # a model built again
         return seen[1]
-    key = _key(stages, templates)
+    key = _key(stages, templates, elements)
     hit = _MODULES.get(key)
     if hit is not None:
-        _SEEN[tuple(map(id, (*stages, *templates)))] = ((*stages, *templates), hit)
+        _SEEN[ident] = (held, hit)
         return hit
     laws: list[Callable] = []
     for s in stages:
         laws += [s.law] + ([s.rate] if s.rate else [])
+    laws += [e.law for e in elements]
     _LAWS[key] = laws
     path = _directory() / f"vtable_stages_{key}.py"
     if not path.exists():
         tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(_source(stages, templates, key))
+        tmp.write_text(_source(stages, templates, key, elements))
         os.replace(tmp, path)
     name = f"vtable_stages_{key}"
     spec = importlib.util.spec_from_file_location(name, path)
@@ -114,11 +134,12 @@ def composition(stages: Sequence[Stage], extra: Sequence[Callable] = ()) -> Comp
     comp = Composition(stages, module, 1 + sum(s.states for s in stages),
                        all(s.linear for s in stages))
     _MODULES[key] = comp
-    _SEEN[tuple(map(id, (*stages, *templates)))] = ((*stages, *templates), comp)
+    _SEEN[ident] = (held, comp)
     return comp
 
 
-def _key(stages: tuple[Stage, ...], templates: list[Callable]) -> str:
+def _key(stages: tuple[Stage, ...], templates: list[Callable],
+         elements: tuple[ElementLaw, ...] = ()) -> str:
     h = hashlib.sha256()
     h.update(f"{numba.__version__} {sys.version}\n".encode())
     h.update(inspect.getsource(element).encode())
@@ -127,7 +148,18 @@ def _key(stages: tuple[Stage, ...], templates: list[Callable]) -> str:
     for s in stages:
         h.update(f"{s.name} {s.kind} {s.params} {s.states} {s.order}\n".encode())
         h.update(s.source().encode())
+    for e in elements:
+        h.update(f"element {e.states} {e.n_params} {e.names}\n".encode())
+        h.update(_law_source(e.law).encode())
     return h.hexdigest()[:20]
+
+
+def _law_source(law: Callable) -> str:
+    """A law's source (its module and name where the source cannot be read)."""
+    try:
+        return inspect.getsource(getattr(law, "py_func", law))
+    except (OSError, TypeError):
+        return f"{law.__module__}.{law.__qualname__}"
 
 
 def _directory() -> Path:
@@ -146,7 +178,34 @@ def _directory() -> Path:
     return d
 
 
-def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str) -> str:
+def _elements_source(elements: tuple[ElementLaw, ...], first_law: int) -> tuple[list, list]:
+    """(module-level lines, the `elements` kernel) calling each element law in turn on the
+    relative motion of coordinates ia[k], ib[k] (ib −1: the ground)."""
+    head, body = [], ["", "", "@njit(cache=True)",
+                      "def elements(q, qd, z, p, f, dz, ia, ib):"]
+    s = o = 0
+    for k, e in enumerate(elements):
+        head.append(f"_E{k} = njit(_L[{first_law + k}])")
+        args = f"p[{o}:{o + e.n_params}]"
+        if e.names is not None:
+            head.append(f"_EP{k} = namedtuple('LawParams', {tuple(e.names)!r})")
+            args = f"_EP{k}(" + ", ".join(f"p[{o + i}]" for i in range(e.n_params)) + ")"
+        body += [f"    i, j = ia[{k}], ib[{k}]",
+                 "    d, v = q[i], qd[i]",
+                 "    if j >= 0:",
+                 "        d -= q[j]",
+                 "        v -= qd[j]",
+                 f"    r = _E{k}(d, v, z[{s}:{s + e.states}], {args}, dz[{s}:{s + e.states}])",
+                 "    f[i] += r",
+                 "    if j >= 0:",
+                 "        f[j] -= r"]
+        s, o = s + e.states, o + e.n_params
+    body.append("    return")
+    return head, body
+
+
+def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str,
+            elements: tuple[ElementLaw, ...] = ()) -> str:
     names = ", ".join(f"{s.kind} {s.name}" for s in stages) or "none"
     head = [f'"""Generated by vtable.hydraulics.compose (stages: {names}). Do not edit."""',
             "", "from collections import namedtuple", "", "import numpy as np",
@@ -194,5 +253,9 @@ def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str) -> s
             "    dP = oil_column(q, P, v, beta, sp)", "    dz[o] = dP",
             *([rate] if rate else []), "    F = piston_force(P, sp)", *calls["force"],
             "    return F", ""]
+    if elements:
+        eh, eb = _elements_source(elements, li)
+        head += eh
+        body += eb
     kernels = ["\n" + inspect.getsource(getattr(f, "py_func", f)) for f in templates]
     return "\n".join(head + body) + "\n".join(kernels)

@@ -76,9 +76,11 @@ class ServoLaw:
         """Whether every stage is linear (the loop is then a linear system)."""
         return all(s.linear for s, _ in self.stages)
 
-    def composition(self, extra: Sequence[Callable] = ()) -> Composition:
-        """The compiled element of this law's stages (`compose.composition`)."""
-        return composition([s for s, _ in self.stages], extra)
+    def composition(self, extra: Sequence[Callable] = (), elements: Sequence = ()
+                    ) -> Composition:
+        """The compiled element of this law's stages (`compose.composition`), with force
+        elements' laws (`compose.ElementLaw`) when given."""
+        return composition([s for s, _ in self.stages], extra, elements)
 
     def vector(self, comp: Composition) -> np.ndarray:
         """The element's parameters for `comp` (this law's composition)."""

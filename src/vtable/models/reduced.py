@@ -21,7 +21,6 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from vtable._numba import njit
 from vtable.analytic.structure import storey_channels, storey_masses
 from vtable.analytic.virtual_table import mechanics
 from vtable.controllers.force_law import law_params, named
@@ -29,17 +28,18 @@ from vtable.effects.table import TableView
 from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.errors import VtableError
 from vtable.hydraulics import group_law
+from vtable.hydraulics.compose import ElementLaw
 from vtable.hydraulics.element import PISTON_AREA
 from vtable.hydraulics.stage import Stage, add_stage
 from vtable.interpolate import upsample
 from vtable.models import physics as phys
 from vtable.models.reduced_kernel import (
+    ELEMENT_KERNELS,
     KERNELS,
     hold_matrices,
     linear_system,
     simulate_linear,
     simulate_modal,
-    simulate_reduced_elements,
     simulate_reduced_python,
 )
 from vtable.models.stiffness import needed_stiffness
@@ -239,48 +239,29 @@ def _upsampled(x_c: np.ndarray, n: int, up: int) -> np.ndarray:
     return xc
 
 
-_COMBINED: dict = {}  # compiled element functions by structure (one kernel compile each)
-
-
-def _combined(elements: list[ForceElement], ix: dict[str, int], jit: bool):
-    """One element function for the kernel: every force element's law on its relative
-    motion, its force added to its coordinate (and subtracted from the other). Made once
-    per structure (laws, coordinates, sizes), so the kernel compiles once for it."""
+def _combined(elements: list[ForceElement], ix: dict[str, int]):
+    """The force elements as one Python function for `simulate_reduced_python` (a law numba
+    cannot compile): every element's law on its relative motion, its force added to its
+    coordinate and subtracted from the other. Returns (function, states, parameters)."""
     params = np.concatenate([e.params for e in elements]) if elements else np.zeros(0)
-    key = (jit, tuple((e.law, ix[e.a], None if e.b is None else ix[e.b], e.states,
-                       len(e.params), e.names) for e in elements))
-    if key in _COMBINED:
-        fn, s = _COMBINED[key]
-        return fn, s, params
-    ns: dict = {}
-    lines = ["def combined(q, qd, z, p, f, dz):"]
+    spans = []
     s = o = 0
-    for k, e in enumerate(elements):
-        law = e.law
-        if jit:
-            law = njit(cache=False)(law)
-        ns[f"law{k}"] = law
-        i = ix[e.a]
-        j = ix[e.b] if e.b is not None else None
-        d = f"q[{i}]" + (f" - q[{j}]" if j is not None else "")
-        v = f"qd[{i}]" + (f" - qd[{j}]" if j is not None else "")
-        m, ps = e.states, len(e.params)
-        arg = f"p[{o}:{o + ps}]"
-        if e.names is not None:  # the law reads its parameters by name
-            ns[f"P{k}"] = named(e.names)
-            arg = f"P{k}(" + ", ".join(f"p[{o + i}]" for i in range(ps)) + ")"
-        lines.append(f"    r = law{k}({d}, {v}, z[{s}:{s + m}], {arg}, dz[{s}:{s + m}])")
-        lines.append(f"    f[{i}] += r")
-        if j is not None:
-            lines.append(f"    f[{j}] -= r")
-        s, o = s + m, o + ps
-    lines.append("    return")
-    exec("\n".join(lines), ns)
-    fn = ns["combined"]
-    if jit:
-        fn = njit(cache=False)(fn)
-    _COMBINED[key] = (fn, s)
-    return fn, s, params
+    for e in elements:
+        spans.append((e, ix[e.a], None if e.b is None else ix[e.b], s, o))
+        s, o = s + e.states, o + len(e.params)
+
+    def combined(q, qd, z, p, f, dz):
+        for e, i, j, s0, o0 in spans:
+            d = q[i] - (q[j] if j is not None else 0.0)
+            v = qd[i] - (qd[j] if j is not None else 0.0)
+            vals = p[o0:o0 + len(e.params)]
+            arg = named(e.names)(*vals) if e.names is not None else vals
+            r = e.law(d, v, z[s0:s0 + e.states], arg, dz[s0:s0 + e.states])
+            f[i] += r
+            if j is not None:
+                f[j] -= r
+
+    return combined, s, params
 
 
 class ReducedModel:
@@ -313,11 +294,10 @@ class ReducedModel:
         self.T, self.Tp, self.g, self.kp, self.kv = law.kernel()
         if self.T.shape != (1, 1):  # the kernel steps one lumped actuator on one DOF
             raise RuntimeError(f"the reduced model's actuator law is {self.T.shape}, not 1 x 1")
-        self.element = law.composition(KERNELS)  # the stage set's compiled element
-        self.sp = law.vector(self.element)
         self.storeys, self.h_top, self.specimen = m.storeys, m.h_top, m.specimen
         self.max_step = m.max_step
-        self._element(m.elements)
+        self._element(law, m.elements)  # the stage set's compiled element (`element`)
+        self.sp = law.vector(self.element)
         #: a linear model is stepped exactly (`reduced_kernel.simulate_linear`)
         self.linear = (self.elem is None and not np.any(c2) and law.linear and LINEAR_PATH)
         if self.linear:
@@ -331,21 +311,34 @@ class ReducedModel:
             self._holds[h] = hold_matrices(self._linear[0], self._linear[1], h)
         return self._holds[h]
 
-    def _element(self, elements: list[ForceElement]) -> None:
+    def _element(self, law, elements: list[ForceElement]) -> None:
+        """The stage set's compiled element (`element`), with the force elements' laws
+        written into it (`compose.ElementLaw`: cached on disk like the stages, one module
+        for every coordinate they act on), their parameters `pe` and coordinates `ia`,
+        `ib`; a law numba cannot compile runs as Python instead (slower, said)."""
         self.python = False
+        self.ne, self.pe = sum(e.states for e in elements), np.zeros(0)
+        self.elem = None
         if not elements:
-            self.elem, self.ne, self.pe = None, 0, np.zeros(0)
+            self.element = law.composition(KERNELS)
             return
-        fn, ne, pe = _combined(elements, self.ix, jit=True)
+        self.pe = np.concatenate([e.params for e in elements])
+        self.ia = np.array([self.ix[e.a] for e in elements], dtype=np.int64)
+        self.ib = np.array([-1 if e.b is None else self.ix[e.b] for e in elements],
+                           dtype=np.int64)
+        laws = tuple(ElementLaw(e.law, e.states, len(e.params), e.names) for e in elements)
         try:  # compile now: a law numba cannot type runs as Python instead (slower)
-            fn(np.zeros(len(self.ix)), np.zeros(len(self.ix)), np.zeros(ne), pe,
-               np.zeros(len(self.ix)), np.zeros(ne))
+            self.element = law.composition(ELEMENT_KERNELS, elements=laws)
+            n = len(self.ix)
+            self.element.module.elements(np.zeros(n), np.zeros(n), np.zeros(self.ne), self.pe,
+                                         np.zeros(n), np.zeros(self.ne), self.ia, self.ib)
+            self.elem = self.element.module.elements
         except Exception:  # numba's typing errors have many classes
-            fn, ne, pe = _combined(elements, self.ix, jit=False)
+            self.element = law.composition(KERNELS)
+            self.elem, _, self.pe = _combined(elements, self.ix)
             self.python = True
             warnings.warn("a force law numba cannot compile runs as Python (slower)",
                           RuntimeWarning, stacklevel=3)
-        self.elem, self.ne, self.pe = fn, ne, pe
 
     def _measured_force(self, F: np.ndarray, P: np.ndarray) -> np.ndarray:
         """The lumped actuator's force as the run's force channels measure it
@@ -379,9 +372,12 @@ class ReducedModel:
             Q, Qd, Qdd, F, PL = simulate_linear(xc, nq, *self._linear, Phi, G0, G1)
         elif self.elem is None:
             Q, Qd, Qdd, F, PL = self.element.module.simulate_reduced(*args)
+        elif self.python:
+            Q, Qd, Qdd, F, PL = simulate_reduced_python(self.element.module, *args, self.elem,
+                                                        self.ne, self.pe)
         else:
-            run = simulate_reduced_python if self.python else simulate_reduced_elements
-            Q, Qd, Qdd, F, PL = run(self.element.module, *args, self.elem, self.ne, self.pe)
+            Q, Qd, Qdd, F, PL = self.element.module.simulate_elements(
+                *args, self.pe, self.ia, self.ib, self.ne)
         return h, up, xc, Q, Qd, Qdd, F, PL
 
     def simulate(self, t: np.ndarray, x_c: np.ndarray) -> dict[str, np.ndarray]:
@@ -406,7 +402,9 @@ class ReducedModel:
         fast = self._modal() if self.linear else None
         if fast is None:
             full = self.simulate(t, x_c)
-            return {c: full[c][::step] for c in names if c in full}
+            once: dict[int, np.ndarray] = {}  # a lumped quantity once, as the fast path
+            return {c: once.setdefault(id(full[c]), full[c][::step])
+                    for c in names if c in full}
         alias = self._aliases(tuple(names))
         names = list(dict.fromkeys(alias.values()))  # a lumped quantity once
         t = np.asarray(t, dtype=float)

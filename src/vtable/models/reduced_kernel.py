@@ -5,11 +5,11 @@ groups' `servo_rates` applies too), auxiliary linear states w (other control loo
 ẇ = Aw w + Wq q + Wv q̇, generalized force Fw w), quadratic dampers c₂|q̇|q̇, and force
 elements with states z (`elem(q, q̇, z, p, f, ż)` adds generalized forces to f).
 
-`simulate_reduced` integrates a model without force elements (the catalog's); it is
-cached on disk, so every process loads it compiled. `simulate_reduced_elements` wraps the
-same rates with a user's element function (compiled once per process: a cache entry typed
-on a function from a user's file could not be loaded by another process), and
-`simulate_reduced_python` runs that code as Python for a law numba cannot compile.
+`simulate_reduced` integrates a model without force elements; `simulate_elements` one
+with them, calling the `elements` its stage set's generated module defines (the laws
+written into it, the coordinates given at run time: `vtable.hydraulics.compose`). Both are
+cached on disk with that module, so every process loads them compiled.
+`simulate_reduced_python` runs the element code as Python for a law numba cannot compile.
 
 A linear model (no force element, no quadratic damper, a linear hydraulic loop) is the
 state-space system ẏ = A y + B x_c whose A and B are the same rates evaluated on unit
@@ -167,34 +167,85 @@ def _element_integrate(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv,
     return Q, Qd, Qdd, F, PL
 
 
-#: the kernels a stage set's compiled element carries (`vtable.hydraulics.compose`)
+@njit(cache=True)
+def elements(q, qd, z, p, f, dz, ia, ib):
+    """The force elements' generalized forces (a stand-in: the generated module of a stage
+    set with force-element laws defines its own, `vtable.hydraulics.compose`)."""
+    return
+
+
+@njit(cache=True)
+def _rates_with_elements(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
+                         Wv, Fw, pe, ia, ib, ne, dy, fe, ws):
+    """Rates of y = [main state, element states]: the elements' forces into fe (their state
+    rates into dy's tail), then `_rates`; no allocation."""
+    m = y.shape[0] - ne
+    for i in range(nq):
+        fe[i] = 0.0
+    elements(y[:nq], y[nq:2 * nq], y[m:], pe, fe, dy[m:], ia, ib)
+    return _rates(y[:m], xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
+                  fe, dy[:m], ws)
+
+
+@njit(cache=True, nogil=True)
+def simulate_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
+                      Fw, pe, ia, ib, ne):
+    """`simulate_reduced` with force elements (`elements` of the stage set's module, on
+    coordinates ia, ib given at run time): RK4 at step dt, no allocation in the loop."""
+    n = xc.shape[0]
+    ny = 2 * nq + NS + Aw.shape[0] + ne
+    y = np.zeros(ny)
+    yt = np.empty(ny)
+    fe = np.zeros(nq)
+    ws = np.zeros(nq)
+    Q, Qd, Qdd, F = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq)), np.empty(n)
+    PL = np.empty(n)
+    k1, k2, k3, k4 = np.empty(ny), np.empty(ny), np.empty(ny), np.empty(ny)
+    for k in range(n):
+        F[k] = _rates_with_elements(y, xc[k], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp,
+                                    kv, Aw, Wq, Wv, Fw, pe, ia, ib, ne, k1, fe, ws)
+        PL[k] = y[2 * nq]
+        for i in range(nq):
+            Q[k, i] = y[i]
+            Qd[k, i] = y[nq + i]
+            Qdd[k, i] = k1[nq + i]
+        if k == n - 1:
+            break
+        xm = 0.5 * (xc[k] + xc[k + 1])
+        for i in range(ny):
+            yt[i] = y[i] + 0.5 * dt * k1[i]
+        _rates_with_elements(yt, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
+                             Wv, Fw, pe, ia, ib, ne, k2, fe, ws)
+        for i in range(ny):
+            yt[i] = y[i] + 0.5 * dt * k2[i]
+        _rates_with_elements(yt, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
+                             Wv, Fw, pe, ia, ib, ne, k3, fe, ws)
+        for i in range(ny):
+            yt[i] = y[i] + dt * k3[i]
+        _rates_with_elements(yt, xc[k + 1], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv,
+                             Aw, Wq, Wv, Fw, pe, ia, ib, ne, k4, fe, ws)
+        for i in range(ny):
+            y[i] += dt / 6.0 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i])
+        if not np.isfinite(y[0]) or abs(y[0]) > 10.0:
+            Q[k + 1:], Qd[k + 1:], Qdd[k + 1:], F[k + 1:] = np.nan, np.nan, np.nan, np.nan
+            PL[k + 1:] = np.nan
+            break
+    return Q, Qd, Qdd, F, PL
+
+
+#: the kernels a stage set's compiled element carries (`vtable.hydraulics.compose`) ...
 KERNELS = (_rates, simulate_reduced)
-
-
-def _bound(module, jit: bool):
-    """`_element_integrate` calling `module`'s `_rates` (a stage set's), compiled or not."""
-    glb = dict(_element_integrate.__globals__)
-    glb["_rates"], glb["NS"] = module._rates, module.NS
-    rates = types.FunctionType(_element_rates.__code__, glb)
-    glb["_element_rates"] = njit(rates) if jit else rates
-    fn = types.FunctionType(_element_integrate.__code__, glb)
-    return njit(nogil=True)(fn) if jit else fn
+#: ... and those it carries when the model has force elements (their laws written in too)
+ELEMENT_KERNELS = (*KERNELS, _rates_with_elements, simulate_elements)
 
 
 def simulate_reduced_python(module, *args):
-    """`_element_integrate` as plain Python (`module`'s compiled `_rates` does the rest)."""
-    return _bound(module, jit=False)(*args)
-
-
-_COMPILED: dict = {}
-
-
-def simulate_reduced_elements(module, *args):
-    """`_element_integrate` on `module`'s element, compiled (once per process and stage
-    set, not cached on disk)."""
-    if module.__name__ not in _COMPILED:
-        _COMPILED[module.__name__] = _bound(module, jit=True)
-    return _COMPILED[module.__name__](*args)
+    """`_element_integrate` as plain Python, calling `module`'s compiled `_rates` (a stage
+    set's)."""
+    glb = dict(_element_integrate.__globals__)
+    glb["_rates"], glb["NS"] = module._rates, module.NS
+    glb["_element_rates"] = types.FunctionType(_element_rates.__code__, glb)
+    return types.FunctionType(_element_integrate.__code__, glb)(*args)
 
 
 def linear_system(module, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw):
