@@ -43,8 +43,6 @@ AT_BOUND = 0.01  # a fitted value within 1 % of its range (fitted scale) of a bo
 #: an effect parameter this correlated with a base parameter is not identifiable apart
 #: from the base (the fit could trade one for the other)
 MAX_CORRELATION = 0.95
-#: least-squares steps with forward-difference Jacobians that end every fit
-POLISH_STEPS = 10
 SCREEN = 0.01  # a candidate must lower the training cost by 1 % in its first steps ...
 #: ... and one whose screen halves it is refined at once (it is likely to win its round)
 STRONG = 0.5
@@ -384,8 +382,6 @@ class TableModel:
             starts: list[tuple[float, np.ndarray]] = []  # the best of each base start
             # (a fitted loop within 2 % of the declared one is a start of its own already)
             bases = (x0[base],) if near else (x0[base], mixed)
-            if projected is not None:  # its screen explored the grid from the fitted base
-                bases = (mixed,) if far else ()
             for base_x in bases:
                 best, best_x = np.inf, x0
                 for v in points:
@@ -405,14 +401,10 @@ class TableModel:
             eff = np.zeros(len(lay), dtype=bool)
             eff[idx] = True
             grid = [x for _, x in starts]
-            if projected is None:
-                starts = [self._refine(x, eff, lo, hi, start, lay, campaign)
-                          for _, x in starts]
-                c_min = min(c for c, _ in starts)
-                rivals = [(x, SCREEN_STEPS) for c, x in sorted(starts, key=lambda s: s[0])
-                          if c <= RIVAL * c_min]
-            else:
-                rivals = []
+            starts = [self._refine(x, eff, lo, hi, start, lay, campaign) for _, x in starts]
+            c_min = min(c for c, _ in starts)
+            rivals = [(x, SCREEN_STEPS) for c, x in sorted(starts, key=lambda s: s[0])
+                      if c <= RIVAL * c_min]
             # and two starts whatever their cost before their steps in every parameter:
             # where an earlier fit's base absorbed part of the effect (a free loop taking
             # up an RC filter or entrained air), the effect refined with the base held
@@ -427,7 +419,7 @@ class TableModel:
             rivals.append((x0.copy(), AS_IS_STEPS))
             if far:
                 rivals.append((grid[-1], DECLARED_STEPS))
-            x0 = min(starts, key=lambda s: s[0])[1] if starts else projected
+            x0 = min(starts, key=lambda s: s[0])[1]
         else:
             rivals = []
 
@@ -460,11 +452,10 @@ class TableModel:
             if float(np.sum(sol.fun**2)) >= self.baseline * (1 - SCREEN):
                 return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac, screened=True)
             x0 = sol.x
-        sol = solve(x0, 40)
-        # Broyden's Jacobian may stop short of the minimum: the fit ends on steps with
-        # forward differences (one Jacobian and done where it had converged), whose last
-        # is the covariance the flags read
-        sol = solve(sol.x, POLISH_STEPS, refresh=1)
+        # the best start goes on with forward-difference Jacobians (Broyden's may stop
+        # short of the minimum: a pitch fit ten times the cost it can reach), the last of
+        # them the covariance the flags read
+        sol = solve(x0, 40, refresh=1)
         return self._done(campaign, start, lay, sol.x, sol.fun, sol.secant.at(sol.x))
 
     @staticmethod
