@@ -17,14 +17,15 @@ SIAM J. Numer. Anal. 10, 1973). So, with J worked out once per round for every c
    least-squares steps);
 3. a candidate whose projected cost does not fall `SCREEN` (1 %) below the current
    model's cost takes `SCREEN_STEPS` least-squares steps in every parameter from its best
-   values with the current parameters moved as the projection says, and from its defaults
-   with the current parameters (one forward-difference Jacobian, then Broyden's updates
-   carried from one start to the next), and, when the fitted servo loop is far from the
-   declared one, from the loop as declared with the effect at its best there: an effect
-   the fitted base had absorbed comes back only when both move together, over several
-   steps the linearisation cannot see (an RC filter behind friction, entrained air; the
-   table's pitch). Still not 1 % below, it is screened out — a gain of 1 % of the training
-   cost cannot reach the 5 % of the noise's cost the selection asks (criterion 3);
+   values with the current parameters moved as the projection says, from its defaults
+   with the current parameters, and, when the fitted servo loop is far from the declared
+   one, from the loop as declared with the effect at its best there (a forward-difference
+   Jacobian at each start, then Broyden's updates; one start's Jacobian carried to the
+   next misled: a platen resonator missed): an effect the fitted base had absorbed comes
+   back only when both move together, over several steps the linearisation cannot see
+   (an RC filter behind friction, entrained air; the table's pitch). Still not 1 % below,
+   it is screened out — a gain of 1 % of the training cost cannot reach the 5 % of the
+   noise's cost the selection asks (criterion 3);
 4. otherwise (the gain confirmed by a simulation where the move points: the linearisation
    can promise what the model does not give) every parameter is fitted by least squares,
    this start (the effect's best values, the current parameters moved by δb within their
@@ -152,16 +153,13 @@ def projected_start(model, campaign, start, lay, x0: np.ndarray, frame: Frame,
             f = model._cost(np.clip(z, lo, hi), start, lay, campaign)
             trials.append((float(f @ f), z))
         starts.append(min(trials, key=lambda t: t[0])[1])
-    best, J = None, None
+    best = None
     for z in starts:
         z = np.clip(z, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         secant = Secant(lambda q: model._cost(q, start, lay, campaign), lo, hi,
                         refresh=1 << 30)
-        if J is not None:  # the next start takes the last one's Jacobian (Broyden's)
-            secant.seed(z, J, np.ones(len(z), dtype=bool))
         sol = scipy.optimize.least_squares(secant.fun, z, jac=secant.jac, bounds=(lo, hi),
                                            xtol=1e-6, ftol=1e-8, max_nfev=SCREEN_STEPS)
-        J = secant.last_jacobian
         if float(sol.fun @ sol.fun) < frame.cost * (1 - screen):
             return np.clip(sol.x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         if best is None or float(sol.fun @ sol.fun) < float(best.fun @ best.fun):

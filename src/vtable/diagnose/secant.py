@@ -67,28 +67,6 @@ class Secant:
             J[:, i] = (self.fun(xi) - f0) / h
         return J
 
-    def seed(self, x: np.ndarray, known: np.ndarray, columns: np.ndarray) -> None:
-        """Start from a Jacobian whose `columns` (a boolean per parameter) are `known` at
-        `x` (taken elsewhere: a shared linearisation); the others are taken now by forward
-        differences, and the next forward-difference refresh waits `refresh` calls."""
-        x = np.asarray(x, dtype=float)
-        f0 = self._value(x)
-        J = np.empty((len(f0), len(x)))
-        J[:, columns] = known
-        for i in np.flatnonzero(~columns):
-            h = self.diff_step * max(1.0, abs(x[i])) * (1.0 if x[i] >= 0 else -1.0)
-            if not self.lo[i] <= x[i] + h <= self.hi[i]:
-                h = -h
-            xi = x.copy()
-            xi[i] += h
-            J[:, i] = (self.fun(xi) - f0) / h
-        self._J, self._x, self._f, self._calls = J, x.copy(), f0, 1
-
-    @property
-    def last_jacobian(self) -> np.ndarray | None:
-        """The Jacobian last handed out (at the last point `jac` was asked)."""
-        return self._J
-
     def jac(self, x: np.ndarray) -> np.ndarray:
         x = np.asarray(x, dtype=float)
         f = self._value(x)
