@@ -143,8 +143,7 @@ _LOCK = threading.Lock()
 def cluster(n: int, scheduler: str | None = None):
     """The Dask client candidate fits run on (module docstring): the scheduler at
     `scheduler`, or this process's local cluster of `n` forked workers (made on first
-    use). Ctrl-C is ignored while the local workers are forked (they keep that
-    disposition), where this thread may set it."""
+    use); the local workers ignore Ctrl-C (`_fork_safe`)."""
     key = (n, scheduler)
     with _LOCK:
         client = _CLIENTS.get(key)
@@ -160,10 +159,9 @@ def cluster(n: int, scheduler: str | None = None):
                 raise VtableError(f"--scheduler {scheduler}: no Dask scheduler answers there "
                                   f"({e})") from None
         else:
-            main = threading.current_thread() is threading.main_thread()
-            old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+            _fork_safe()
+            _FORKING.set()  # the children forked now are our workers: Ctrl-C is ours
             try:
-                _fork_safe()
                 with dask.config.set({"distributed.worker.multiprocessing-method": "fork",
                                       "distributed.worker.daemon": True,
                                       "distributed.scheduler.work-stealing": False}):
@@ -171,23 +169,31 @@ def cluster(n: int, scheduler: str | None = None):
                                       dashboard_address=":0", silence_logs=logging.CRITICAL)
                     client = Client(lc)
             finally:
-                if main:
-                    signal.signal(signal.SIGINT, old)
+                _FORKING.clear()
         _CLIENTS[key] = client
         return client
 
 
+#: set while this process forks its local workers (`cluster`)
+_FORKING = threading.Event()
+
+
 @functools.cache
 def _fork_safe() -> None:
-    """Forked workers inherit this process's module state, distributed's executor for
-    (de)serialising large messages among it: once its thread has run here, the child's
-    copy has a thread that does not exist, and a large campaign would wait for it forever.
-    Each forked child gets a new one."""
+    """What a worker forked from this process must not inherit as it is, set right after
+    the fork in the child: distributed's executor for (de)serialising large messages
+    (once its thread has run here, the child's copy has a thread that does not exist, and
+    a large campaign would wait for it forever: each child gets a new one); and, for our
+    workers (`_FORKING`), Ctrl-C, which the terminal sends to the whole process group and
+    this process handles (a worker would print its traceback). This process's own
+    handling of Ctrl-C is never changed, so an interrupt is never lost while they start."""
     import distributed.utils
 
     def fresh() -> None:
         distributed.utils._offload_executor = ThreadPoolExecutor(
             max_workers=1, thread_name_prefix="Dask-Offload")
+        if _FORKING.is_set():
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
 
     os.register_at_fork(after_in_child=fresh)
 
