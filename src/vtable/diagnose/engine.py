@@ -232,7 +232,6 @@ class Diagnoser:
         self._stop.clear()
         st = _State()
         try:
-            self.fits.start()  # the workers, forked from this thread (Ctrl-C ignored there)
             in_thread(lambda post: self._loop(st, post), self.progress, self.fits.halt)
         except KeyboardInterrupt:
             self._stop.clear()

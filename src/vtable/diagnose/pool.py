@@ -78,9 +78,8 @@ class Fits:
 
     def start(self) -> Tasks | None:
         """This diagnosis's tasks on the Dask cluster (`workers.cluster`: made on first
-        use), or None: one worker, or a user's effect registered from code. Called from the
-        caller's thread before the loop starts, so local workers are forked ignoring
-        Ctrl-C."""
+        use, after the starting model's fit, so that forked workers hold the kernels it
+        loaded), or None: one worker, or a user's effect registered from code."""
         if self.workers < 2 and not self.scheduler:
             return None
         files = self.user_files()
