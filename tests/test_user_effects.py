@@ -113,7 +113,7 @@ def test_without_the_file_the_residual_is_unexplained():
     from vtable.diagnose.engine import Diagnoser
 
     _, runs = backlash_campaign()
-    d = Diagnoser(runs).diagnose()  # the whole catalog, storey_yield included
+    d = Diagnoser(runs, catalog=BUILT_IN).diagnose()  # the catalog, storey_yield included
     assert d.final_effects == []
     assert d.unexplained is not None and d.unexplained["ratio_to_floor"] > 5
     assert "a residual remains unexplained" in d.verdict

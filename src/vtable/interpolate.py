@@ -47,3 +47,24 @@ def upsample(x: np.ndarray, up: int) -> np.ndarray:
     # does not ring over the filter's half-length
     y = scipy.signal.resample_poly(x, up, 1, window=interpolator(up), padtype="line")
     return y[: (len(x) - 1) * up + 1]
+
+
+_UPSAMPLED: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
+
+
+def upsampled(x_c: np.ndarray, n: int, up: int) -> np.ndarray:
+    """The command interpolated band-limited onto the integration step (`upsample`),
+    kept for the last few command arrays (a fit drives the model by the same array
+    hundreds of times; the array is held with its result, so its id stays its own)."""
+    if up == 1:
+        return np.ascontiguousarray(x_c, dtype=float)
+    key = (id(x_c), n, up)
+    hit = _UPSAMPLED.get(key)
+    if hit is not None and hit[0] is x_c:
+        return hit[1]
+    xc = upsample(x_c, up)  # (n - 1) up + 1 samples
+    xc.flags.writeable = False
+    if len(_UPSAMPLED) >= 32:
+        _UPSAMPLED.pop(next(iter(_UPSAMPLED)))
+    _UPSAMPLED[key] = (x_c, xc)
+    return xc

@@ -1,64 +1,39 @@
 """The diagnosis loop: calibrate the base, then for every catalog effect the model lacks,
-add it, fit its parameters together with the whole calibrated base (the servo loop, the
-specimen's modes, damping and mass, the platen's mass, and its centre-of-mass height and
-pitch inertia when the effect lets it pitch: `vtable.diagnose.calibration`) and the effects
-already in the model on the training segments of the campaign, score on the held-out
-segments, rank by held-out gain, add the best that passes the selection rule, repeat.
-Each candidate starts from the best of a grid across its parameters' ranges and from its
-defaults with the base as fitted, and from its best grid start with the loop as declared
-(a free loop that absorbed part of the effect gives it back only when every parameter
-moves together; `TableModel`'s `multistart`). Nonlinear candidates (an order of
-magnitude costlier to simulate) are screened: if a few least-squares steps from their best
-starts do not lower the training cost by 1 %, their fit stops there (`TableModel`'s
-`baseline`).
+add it, fit its parameters together with the whole calibrated base (`calibration`) and
+the effects already in the model on the training segments, score on the held-out ones,
+add the best that passes the selection rule (`selection.SELECTION`), repeat; after each
+addition, test the earlier ones again without it (the backward step).
 
-The selection rule is `vtable.diagnose.selection`'s (`SELECTION`); what a diagnosis
-returns is `vtable.diagnose.result`'s (`Diagnosis`, with `to_json()`, `report()` and
-`plot()`).
+Each round's candidates are screened before they are fitted in full (`_candidates`): a
+nonlinear one only where the runs show amplitude dependence (`screen`), every one on the
+current model linearised once for the round (`projected`); those that pass are refined
+best first, and one that cannot win the round is kept where its screen left it. Training
+is the first 60 % of every run (at most its first 30 s), held out the last 40 %, both at
+the analysis rate (`sampling`). The verdict (`verdict`) is honest about what is left:
+"no missing effect" only when the final error is within 2 x the noise floor
+(`noise.UNEXPLAINED_RULE`); above that, where the residual lives.
 
-Training = the first 60 % of every run (at most its first 30 s: a few parameters need no more,
-and every simulated second costs each fit), held out = the last 40 % (`compare.segments`),
-both at the analysis rate (`compare.analysis_run`: runs faster than 200 Hz are anti-alias
-filtered and resampled to 200 Hz; slower ones keep their rate).
-
-The verdict is honest about what is left: the final model's held-out error is compared
-with the noise floor by `compare.UNEXPLAINED_RULE` (consistent when err ≤ 2 × floor: noise and
-a systematic error add in quadrature, err² ≈ floor² + sys²). Above that, `unexplained`
-gives the ratio and where the residual lives, and the verdict says a residual remains
-unexplained; "no missing effect" is said only when the final error is consistent with the
-noise. A candidate whose fitted parameters sit within 1 % of a bound (on the fitted scale:
-logarithmic for log parameters) is flagged: the fit may have pushed the effect where it is
-not physics but a patch.
-
-The candidates of a round (and the backward step's refits) are fitted in `workers`
-processes (`vtable.diagnose.pool.Fits`; threads when a user's effect was registered from code
-rather than a file, and in the loop's own thread with `workers=1`).
-
-Ctrl-C: the loop runs in a thread of its own (`pool.in_thread`); the caller's thread only
-waits and reports progress. An interrupt sets the stop flags (this process's and the
-workers' shared one) that the residual function checks between simulations, pending
-candidate fits are cancelled, and `DiagnosisInterrupted` (a KeyboardInterrupt) carries the
-rounds finished.
+The fits run as Dask tasks (`pool.Fits`, `workers`). Ctrl-C: the loop runs in a thread of
+its own (`pool.in_thread`); an interrupt sets the stop flags every fit checks between
+simulations, cancels what has not started, and `DiagnosisInterrupted` (a
+KeyboardInterrupt) carries the rounds finished.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from vtable.diagnose.bounds import base_at_bounds, bounds_verdict, pushed_beyond
+from vtable.diagnose.bounds import base_at_bounds, pushed_beyond
 from vtable.diagnose.calibration import Calibration, bounding_setting
 from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import compare
 from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
-from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
 from vtable.diagnose.projected import Frame
-from vtable.diagnose.prose import unexplained
 from vtable.diagnose.result import (
     ERROR_DEFINITION,
     Candidate,
@@ -71,8 +46,8 @@ from vtable.diagnose.result import (
 )
 from vtable.diagnose.screen import nonlinearity_evidence
 from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE, failing
-from vtable.diagnose.stationarity import stationarity_check
 from vtable.diagnose.statistics import Comparison, held_out_gain
+from vtable.diagnose.verdict import State, diagnosis_of
 from vtable.effects.registry import default_candidates
 from vtable.effects.registry import get as effect
 from vtable.effects.table import TableView
@@ -89,24 +64,6 @@ REFINE_FACTOR = 3.0
 __all__ = ["BASE_PARAMS", "ERROR_DEFINITION", "MIN_SHARE", "NOISE_SHARE", "SELECTION",
            "WORKERS", "Z_NOISE", "Candidate", "Diagnoser", "Diagnosis", "DiagnosisInterrupted",
            "Round", "Stage", "check_campaign", "diagnose", "failing", "localise"]
-
-
-@dataclass
-class _State:
-    """What the loop has established so far (read by the caller on an interrupt)."""
-
-    current: Physics | None = None
-    err: float | None = None
-    start_err: float | None = None
-    cmp0: Comparison | None = None
-    cmp: Comparison | None = None  # detailed comparison of `current`, when made
-    rounds: list[Round] = field(default_factory=list)
-    stages: list[Stage] = field(default_factory=list)
-    result: Diagnosis | None = None
-    error: BaseException | None = None
-    #: declarations the final model leans on that a widened refit moves beyond their
-    #: bounds (`bounds.pushed_beyond`)
-    pushed: list[dict[str, Any]] = field(default_factory=list)
 
 
 class Diagnoser:
@@ -182,7 +139,7 @@ class Diagnoser:
                           f"--calibrate {wider.text()}")
         return wider, names, self.predict(fitted[0])
 
-    def _pushed_beyond(self, st: _State) -> list[dict[str, Any]]:
+    def _pushed_beyond(self, st: State) -> list[dict[str, Any]]:
         """`bounds.pushed_beyond` of the final model."""
         if st.current is None or not self.calibration.enabled:
             return []
@@ -230,7 +187,7 @@ class Diagnoser:
         progress callback raising KeyboardInterrupt) stops the fits promptly and raises
         `DiagnosisInterrupted` with the rounds finished."""
         self._stop.clear()
-        st = _State()
+        st = State()
         try:
             in_thread(lambda post: self._loop(st, post), self.progress, self.fits.halt)
         except KeyboardInterrupt:
@@ -247,7 +204,7 @@ class Diagnoser:
         assert st.result is not None
         return st.result
 
-    def _loop(self, st: _State, post: Callable[[tuple[int, int, str]], None]) -> None:
+    def _loop(self, st: State, post: Callable[[tuple[int, int, str]], None]) -> None:
         try:
             with threadpool_limits(limits=1, user_api="blas"):  # small matrices: see model
                 st.result = self._run(st, lambda i, n, s: post((i, n, s)))
@@ -256,7 +213,7 @@ class Diagnoser:
         except BaseException as e:  # handed to the caller's thread
             st.error = e
 
-    def _detail(self, st: _State) -> Comparison:
+    def _detail(self, st: State) -> Comparison:
         """The detailed comparison of the current model (from its stage's predictions)."""
         if st.cmp is None:
             stage = st.stages[-1]
@@ -265,7 +222,7 @@ class Diagnoser:
             stage.comparison = st.cmp
         return st.cmp
 
-    def _run(self, st: _State, progress: Callable[[int, int, str], None]) -> Diagnosis:
+    def _run(self, st: State, progress: Callable[[int, int, str], None]) -> Diagnosis:
         steps = 1 + self.max_rounds * len(self.catalog)
         done = 0
         progress(done, steps, "fitting the starting model")
@@ -377,7 +334,7 @@ class Diagnoser:
                                  c.physics, c.effect, self.table_view)
         return not c.failing() and not c.blocking and not c.stand_in
 
-    def _judged(self, st: _State, name: str, fitted: tuple, spent: dict[str, float],
+    def _judged(self, st: State, name: str, fitted: tuple, spent: dict[str, float],
                 unrefined: str = "") -> Candidate:
         """The candidate a fit (`workers.fitted`'s tuple) makes, scored held out."""
         cand, train, flags, cost_, screened, pred, secs, _ = fitted
@@ -392,7 +349,7 @@ class Diagnoser:
                          len(effect(name).params), cand, flags, pred, screened, cost_, gain,
                          self.table_view, unrefined=unrefined)
 
-    def _candidates(self, st: _State, current: Physics, cost: float, todo: list[str],
+    def _candidates(self, st: State, current: Physics, cost: float, todo: list[str],
                     backward: list[str], seeds: dict, spent: dict, lean: tuple | None,
                     progress, done: int, steps: int, k: int
                     ) -> tuple[list[Candidate], dict[str, tuple], int]:
@@ -476,7 +433,7 @@ class Diagnoser:
             progress(done, steps, f"round {k}: tried {e}")
         return ranking, left, done
 
-    def _not_fitted(self, ph: Physics, name: str, cost: float, st: _State,
+    def _not_fitted(self, ph: Physics, name: str, cost: float, st: State,
                     why: str) -> Candidate:
         """A candidate the screen keeps from being fitted: at its defaults, credited with
         the current model's predictions (no gain claimed), marked screened."""
@@ -486,7 +443,7 @@ class Diagnoser:
                          len(effect(name).params), ph, [], pred, True, cost, gain,
                          self.table_view, not_fitted=why)
 
-    def _backward(self, st: _State, names: list[str], fitted: dict[str, tuple],
+    def _backward(self, st: State, names: list[str], fitted: dict[str, tuple],
                   progress, done: int, steps: int, k: int):
         """The backward step: the current model against each fit without one of `names`;
         the first effect whose keeping is not a gain `SELECTION` would count is removed
@@ -514,65 +471,12 @@ class Diagnoser:
             return physics, err, cost
         return None
 
-    def _diagnosis(self, st: _State, final_cmp: Comparison | None, reason: str,
+    def _diagnosis(self, st: State, final_cmp: Comparison | None, reason: str,
                    interrupted: bool = False) -> Diagnosis:
-        current = st.current or self.start
-        err = st.err
-        added = [r.added for r in st.rounds if r.added]
-        floor = self.floor
-        unexp = None
-        if final_cmp is not None:
-            unexp = unexplained(final_cmp)
-        elif err is not None and not (floor > 0 and err <= NOISE_FACTOR * floor):
-            unexp = {"ratio_to_floor": err / floor if floor > 0 else float("inf"),
-                     "where": "not localised (the diagnosis was interrupted)"}
-        parts = []
-        if interrupted:
-            parts.append(f"interrupted after round {len(st.rounds)}"
-                         + ("" if err is not None else ", before the starting model was fitted")
-                         + "; the diagnosis is incomplete")
-        removed = [e for r in st.rounds for e in r.removed]
-        if added:
-            parts.append(f"added {', '.join(added)}"
-                         + (f" (later removed: {', '.join(removed)})" if removed else "")
-                         + f": held-out error {st.start_err:.2%} -> {err:.2%} (noise floor "
-                           f"{floor:.2%})")
-        if err is not None:
-            if unexp is None:
-                lead = "no missing effect" if not added else "no further missing effect"
-                if interrupted:
-                    lead = "so far within the noise"
-                parts.append(f"{lead}: the final held-out error {err:.2%} is within "
-                             f"{NOISE_FACTOR:g} x the noise floor ({floor:.2%})")
-            else:
-                parts.append(f"a residual remains unexplained: the final held-out error "
-                             f"{err:.2%} is {unexp['ratio_to_floor']:.1f} x the noise floor "
-                             f"({floor:.2%}), above the {NOISE_FACTOR:g} x noise alone explains;"
-                             f" it lives in {unexp['where']}")
-                for c in self.campaign.sensors:  # what no effect on the platen can fit
-                    parts.append(c.text())
-                if st.stages:  # what no time-invariant model of the command can fit
-                    preds = st.stages[-1].predictions
-                    for r in self.runs:
-                        c = stationarity_check(r, preds.get(r.name))
-                        text = "" if c is None else c.text(floor, NOISE_FACTOR)
-                        if text:
-                            parts.append(text)
-        base = self.base_table(current)
-        start = getattr(self, "start_fitted", None)
-        at_bounds = [] if err is None else base_at_bounds(
-            base, self.calibration, None if start is None else self.base_table(start),
-            st.pushed)
-        if at_bounds:  # deliverable 6 of issue 18: the suspect declarations named
-            parts.append(bounds_verdict(at_bounds, self.calibration))
-        if reason:
-            parts.append(reason)
-        return Diagnosis(list(self.start.effects), st.start_err, floor, list(st.rounds),
-                         current, err, "; ".join(parts), st.cmp0, final_cmp,
-                         base, unexp, list(self.notes), interrupted,
-                         list(st.stages), list(self.runs), base_at_bounds=at_bounds)
+        """The `Diagnosis` of the loop's state (`verdict.diagnosis_of`)."""
+        return diagnosis_of(self, st, final_cmp, reason, interrupted)
 
-    def _partial(self, st: _State) -> Diagnosis:
+    def _partial(self, st: State) -> Diagnosis:
         """The diagnosis of the rounds that finished, without another simulation."""
         return self._diagnosis(st, st.cmp if st.current is not None else None, "",
                                interrupted=True)

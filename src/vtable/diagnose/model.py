@@ -26,9 +26,10 @@ import numpy as np
 import scipy.optimize
 from threadpoolctl import threadpool_limits
 
-from vtable.diagnose.calibration import LOOP, BaseParam, Calibration, base_params
+from vtable.diagnose.calibration import LOOP, Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare, segments
+from vtable.diagnose.layout import Layout
 from vtable.diagnose.projected import Frame, projected_start
 from vtable.diagnose.reuse import model_at
 from vtable.diagnose.secant import REFRESH, Secant
@@ -36,7 +37,7 @@ from vtable.diagnose.statistics import correlations
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
-from vtable.models.reduced import ReducedAssembly, ReducedModel
+from vtable.models.reduced import ReducedModel
 from vtable.runs.model import Run
 
 AT_BOUND = 0.01  # a fitted value within 1 % of its range (fitted scale) of a bound is flagged
@@ -70,30 +71,7 @@ class StopRequestedError(Exception):
     """Raised inside a fit when the caller asked it to stop (an interrupt)."""
 
 
-def _effect_param(name: str, p) -> BaseParam:
-    def get(ph: Physics) -> float:
-        return float(ph.effects[name][p.name])
-
-    def put(ph: Physics, v: float) -> Physics:
-        eff = {k: dict(val) for k, val in ph.effects.items()}
-        eff[name][p.name] = v
-        return dataclasses.replace(ph, effects=eff)
-
-    return BaseParam(f"{name}.{p.name}", p.unit, float(p.default), p.lower, p.upper, p.log,
-                     None, f"effect:{name}", get, put)
-
-
-def pitches(ph: Physics, vt) -> bool:
-    """Whether the model `ph` lets the platen pitch on table `vt`."""
-    try:
-        m = ReducedAssembly(ph, vt)
-        ph.apply(m, "reduced")
-    except VtableError:
-        return False
-    return "pitch" in m.active
-
-
-class TableModel:
+class TableModel(Layout):
     """The linear uni-directional servo loop carrying the runs' specimen (report ch. 7)
     plus `effects`, with the base calibrated around the runs' declarations
     (`vtable.diagnose.calibration`).
@@ -159,63 +137,6 @@ class TableModel:
         self.physics_: Physics | None = None
         self.vt = None  # the campaign's table, known when fitting
         self.declared = None  # the campaign's declared specimen, known when fitting
-
-    # -- parameter vector --------------------------------------------------------------
-    def base_params(self, ph: Physics) -> list[BaseParam]:
-        """Every calibrated base parameter of `ph` on this campaign's table."""
-        return base_params(self.declared if self.declared is not None else ph.specimen,
-                           self.vt, self.calibration, pitch=pitches(ph, self.vt))
-
-    def _layout(self, ph: Physics) -> list[BaseParam]:
-        """The fitted parameters: the base's and the effects' continuous ones (a discrete
-        parameter is chosen by `_fit`, not moved by least squares)."""
-        return self.base_params(ph) + [_effect_param(name, p) for name in ph.effects
-                                       for p in effect(name).params if not p.discrete]
-
-    @staticmethod
-    def _pack(ph: Physics, lay) -> np.ndarray:
-        return np.array([math.log(p.get(ph)) if p.log else p.get(ph) for p in lay])
-
-    @staticmethod
-    def _set(ph: Physics, p: BaseParam, xi: float) -> Physics:
-        """`ph` with parameter `p` at `xi` on its fitted scale (clipped to its bounds)."""
-        return p.set(ph, float(np.clip(math.exp(xi) if p.log else xi, p.lower, p.upper)))
-
-    @classmethod
-    def _unpack(cls, x: np.ndarray, ph: Physics, lay) -> Physics:
-        """`ph` with every parameter of `lay` at `x`. One at a time, a parameter can meet
-        a state the others have not reached yet (a Rayleigh building's mode damping computed
-        with the new frequencies and the old masses: no shear building has them); such a
-        parameter is set again once the others are."""
-        later = []
-        for xi, p in zip(x, lay, strict=True):
-            try:
-                ph = cls._set(ph, p, xi)
-            except VtableError:
-                later.append((xi, p))
-        for xi, p in later:
-            ph = cls._set(ph, p, xi)
-        return ph
-
-    def _unpack_fast(self, x: np.ndarray, start: Physics, lay) -> Physics:
-        """`_unpack`, from the last vector unpacked on the same start and layout when there
-        is one: only the parameters that differ are set again (a finite-difference Jacobian
-        moves one at a time; each is set independently of the others)."""
-        last = self._last
-        if last is not None and last[0] is start and last[1] is lay:
-            ph = last[3]
-            for i in np.flatnonzero(x != last[2]):
-                ph = self._set(ph, lay[i], x[i])
-        else:
-            ph = self._unpack(x, start, lay)
-        self._last = (start, lay, x.copy(), ph)
-        return ph
-
-    def _priors(self, x: np.ndarray, lay, campaign: Campaign) -> np.ndarray:
-        lam = self.calibration.prior_weight * campaign.floor * math.sqrt(len(campaign.targets))
-        out = [lam * (xi - (math.log(p.declared) if p.log else p.declared)) / p.prior
-               for xi, p in zip(x, lay, strict=True) if p.prior]
-        return np.array(out)
 
     # -- simulate ----------------------------------------------------------------------
     def _predict(self, ph: Physics, campaign: Campaign, train_only: bool = False
@@ -457,12 +378,6 @@ class TableModel:
         # them the covariance the flags read
         sol = solve(x0, 40, refresh=1)
         return self._done(campaign, start, lay, sol.x, sol.fun, sol.secant.at(sol.x))
-
-    @staticmethod
-    def bounds(lay) -> tuple[np.ndarray, np.ndarray]:
-        """The layout's bounds on the fitted scale (the logarithm for log parameters)."""
-        return (np.array([math.log(p.lower) if p.log else p.lower for p in lay]),
-                np.array([math.log(p.upper) if p.log else p.upper for p in lay]))
 
     def _refine(self, x: np.ndarray, eff: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                 start: Physics, lay, campaign: Campaign) -> tuple[float, np.ndarray]:

@@ -24,6 +24,8 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
+from distributed import as_completed as dask_completed
+
 from vtable.controllers import kinds
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign
@@ -103,8 +105,6 @@ class Fits:
             return
         tasks = self.start()
         if tasks is not None:
-            from distributed import as_completed as dask_completed
-
             futures = {tasks.submit(job, self.calibration): key for key, job in jobs}
             for fut in dask_completed(list(futures)):
                 yield futures[fut], fut.result()

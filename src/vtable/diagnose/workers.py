@@ -37,6 +37,10 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+import dask
+import distributed.utils
+from distributed import Client, Event, LocalCluster
+
 from vtable.controllers import kinds
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign
@@ -66,8 +70,6 @@ class StopFlag:
         if now >= self._next:
             self._next = now + POLL_S
             if self._event is None:
-                from distributed import Event
-
                 self._event = Event(self.name)
             self._set = bool(self._event.is_set())
         return self._set
@@ -149,8 +151,6 @@ def cluster(n: int, scheduler: str | None = None):
         client = _CLIENTS.get(key)
         if client is not None and client.status == "running":
             return client
-        import dask
-        from distributed import Client, LocalCluster
 
         if scheduler:
             try:
@@ -187,8 +187,6 @@ def _fork_safe() -> None:
     workers (`_FORKING`), Ctrl-C, which the terminal sends to the whole process group and
     this process handles (a worker would print its traceback). This process's own
     handling of Ctrl-C is never changed, so an interrupt is never lost while they start."""
-    import distributed.utils
-
     def fresh() -> None:
         distributed.utils._offload_executor = ThreadPoolExecutor(
             max_workers=1, thread_name_prefix="Dask-Offload")
@@ -240,8 +238,6 @@ class Tasks:
 
     def halt(self) -> None:
         """Stop the running fits at their next look at the event; cancel the rest."""
-        from distributed import Event
-
         with contextlib.suppress(Exception):
             Event(self.stop.name, client=self.client).set()
         with contextlib.suppress(Exception):

@@ -19,7 +19,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
 from vtable.analytic.structure import storey_channels, storey_masses
 from vtable.analytic.virtual_table import mechanics
@@ -31,15 +30,15 @@ from vtable.hydraulics import group_law
 from vtable.hydraulics.compose import ElementLaw
 from vtable.hydraulics.element import PISTON_AREA
 from vtable.hydraulics.stage import Stage, add_stage
-from vtable.interpolate import upsample
+from vtable.interpolate import upsampled
 from vtable.models import physics as phys
+from vtable.models.modal import ModalOutputs
 from vtable.models.reduced_kernel import (
     ELEMENT_KERNELS,
     KERNELS,
     hold_matrices,
     linear_system,
     simulate_linear,
-    simulate_modal,
     simulate_reduced_python,
 )
 from vtable.models.stiffness import needed_stiffness
@@ -218,27 +217,6 @@ def _mechanics(ph: phys.Physics, vt: VirtualTable):
     return vt_on, mech
 
 
-_UPSAMPLED: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
-
-
-def _upsampled(x_c: np.ndarray, n: int, up: int) -> np.ndarray:
-    """The command interpolated band-limited onto the integration step (`upsample`),
-    kept for the last few command arrays (a fit drives the model by the same array
-    hundreds of times; the array is held with its result, so its id stays its own)."""
-    if up == 1:
-        return np.ascontiguousarray(x_c, dtype=float)
-    key = (id(x_c), n, up)
-    hit = _UPSAMPLED.get(key)
-    if hit is not None and hit[0] is x_c:
-        return hit[1]
-    xc = upsample(x_c, up)  # (n - 1) up + 1 samples
-    xc.flags.writeable = False
-    if len(_UPSAMPLED) >= 32:
-        _UPSAMPLED.pop(next(iter(_UPSAMPLED)))
-    _UPSAMPLED[key] = (x_c, xc)
-    return xc
-
-
 def _combined(elements: list[ForceElement], ix: dict[str, int]):
     """The force elements as one Python function for `simulate_reduced_python` (a law numba
     cannot compile): every element's law on its relative motion, its force added to its
@@ -264,7 +242,7 @@ def _combined(elements: list[ForceElement], ix: dict[str, int]):
     return combined, s, params
 
 
-class ReducedModel:
+class ReducedModel(ModalOutputs):
     """Predicts a run's channels from its command for a given `Physics`."""
 
     def __init__(self, physics: phys.Physics, vt: VirtualTable | None = None) -> None:
@@ -296,8 +274,8 @@ class ReducedModel:
             raise RuntimeError(f"the reduced model's actuator law is {self.T.shape}, not 1 x 1")
         self.storeys, self.h_top, self.specimen = m.storeys, m.h_top, m.specimen
         self.max_step = m.max_step
-        self._element(law, m.elements)  # the stage set's compiled element (`element`)
-        self.sp = law.vector(self.element)
+        self._law = law
+        self._element(m.elements)  # the stage set's compiled element (`element`, `sp`)
         #: a linear model is stepped exactly (`reduced_kernel.simulate_linear`)
         self.linear = (self.elem is None and not np.any(c2) and law.linear and LINEAR_PATH)
         if self.linear:
@@ -311,16 +289,18 @@ class ReducedModel:
             self._holds[h] = hold_matrices(self._linear[0], self._linear[1], h)
         return self._holds[h]
 
-    def _element(self, law, elements: list[ForceElement]) -> None:
+    def _element(self, elements: list[ForceElement]) -> None:
         """The stage set's compiled element (`element`), with the force elements' laws
         written into it (`compose.ElementLaw`: cached on disk like the stages, one module
         for every coordinate they act on), their parameters `pe` and coordinates `ia`,
         `ib`; a law numba cannot compile runs as Python instead (slower, said)."""
+        law = self._law
         self.python = False
         self.ne, self.pe = sum(e.states for e in elements), np.zeros(0)
         self.elem = None
         if not elements:
             self.element = law.composition(KERNELS)
+            self.sp = law.vector(self.element)
             return
         self.pe = np.concatenate([e.params for e in elements])
         self.ia = np.array([self.ix[e.a] for e in elements], dtype=np.int64)
@@ -339,6 +319,7 @@ class ReducedModel:
             self.python = True
             warnings.warn("a force law numba cannot compile runs as Python (slower)",
                           RuntimeWarning, stacklevel=3)
+        self.sp = law.vector(self.element)
 
     def _measured_force(self, F: np.ndarray, P: np.ndarray) -> np.ndarray:
         """The lumped actuator's force as the run's force channels measure it
@@ -363,7 +344,7 @@ class ReducedModel:
             raise VtableError(f"run step {dt:g} s: the time column must increase")
         up = max(1, math.ceil(dt / self.max_step - 1e-9))
         h = dt / up
-        xc = _upsampled(x_c, len(t), up)
+        xc = upsampled(x_c, len(t), up)
         nq = self.M.shape[0]
         args = (xc, h, nq, self.Minv, self.K, self.C, self.c2, self.bF, self.ax, self.sp,
                 self.T, self.Tp, self.g, self.kp, self.kv, self.Aw, self.Wq, self.Wv, self.Fw)
@@ -392,113 +373,6 @@ class ReducedModel:
                     done[id(v)] = fn(v, 1.0 / h) if np.any(v) else v
                 out[k] = done[id(v)]
         return self._aliased({k: v[::up] for k, v in out.items()})
-
-    def outputs(self, t: np.ndarray, x_c: np.ndarray, names: Sequence[str],
-                step: int = 1) -> dict[str, np.ndarray]:
-        """The channels `names` (those of `simulate`) at every `step`-th sample of `t`
-        (the same values as `simulate`'s, to rounding). A linear model computes only these
-        (`reduced_kernel.simulate_modal`: the modal coordinates stepped exactly, the output
-        rows of `_output_map`); any other is simulated whole and sampled."""
-        fast = self._modal() if self.linear else None
-        if fast is None:
-            full = self.simulate(t, x_c)
-            once: dict[int, np.ndarray] = {}  # a lumped quantity once, as the fast path
-            return {c: once.setdefault(id(full[c]), full[c][::step])
-                    for c in names if c in full}
-        alias = self._aliases(tuple(names))
-        names = list(dict.fromkeys(alias.values()))  # a lumped quantity once
-        t = np.asarray(t, dtype=float)
-        dt = float((t[-1] - t[0]) / (len(t) - 1)) if len(t) > 1 else 0.0
-        if not dt > 0:
-            self.histories(t, x_c)  # its one-line error
-        up = max(1, math.ceil(dt / self.max_step - 1e-9))
-        h = dt / up
-        xc = _upsampled(x_c, len(t), up)
-        filters = self.assembly.filters
-        every = 1 if filters else up * step
-        phi, g0, g1, Cm, D = self._modal_step(h, tuple(names))
-        Y = simulate_modal(xc, phi, g0, g1, Cm, D, every)
-        out = {c: Y[i] for i, c in enumerate(names)}
-        if filters:
-            for fn in filters:
-                out = {c: fn(v, 1.0 / h) if np.any(v) else v for c, v in out.items()}
-            out = {c: v[::up * step] for c, v in out.items()}
-        return {c: out[a] for c, a in alias.items()}
-
-    def _aliases(self, names: tuple[str, ...]) -> dict[str, str]:
-        """Each of `names` the model predicts -> the first of them with the same output row
-        (a lumped quantity several channels stand for is computed once)."""
-        cache = self.__dict__.setdefault("_alias_of", {})
-        if names not in cache:
-            rows = self._output_map()
-            have = [c for c in names if c in rows]
-            cache[names] = {c: next(a for a in have if rows[a][0] is rows[c][0])
-                            for c in have}
-        return cache[names]
-
-    def _modal_step(self, h: float, names: tuple[str, ...]):
-        """(e^{λh}, γ₀, γ₁, output rows, feedthrough) of `simulate_modal` for step `h` and
-        the channels `names` (kept: the runs of a campaign share them): the first-order
-        hold of each mode, γ₀ = (e^{λh} − 1)/λ and γ₁ = (e^{λh} − 1 − λh)/(λ²h) times
-        V⁻¹B (their series where λh is tiny), the rows times V with each conjugate pair
-        once, doubled."""
-        key = (h, names)
-        cache = self.__dict__.setdefault("_steps", {})
-        if key not in cache:
-            lam, V, Vinv = self._modal()
-            rows = self._output_map()
-            lh = lam * h
-            phi = np.exp(lh)
-            small = np.abs(lh) < 1e-6
-            with np.errstate(divide="ignore", invalid="ignore"):
-                g0 = np.where(small, h * (1 + lh / 2), (phi - 1) / np.where(small, 1, lam))
-                g1 = np.where(small, h * (0.5 + lh / 6),
-                              (phi - 1 - lh) / np.where(small, 1, lam * lam * h))
-            bt = Vinv @ self._linear[1]
-            weight = np.where(lam.imag > 0, 2.0, np.where(lam.imag < 0, 0.0, 1.0))
-            Cm = (np.array([rows[c][0] for c in names]) @ V * weight if names
-                  else np.zeros((0, len(lam)), dtype=complex))
-            D = np.array([rows[c][1] for c in names]) if names else np.zeros(0)
-            cache[key] = (phi, g0 * bt, g1 * bt, np.ascontiguousarray(Cm), D)
-        return cache[key]
-
-    def _modal(self):
-        """(λ, V, V⁻¹) of the linear model's A when its modal coordinates can be stepped
-        (eigenvectors well conditioned, no eigenvalue in the right half-plane: an unstable
-        model is stepped by `simulate_linear`, which ends it with NaN as the others do);
-        else None."""
-        if not hasattr(self, "_modal_"):
-            A = self._linear[0]
-            self._modal_ = None
-            try:  # pressures (Pa) beside displacements (m): balanced first
-                _, (s, _) = scipy.linalg.matrix_balance(A, permute=False, separate=True)
-                lam, Vb = np.linalg.eig(A * (s[None, :] / s[:, None]))
-                if np.all(np.isfinite(lam)) and lam.real.max() < 0 and \
-                        np.linalg.cond(Vb) < 1e8:
-                    self._modal_ = (lam, Vb * s[:, None], np.linalg.inv(Vb) / s[None, :])
-            except (np.linalg.LinAlgError, ValueError):
-                pass
-        return self._modal_
-
-    def _output_map(self) -> dict[str, tuple[np.ndarray, float]]:
-        """Each channel of `simulate` (before its output filters) as (c, d): the channel is
-        c·y + d x_c in the linear model's state y (`_channels` is linear in q, q̇, q̈, F
-        and P_L, each of them linear in y and x_c: applied to the unit states and the unit
-        command it gives the rows)."""
-        if not hasattr(self, "_rows"):
-            A, B, fy, fu = self._linear
-            ny, nq = A.shape[0], self.M.shape[0]
-            E = np.vstack([np.eye(ny), np.zeros((1, ny))])  # unit states, then x_c = 1
-            Q, Qd = E[:, :nq], E[:, nq:2 * nq]
-            Qdd = np.vstack([A[nq:2 * nq].T, B[nq:2 * nq][None, :]])
-            F = np.append(fy, fu)
-            PL = E[:, 2 * nq].copy()
-            out = self._aliased(self._channels(Q, Qd, Qdd, F, PL))
-            rows: dict[int, tuple[np.ndarray, float]] = {}  # one row per distinct array
-            self._rows = {c: rows.setdefault(id(v), (np.ascontiguousarray(v[:ny]),
-                                                     float(v[ny])))
-                          for c, v in out.items()}
-        return self._rows
 
     def _aliased(self, out: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         """The channels each lumped quantity stands for: every horizontal actuator's
