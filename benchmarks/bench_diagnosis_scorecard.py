@@ -7,7 +7,7 @@ diagnosed with the full catalog; one line per case and the acceptance totals.
     python benchmarks/bench_diagnosis_scorecard.py --cases backlash_1,null_sdof_elcentro
     python benchmarks/bench_diagnosis_scorecard.py --list
     python benchmarks/bench_diagnosis_scorecard.py --set 18         # issue 18's 30 cases
-    python benchmarks/bench_diagnosis_scorecard.py --set all        # both (70 cases)
+    python benchmarks/bench_diagnosis_scorecard.py --set all        # all three (88 cases)
     python benchmarks/bench_diagnosis_scorecard.py --set 21         # issue 21's yielding set
 
 Campaigns and results are cached under $VTABLE_SCORECARD_CACHE (default
@@ -174,7 +174,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--list", action="store_true", help="list the cases and exit")
     ap.add_argument("--set", choices=("12", "18", "21", "all"), default="12",
                     help="issue 12's 40 cases (default), issue 18's 30, issue 21's yielding "
-                         "set (its own catalog: + storey_yield), or 12 and 18")
+                         "set, or all three")
     a = ap.parse_args(argv)
     if a.list:
         for c in sc.CASES if a.set in ("12", "all") else []:
@@ -189,7 +189,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     names = ([c.name for c in sc.CASES] if a.set in ("12", "all") else []) + (
         [c.name for c in sc.CASES_18] if a.set in ("18", "all") else []) + (
-        [c.name for c in sc.CASES_21] if a.set == "21" else [])
+        [c.name for c in sc.CASES_21] if a.set in ("21", "all") else [])
     if a.quick:
         names = list(sc.QUICK)
     if a.cases:
