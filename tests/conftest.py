@@ -23,6 +23,36 @@ def pytest_sessionfinish(session, exitstatus):
     tempfile.tempdir = None
     shutil.rmtree(SESSION_TMP, ignore_errors=True)
 
+
+def _catalog_as_shipped() -> tuple:
+    from vtable.effects import registry
+
+    registry.names()  # the catalog's own effects, loaded
+    return dict(registry._REGISTRY), set(registry._USER), dict(registry._FILES)
+
+
+_SHIPPED = _catalog_as_shipped()
+
+
+def _restore_catalog() -> None:
+    from vtable.effects import registry
+
+    for live, shipped in zip((registry._REGISTRY, registry._USER, registry._FILES), _SHIPPED,
+                             strict=True):
+        live.clear()
+        live.update(shipped)
+
+
+@pytest.fixture(autouse=True)
+def catalog_as_shipped():
+    """Every test starts and ends with the catalog as shipped: an effect a test (or a test
+    module, when it is collected) registers never becomes a candidate of another test's
+    diagnosis (with pytest-xdist every worker collects every module)."""
+    _restore_catalog()
+    yield
+    _restore_catalog()
+
+
 PERIOD = 20.48  # s: 4096 samples at the 200 Hz output rate
 RMS_IN = 0.0003  # small-signal periodic random: the linear regime of the multibody table
 

@@ -162,3 +162,30 @@ def test_ctrl_c_into_diagnose_is_one_line_and_exit_130(long_campaign):
         assert lines[0].startswith("vtable: interrupted"), (after, err)
         landed += 1
     assert landed >= 5, landed
+
+
+def test_ctrl_c_while_numba_compiles_a_force_law_is_not_taken_for_a_typing_error(monkeypatch):
+    """A Ctrl-C pending while numba compiles comes back as a SystemError chained to it; the
+    reduced model's fallback for a law numba cannot type (run it as Python) must not take
+    it for one: the interrupt goes on (a cold cache's first diagnosis lost it, exit 0)."""
+    from vtable.hydraulics.law import ServoLaw
+    from vtable.models.physics import Physics, nominal_open_loop
+    from vtable.models.reduced import ReducedModel
+    from vtable.params import presets
+
+    real = ServoLaw.composition
+
+    def pending(self, extra=(), elements=()):
+        if elements:
+            try:
+                raise KeyboardInterrupt
+            except KeyboardInterrupt as e:
+                raise SystemError("error return without exception set") from e
+        return real(self, extra, elements)
+
+    monkeypatch.setattr(ServoLaw, "composition", pending)
+    ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"), {"storey_yield": {}})
+    with pytest.raises(KeyboardInterrupt):
+        ReducedModel(ph)
+    monkeypatch.setattr(ServoLaw, "composition", real)
+    assert not ReducedModel(ph).python  # without the interrupt, the law compiles

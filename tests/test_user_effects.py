@@ -97,9 +97,15 @@ def test_a_bad_effect_file_is_one_line_naming_it(capsys, tmp_path, source, msg):
     assert str(f) in err and msg in err, err
 
 
-@functools.cache
 def backlash_campaign():
+    """The backlash campaign, its effect loaded (each test starts from the catalog as
+    shipped: conftest's catalog_as_shipped)."""
     load_file(EXAMPLE)
+    return _backlash_campaign()
+
+
+@functools.cache
+def _backlash_campaign():
     truth = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                     {"swivel_backlash": {"gap": GAP_IN}})
     runs = [simulate(truth, c, noise=0.01, seed=10 + i, name=f"run{i}")
@@ -318,9 +324,13 @@ def test_the_valve_example_simulates_from_the_cli(capsys, tmp_path):
     assert (tmp_path / "overlap.toml").is_file() and (tmp_path / "overlap.csv").is_file()
 
 
-@functools.cache
 def overlap_campaign():
     load_file(VALVE)
+    return _overlap_campaign()
+
+
+@functools.cache
+def _overlap_campaign():
     truth = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                     {"valve_overlap": {"overlap": OVERLAP_PCT}})
     runs = [simulate(truth, c, noise=0.01, seed=20 + i, name=f"run{i}")

@@ -13,7 +13,7 @@ import sys
 
 from vtable import verbs
 from vtable.cli_args import parser
-from vtable.errors import UnstableError, VtableError
+from vtable.errors import UnstableError, VtableError, interrupted
 from vtable.fileio import write_text
 from vtable.results import Result
 
@@ -130,19 +130,6 @@ _COMMANDS = {"demo": cmd_demo, "modes": cmd_modes, "margins": cmd_margins, "tf":
              "assess": cmd_assess, "study": cmd_study, "drive": cmd_drive}
 
 
-def _interrupted(e: BaseException) -> bool:
-    """A KeyboardInterrupt, or an error raised because one was pending (numba-compiled code
-    returns a SystemError chained to the interrupt)."""
-    seen = set()
-    while e is not None and id(e) not in seen:
-        if isinstance(e, KeyboardInterrupt):
-            return True
-        seen.add(id(e))
-        e = e.__cause__ or e.__context__
-    return False
-
-
-
 def _quiet_stdout() -> None:
     """After a closed pipe: send what is left of stdout to /dev/null, so the interpreter's
     final flush does not complain."""
@@ -192,7 +179,7 @@ def main(argv: list[str] | None = None) -> int:
             print("vtable: interrupted", file=sys.stderr)
         return 130
     except Exception as e:
-        if _interrupted(e):
+        if interrupted(e):
             print("vtable: interrupted", file=sys.stderr)
             return 130
         raise

@@ -28,3 +28,16 @@ def did_you_mean(name: object, candidates) -> str:
     ratio ≥ 0.6, the closest), else ""."""
     close = difflib.get_close_matches(str(name), [str(c) for c in candidates], n=1)
     return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def interrupted(e: BaseException | None) -> bool:
+    """Whether `e` is a KeyboardInterrupt or was raised because one was pending (code
+    numba compiled, or numba compiling, returns a SystemError chained to the interrupt):
+    a handler that catches Exception must raise it again, or Ctrl-C is lost."""
+    seen = set()
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return True
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return False

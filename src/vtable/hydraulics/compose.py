@@ -148,10 +148,19 @@ def _key(stages: tuple[Stage, ...], templates: list[Callable],
     for s in stages:
         h.update(f"{s.name} {s.kind} {s.params} {s.states} {s.order}\n".encode())
         h.update(s.source().encode())
+        h.update(" ".join(_law_name(f) for f in (s.law, s.rate) if f).encode())
     for e in elements:
-        h.update(f"element {e.states} {e.n_params} {e.names}\n".encode())
+        h.update(f"element {e.states} {e.n_params} {e.names} {_law_name(e.law)}\n".encode())
         h.update(_law_source(e.law).encode())
     return h.hexdigest()[:20]
+
+
+def _law_name(law: Callable) -> str:
+    """Where a law lives (module and name): numba's cache of a kernel that calls it names
+    its module, so the same source loaded as another module (a user's effects file from
+    another folder) is compiled anew, not read back from a cache that cannot find it."""
+    law = getattr(law, "py_func", law)
+    return f"{law.__module__}.{law.__qualname__}"
 
 
 def _law_source(law: Callable) -> str:
@@ -159,7 +168,7 @@ def _law_source(law: Callable) -> str:
     try:
         return inspect.getsource(getattr(law, "py_func", law))
     except (OSError, TypeError):
-        return f"{law.__module__}.{law.__qualname__}"
+        return _law_name(law)
 
 
 def _directory() -> Path:

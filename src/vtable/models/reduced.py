@@ -25,7 +25,7 @@ from vtable.analytic.virtual_table import mechanics
 from vtable.controllers.force_law import law_params, named
 from vtable.effects.table import TableView
 from vtable.effects.valve_dynamics import SPOOL_LAG
-from vtable.errors import VtableError
+from vtable.errors import VtableError, interrupted
 from vtable.hydraulics import group_law
 from vtable.hydraulics.compose import ElementLaw
 from vtable.hydraulics.element import PISTON_AREA
@@ -313,7 +313,9 @@ class ReducedModel(ModalOutputs):
             self.element.module.elements(np.zeros(n), np.zeros(n), np.zeros(self.ne), self.pe,
                                          np.zeros(n), np.zeros(self.ne), self.ia, self.ib)
             self.elem = self.element.module.elements
-        except Exception:  # numba's typing errors have many classes
+        except Exception as e:  # numba's typing errors have many classes
+            if interrupted(e):  # Ctrl-C while numba compiled: not a law it cannot type
+                raise KeyboardInterrupt from e
             self.element = law.composition(KERNELS)
             self.elem, _, self.pe = _combined(elements, self.ix)
             self.python = True

@@ -11,7 +11,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from vtable.controllers.force_law import law_argument, law_params
-from vtable.errors import VtableError
+from vtable.errors import VtableError, interrupted
 
 #: |d| probed (m): 1 µm to 0.5 m, 8 points a decade, either sign, and 0
 PROBE = np.concatenate([[0.0], np.logspace(-6, math.log10(0.5), 46)])
@@ -35,6 +35,8 @@ def needed_stiffness(law: Callable, params: Sequence[float], states: int = 0) ->
     except VtableError:
         raise
     except Exception as e:  # a user's law may raise anything
+        if interrupted(e):
+            raise KeyboardInterrupt from e
         raise VtableError(f"{name}: give stiffness= (N/m, its largest slope): probing the law "
                           f"failed ({type(e).__name__}: {e})") from None
     return slope
