@@ -19,11 +19,15 @@ SIAM J. Numer. Anal. 10, 1973). So, with J worked out once per round for every c
    model's cost takes `SCREEN_STEPS` least-squares steps in every parameter from its best
    values with the current parameters moved as the projection says, from its defaults
    with the current parameters, and, when the fitted servo loop is far from the declared
-   one, from the loop as declared with the effect at its best there (a forward-difference
-   Jacobian at each start, then Broyden's updates; one start's Jacobian carried to the
-   next misled: a platen resonator missed): an effect the fitted base had absorbed comes
-   back only when both move together, over several steps the linearisation cannot see
-   (an RC filter behind friction, entrained air; the table's pitch). Still not 1 % below,
+   one, from the loop as declared with the effect at its best there (Broyden's updates
+   between steps; one start's Broyden Jacobian carried to the next misled: a platen
+   resonator missed). The first two starts are near the current model: their Jacobian
+   takes the frame's J for the parameters the current model has and forward differences
+   for the others (the effect's own: one simulation each, not one per parameter); the
+   declared loop's start takes forward differences in every parameter. An effect the
+   fitted base had absorbed comes back only when both move together, over several steps
+   the linearisation cannot see (an RC filter behind friction, entrained air; the
+   table's pitch). Still not 1 % below,
    it is screened out — a gain of 1 % of the training cost cannot reach the 5 % of the
    noise's cost the selection asks (criterion 3);
 4. otherwise (the gain confirmed by a simulation where the move points: the linearisation
@@ -154,10 +158,17 @@ def projected_start(model, campaign, start, lay, x0: np.ndarray, frame: Frame,
             trials.append((float(f @ f), z))
         starts.append(min(trials, key=lambda t: t[0])[1])
     best = None
-    for z in starts:
+    others = [i for i in range(len(x0)) if i not in set(ci.tolist())]
+    for k, z in enumerate(starts):
         z = np.clip(z, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         secant = Secant(lambda q: model._cost(q, start, lay, campaign), lo, hi,
                         refresh=1 << 30)
+        if k < 2:  # near the current model: its Jacobian's columns for the parameters it
+            # has (the frame's), forward differences for the effect's own
+            J = secant.at(z, others)
+            J[:n, ci] = frame.J[:, fi]
+            J[n:, ci] = _prior_jacobian(model, lay, campaign, z)[:, ci]
+            secant.seed(z, J)
         sol = scipy.optimize.least_squares(secant.fun, z, jac=secant.jac, bounds=(lo, hi),
                                            xtol=1e-6, ftol=1e-8, max_nfev=SCREEN_STEPS)
         if float(sol.fun @ sol.fun) < frame.cost * (1 - screen):

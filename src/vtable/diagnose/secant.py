@@ -53,12 +53,13 @@ class Secant:
         f = self._seen.get(np.asarray(x, dtype=float).tobytes())
         return self.fun(x) if f is None else f
 
-    def at(self, x: np.ndarray) -> np.ndarray:
-        """The forward-difference Jacobian at `x`."""
+    def at(self, x: np.ndarray, cols=None) -> np.ndarray:
+        """The forward-difference Jacobian at `x` (only the columns `cols`, the others
+        zero, when given)."""
         x = np.asarray(x, dtype=float)
         f0 = self._value(x)
-        J = np.empty((len(f0), len(x)))
-        for i in range(len(x)):
+        J = np.zeros((len(f0), len(x)))
+        for i in range(len(x)) if cols is None else cols:
             h = self.diff_step * max(1.0, abs(x[i])) * (1.0 if x[i] >= 0 else -1.0)
             if not self.lo[i] <= x[i] + h <= self.hi[i]:
                 h = -h
@@ -66,6 +67,11 @@ class Secant:
             xi[i] += h
             J[:, i] = (self.fun(xi) - f0) / h
         return J
+
+    def seed(self, x: np.ndarray, J: np.ndarray) -> None:
+        """Start from the Jacobian `J` at `x` (Broyden's updates from there)."""
+        self._J, self._x, self._f = J, np.asarray(x, dtype=float).copy(), self._value(x)
+        self._calls = 1
 
     def jac(self, x: np.ndarray) -> np.ndarray:
         x = np.asarray(x, dtype=float)
