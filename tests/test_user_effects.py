@@ -180,8 +180,11 @@ def test_a_pure_python_law_gives_the_same_prediction():
     register(Slow())
     ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                  {"swivel_backlash_python": {"gap": GAP_IN}})
-    with pytest.warns(RuntimeWarning, match="runs as Python"):
+    with pytest.warns(RuntimeWarning, match="runs as Python") as caught:
         model = ReducedModel(ph)
+    # the warning names the law, its file and numba's reason
+    msg = str(caught[0].message)
+    assert "python_law (" in msg and "test_user_effects.py" in msg and "Error" in msg, msg
     assert model.python
     part = slice(0, 300)
     slow = model.simulate(r.time[part], r.channel("h_span")[part])

@@ -217,6 +217,14 @@ def _mechanics(ph: phys.Physics, vt: VirtualTable):
     return vt_on, mech
 
 
+def _law_where(law: Callable) -> str:
+    """A law's name and the file it lives in, for a message."""
+    law = getattr(law, "py_func", law)
+    code = getattr(law, "__code__", None)
+    where = f" ({code.co_filename})" if code is not None else ""
+    return f"{getattr(law, '__qualname__', law)}{where}"
+
+
 def _combined(elements: list[ForceElement], ix: dict[str, int]):
     """The force elements as one Python function for `simulate_reduced_python` (a law numba
     cannot compile): every element's law on its relative motion, its force added to its
@@ -319,8 +327,10 @@ class ReducedModel(ModalOutputs):
             self.element = law.composition(KERNELS)
             self.elem, _, self.pe = _combined(elements, self.ix)
             self.python = True
-            warnings.warn("a force law numba cannot compile runs as Python (slower)",
-                          RuntimeWarning, stacklevel=3)
+            names = ", ".join(sorted({_law_where(e.law) for e in elements}))
+            why = (str(e).strip().splitlines() or [""])[0][:160]
+            warnings.warn(f"a force law numba cannot compile runs as Python (slower): "
+                          f"{names}: {type(e).__name__}: {why}", RuntimeWarning, stacklevel=3)
         self.sp = law.vector(self.element)
 
     def _measured_force(self, F: np.ndarray, P: np.ndarray) -> np.ndarray:
