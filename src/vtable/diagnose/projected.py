@@ -27,9 +27,9 @@ SIAM J. Numer. Anal. 10, 1973). So, with J worked out once per round for every c
    declared loop's start takes forward differences in every parameter. An effect the
    fitted base had absorbed comes back only when both move together, over several steps
    the linearisation cannot see (an RC filter behind friction, entrained air; the
-   table's pitch). Still not 1 % below,
-   it is screened out — a gain of 1 % of the training cost cannot reach the 5 % of the
-   noise's cost the selection asks (criterion 3);
+   table's pitch). Still not 1 % below, it is screened out — a gain of 1 % of the
+   training cost cannot reach the 5 % of the noise's cost the selection asks
+   (criterion 3);
 4. otherwise (the gain confirmed by a simulation where the move points: the linearisation
    can promise what the model does not give) every parameter is fitted by least squares,
    this start (the effect's best values, the current parameters moved by δb within their
@@ -158,7 +158,8 @@ def projected_start(model, campaign, start, lay, x0: np.ndarray, frame: Frame,
             trials.append((float(f @ f), z))
         starts.append(min(trials, key=lambda t: t[0])[1])
     best = None
-    others = [i for i in range(len(x0)) if i not in set(ci.tolist())]
+    others = np.setdiff1d(np.arange(len(x0)), ci)  # the effect's own, and any new ones
+    prior_J = _prior_jacobian(model, lay, campaign, x0)[:, ci]  # the priors are linear
     for k, z in enumerate(starts):
         z = np.clip(z, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         secant = Secant(lambda q: model._cost(q, start, lay, campaign), lo, hi,
@@ -167,7 +168,7 @@ def projected_start(model, campaign, start, lay, x0: np.ndarray, frame: Frame,
             # has (the frame's), forward differences for the effect's own
             J = secant.at(z, others)
             J[:n, ci] = frame.J[:, fi]
-            J[n:, ci] = _prior_jacobian(model, lay, campaign, z)[:, ci]
+            J[n:, ci] = prior_J
             secant.seed(z, J)
         sol = scipy.optimize.least_squares(secant.fun, z, jac=secant.jac, bounds=(lo, hi),
                                            xtol=1e-6, ftol=1e-8, max_nfev=SCREEN_STEPS)

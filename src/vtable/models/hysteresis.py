@@ -23,7 +23,7 @@ def bouc_wen(d: float, v: float, z, p, dz) -> float:
     A = 1). p: k (N/m), alpha, u_y (m), beta, gamma, n."""
     zz = z[0]
     az = abs(zz)
-    if p.n == 2.0:  # the usual exponent (storey_yield's): products, not powers (4x a step)
+    if p.n == 2.0:  # the usual exponent (storey_yield's): products, not powers
         az_n1, az_n = az, az * az
     else:
         az_n1, az_n = az ** (p.n - 1.0), az ** p.n
