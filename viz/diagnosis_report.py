@@ -211,7 +211,14 @@ def write_report(d: Any, path: str | Path) -> Path:
     parts = [f"<html><head><meta charset='utf-8'><title>{title}</title>"
              "<style>body{font-family:sans-serif;max-width:60em;margin:auto}"
              "td,th{padding:2px 8px;border-bottom:1px solid #ddd}</style></head><body>",
-             f"<h1>{title}</h1>", f"<p><b>Verdict:</b> {e(d.verdict)}</p>",
+             f"<h1>{title}</h1>",
+             *([f"<p style='font-size:1.2em'><b>{e(d.headline)}</b></p>"] if d.headline else []),
+             *(["<ul>" + "".join(f"<li>{e(f['what'])}"
+                                 + (f" <i>({e(', '.join(f['runs']))})</i>" if f['runs'] else "")
+                                 + f"<br>→ {e(f['action'])}</li>" for f in d.findings)
+                + "</ul>"] if d.findings else []),
+             f"<details><summary>Verdict (the statistics)</summary><p>{e(d.verdict)}</p>"
+             "</details>",
              "<p><b>Unexplained:</b> " + (e("none: the final error is consistent with the "
                                              "noise floor") if u is None else
                                            e(f"the final error is {u['ratio_to_floor']:.1f} x "

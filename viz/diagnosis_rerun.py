@@ -82,7 +82,11 @@ def _series(rec: rr.RecordingStream, path: str, times, values: np.ndarray, label
 
 
 def _text(d) -> str:
-    lines = [f"**Verdict:** {d.verdict}", ""]
+    lines = [f"**{d.headline}**", ""] if d.headline else []
+    for f in d.findings:
+        lines.append(f"- {f['what']}" + (f" ({', '.join(f['runs'])})" if f["runs"] else "")
+                     + f" → {f['action']}")
+    lines += ["", f"**Verdict:** {d.verdict}", ""]
     u = d.unexplained
     lines.append("**Unexplained:** " + ("none (the final error is consistent with the noise "
                                         "floor)" if u is None else

@@ -152,7 +152,8 @@ def _emit(a: argparse.Namespace, result: Result) -> None:
     else:
         if a.json:
             _write_json(a.json, result)
-        print(result.report())
+        print(result.report(verbose=True) if getattr(a, "verbose", False)
+              else result.report())
         if a.json:
             print(f"wrote {a.json}")
     sys.stdout.flush()

@@ -157,6 +157,8 @@ def parser() -> argparse.ArgumentParser:
     _add_json(dg)
     dg.add_argument("--rerun", default=None, help="write a Rerun recording (.rrd)")
     dg.add_argument("--report", default=None, help="write an HTML report")
+    dg.add_argument("--verbose", action="store_true",
+                    help="print the verdict with its statistics too")
     cp = sub.add_parser("compare", help="how a model with given effects fits the runs")
     cp.add_argument("runs", nargs="+")
     cp.add_argument("--with", dest="with_", default="",

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from vtable import display
+from vtable.diagnose.limits import Limits, limits
 from vtable.diagnose.model import SCREEN, TableModel
 from vtable.diagnose.noise import UNEXPLAINED_RULE
 from vtable.diagnose.prose import localisation_text, unexplained
@@ -126,6 +127,11 @@ class Diagnosis:
     base_at_bounds: list[dict[str, Any]] = field(default_factory=list)
     #: the figures' title (`vtable compare` draws its one model as a diagnosis)
     title: str = "vtable diagnosis"
+    #: what the data allow the final model (`limits.limits`: the black box, the bound)
+    limits: Limits | None = None
+    #: one sentence and the findings a lab engineer reads (`findings`)
+    headline: str = ""
+    findings: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def final_effects(self) -> list[str]:
@@ -175,6 +181,11 @@ class Diagnosis:
             "final_error": self.final_error,
             "unexplained": self.unexplained,
             "base_at_bounds": self.base_at_bounds,
+            "bound": None if self.limits is None else self.limits.bound,
+            "reference": None if self.limits is None else self.limits.reference,
+            "limits": None if self.limits is None else self.limits.to_json(),
+            "headline": self.headline,
+            "findings": self.findings,
             "verdict": self.verdict,
             "interrupted": self.interrupted,
             "notes": self.notes,
@@ -184,10 +195,11 @@ class Diagnosis:
             "localisation": self.localisation,
         }
 
-    def report(self) -> str:
+    def report(self, verbose: bool = False) -> str:
         """The text `vtable diagnose` prints: the notes, the starting model, each round's
         ranking with its evidence and flags, the error history, the calibrated base, what
-        is left unexplained, the verdict and the files written."""
+        is left unexplained, what the data allow per run and group, the headline and the
+        findings, and the files written; `verbose`, the verdict with its statistics."""
         d = self._raw()
         out = []
         for i, n in enumerate(d["notes"]):
@@ -222,7 +234,12 @@ class Diagnosis:
                                       "floor)" if u is None else
                                       f"{u['ratio_to_floor']:.1f} x the noise floor, "
                                       f"{u['where']}"))
-        out.append(f"verdict: {d['verdict']}")
+        if self.limits is not None and self.limits.groups:
+            out.append("what the data allow (held-out, per run and channel group):")
+            out.append(self.limits.text())
+        if verbose:
+            out.append(f"verdict: {d['verdict']}")
+        out += finding_lines(self.headline, self.findings)
         out += [f"wrote {f}" for f in self.files]
         return "\n".join(out)
 
@@ -251,6 +268,15 @@ class Diagnosis:
         self.files += wrote
         return wrote
 
+
+
+def finding_lines(headline: str, findings: list[dict[str, Any]]) -> list[str]:
+    """The headline and the findings as the terminal shows them: what, then what to do."""
+    out = [f"headline: {headline}"] if headline else []
+    for f in findings:
+        out.append(f"  - {f['what']}" + (f" [{', '.join(f['runs'])}]" if f["runs"] else ""))
+        out.append(f"    -> {f['action']}")
+    return out
 
 
 class DiagnosisInterrupted(KeyboardInterrupt):
@@ -356,6 +382,8 @@ class ModelComparison:
     model: TableModel | None = field(default=None, repr=False, compare=False)
     predictions: dict | None = field(default=None, repr=False, compare=False)
     comparison: Comparison | None = field(default=None, repr=False, compare=False)
+    #: what the data allow the model (`limits.limits`: the black box, the bound)
+    limits: Limits | None = None
 
     @classmethod
     def of(cls, m: TableModel) -> ModelComparison:
@@ -367,7 +395,7 @@ class ModelComparison:
                    {"f_o_hz": ol.f_o, "xi_o": ol.xi_o, "k_o_per_s": ol.k_o}, c.error,
                    c.noise_floor, c.per_run, localisation_text(c), unexplained(c),
                    m.notes_, m.base_, m.flags_, c.bands, display=c.display, model=m,
-                   predictions=pred, comparison=c)
+                   predictions=pred, comparison=c, limits=limits(m.campaign_.runs, pred))
 
     def as_diagnosis(self) -> Diagnosis:
         """The comparison as a diagnosis of no rounds whose one stage is the fitted model,
@@ -399,6 +427,9 @@ class ModelComparison:
                          "noise_floor": self.noise_floor, "per_run": self.per_run,
                          "bands": self.bands, "localisation": self.localisation,
                          "unexplained": self.unexplained, "unexplained_rule": UNEXPLAINED_RULE,
+                         "bound": None if self.limits is None else self.limits.bound,
+                         "reference": None if self.limits is None else self.limits.reference,
+                         "limits": None if self.limits is None else self.limits.to_json(),
                          "notes": self.notes})
 
     def report(self) -> str:
@@ -424,5 +455,15 @@ class ModelComparison:
                                         if u is None else
                                         f"{u['ratio_to_floor']:.1f} x the noise floor, "
                                         f"{u['where']}"))
+        if self.limits is not None and self.limits.groups:
+            lim = self.limits
+            out.append(f"  what the data allow: black box {_pct(lim.reference)}, bound "
+                       f"{_pct(lim.bound)}; the error is noise {_pct(lim.noise)}, within "
+                       f"reach {_pct(lim.within_reach)}, beyond {_pct(lim.beyond)}")
+            out.append(lim.text())
         out += [f"wrote {f}" for f in self.files]
         return "\n".join(out)
+
+
+def _pct(v: float | None) -> str:
+    return "-" if v is None else f"{v:.2%}"

@@ -9,6 +9,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from vtable.diagnose.bounds import base_at_bounds, bounds_verdict
+from vtable.diagnose.findings import findings, headline
+from vtable.diagnose.limits import limits
 from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.prose import unexplained
 from vtable.diagnose.result import Diagnosis, Round, Stage
@@ -91,7 +93,20 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
         parts.append(bounds_verdict(at_bounds, d.calibration))
     if reason:
         parts.append(reason)
-    return Diagnosis(list(d.start.effects), st.start_err, floor, list(st.rounds),
+    preds = st.stages[-1].predictions if st.stages and err is not None else None
+    diag = Diagnosis(list(d.start.effects), st.start_err, floor, list(st.rounds),
                      current, err, "; ".join(parts), st.cmp0, final_cmp,
                      base, unexp, list(d.notes), interrupted,
-                     list(st.stages), list(d.runs), base_at_bounds=at_bounds)
+                     list(st.stages), list(d.runs), base_at_bounds=at_bounds,
+                     limits=None if preds is None else limits(d.runs, preds))
+    lim = diag.limits
+    diag.headline = headline(added, st.start_err, err, floor,
+                             None if lim is None else lim.bound,
+                             None if lim is None else lim.reference, interrupted)
+    notches = {}
+    for r in d.runs:
+        c = stationarity_check(r)
+        if c is not None and c.notch is not None:
+            notches[r.name] = c.notch
+    diag.findings = findings(diag, d.campaign.sensors, notches)
+    return diag

@@ -1,0 +1,144 @@
+"""A diagnosis as a lab engineer reads it: one headline (at most `HEADLINE_MAX` characters:
+what was added, the held-out error before and after, the noise floor, the bound and the
+black box), then findings, each what was seen, on which runs, its numbers and what to do
+(issue 32, deliverable 4; `headline` and `findings` of docs/diagnosis-json.md). The
+statistics behind them stay in the JSON and the verdict (`vtable diagnose --verbose`)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from vtable.diagnose.noise import NOISE_FACTOR
+
+#: the headline's length at most (characters)
+HEADLINE_MAX = 200
+
+#: a model whose held-out error is this many times the black box's leaves dynamics the data
+#: hold unmodelled (the black box has far more unknowns, so 1 is not a bound: a physics model
+#: of the right form should reach it)
+REFERENCE_FACTOR = 1.0
+
+
+def _pct(v: float | None) -> str:
+    return "-" if v is None else f"{100 * v:.3g} %"
+
+
+def headline(added: list[str], start: float | None, final: float | None, floor: float,
+             bound: float | None, reference: float | None, interrupted: bool = False
+             ) -> str:
+    """One sentence: the effects added, the error before -> after, against the floor, the
+    bound and the black box; at most `HEADLINE_MAX` characters (effects beyond what fits
+    are counted, not named)."""
+    tail = f"noise floor {_pct(floor)}"
+    if bound is not None:
+        tail += f", bound {_pct(bound)}"
+    if reference is not None:
+        tail += f", black box {_pct(reference)}"
+    if final is None:
+        return ("interrupted before the starting model was fitted" if interrupted
+                else "no model was fitted")[:HEADLINE_MAX]
+    errors = f"{_pct(start)} -> {_pct(final)}" if added else _pct(final)
+    verdict = ("within the noise" if floor > 0 and final <= NOISE_FACTOR * floor
+               else f"{final / floor:.1f} x the floor" if floor > 0 else "")
+    lead = "interrupted; " if interrupted else ""
+    names = list(added)
+    for keep in range(len(names), -1, -1):
+        what = ", ".join(names[:keep]) + (f" +{len(names) - keep} more" if keep < len(names)
+                                          else "")
+        text = (f"{lead}added {what}: {errors}" if added else f"{lead}nothing added: {errors}")
+        text += f" ({tail})" + (f"; {verdict}" if verdict else "")
+        if len(text) <= HEADLINE_MAX:
+            return text
+    return text[:HEADLINE_MAX]
+
+
+def finding(kind: str, what: str, action: str, runs: list[str] | None = None,
+            numbers: dict[str, Any] | None = None) -> dict[str, Any]:
+    """One finding as docs/diagnosis-json.md holds it."""
+    return {"kind": kind, "runs": list(runs or []), "what": what,
+            "numbers": dict(numbers or {}), "action": action}
+
+
+def findings(d, sensors=(), notches: dict | None = None) -> list[dict[str, Any]]:
+    """The findings of a `Diagnosis` `d` (its rounds, unexplained residual, limits,
+    declarations at their bounds, interruption), the campaign's acceleration channels that
+    disagree with its displacement (`sensors`: `sensors.SensorCheck`) and the notches of
+    x_t/x_c that move within a run (`notches`: run -> (first Hz, last Hz, window s))."""
+    out = []
+    if d.interrupted:
+        out.append(finding("interrupted", f"the diagnosis was interrupted after round "
+                           f"{len(d.rounds)}", "run it again to the end"))
+    for r in d.rounds:
+        if r.added:
+            c = next((c for c in r.ranking if c.effect == r.added), None)
+            params = {} if c is None else {k: float(v) for k, v in c.params.items()
+                                           if isinstance(v, (int, float))}
+            out.append(finding(
+                "effect_added", f"{r.added} lowers the held-out error {_pct(r.before)} -> "
+                f"{_pct(r.error)}", f"keep it in the model (--effects {r.added})",
+                numbers={"error_before": r.before, "error_after": r.error, **params}))
+        for e, why in r.removed.items():
+            out.append(finding("effect_removed", f"{e} removed: {why}", "leave it out"))
+    lim = d.limits
+    if lim is not None and d.final_error is not None:
+        out += _limit_findings(d, lim)
+    for b in d.base_at_bounds:
+        moved = b["fitted"] / b["declared"] - 1 if b["declared"] else None
+        out.append(finding(
+            "declaration_at_bound", f"{b['parameter']} (declared {b['declared']:.4g} "
+            f"{b['unit']}) ends at its {b['side']} bound {b['bound']:.4g}",
+            f"check the declaration; --calibrate {b['calibrate']} lets it move"
+            if b.get("calibrate") else "the bound is at its widest: correct the declaration",
+            numbers={"declared": b["declared"], "fitted": b["fitted"], "bound": b["bound"],
+                     "change": moved}))
+    for c in sensors:
+        out.append(finding("sensor", c.text(), "check the acceleration channel's sensor, "
+                           "its mount and its calibration against the displacement",
+                           runs=[c.run]))
+    for run, (f1, f2, w) in (notches or {}).items():
+        out.append(finding(
+            "softening", f"x_t/x_c's notch moves {f1:.2f} -> {f2:.2f} Hz within the run: the "
+            f"specimen's stiffness changes by {(f2 / f1) ** 2 - 1:+.0%}",
+            "no time-invariant model follows it: fit the run's first part alone, or add an "
+            "effect whose stiffness changes during the run", runs=[run],
+            numbers={"first_hz": f1, "last_hz": f2, "window_s": w}))
+    return out
+
+
+def _limit_findings(d, lim) -> list[dict[str, Any]]:
+    """What the model leaves that a time-invariant model could still fit, what none can,
+    and where a black box does better."""
+    out = []
+    floor = d.noise_floor
+    worse = [g for g in lim.groups if g.reference is not None and g.error is not None
+             and g.error > REFERENCE_FACTOR * g.reference and g.error > NOISE_FACTOR * g.noise]
+    if worse:
+        out.append(finding(
+            "below_reference", "a black box of the command predicts better than the model on "
+            + ", ".join(f"{g.run} {g.group} ({_pct(g.error)} vs {_pct(g.reference)})"
+                        for g in worse[:4]) + (f" and {len(worse) - 4} more"
+                                               if len(worse) > 4 else ""),
+            "dynamics the data hold are missing: look at the within-reach part and the worst "
+            "band; an effect of the right form (the catalog's, or your own) should reach it",
+            runs=sorted({g.run for g in worse}),
+            numbers={"model": lim._mean("error"), "reference": lim.reference}))
+    if d.unexplained is None:
+        return out
+    reach = [g for g in lim.groups if (g.within_reach or 0) > NOISE_FACTOR * floor]
+    if reach:
+        out.append(finding(
+            "within_reach", "a time-invariant model could still fit "
+            + ", ".join(f"{g.run} {g.group} {_pct(g.within_reach)}" for g in reach[:4]),
+            "a missing linear effect (or a change between training and held-out parts): "
+            "try a catalog effect with --effects, or write your own",
+            runs=sorted({g.run for g in reach}), numbers={"within_reach": lim.within_reach}))
+    beyond = [g for g in lim.groups if (g.beyond or 0) > NOISE_FACTOR * floor]
+    if beyond:
+        out.append(finding(
+            "beyond", "no time-invariant model of the command can fit "
+            + ", ".join(f"{g.run} {g.group} {_pct(g.beyond)}" for g in beyond[:4]),
+            "nonlinearity, a change during the run or a disturbance: a nonlinear or "
+            "time-varying effect, or runs split where the specimen changed",
+            runs=sorted({g.run for g in beyond}), numbers={"beyond": lim.beyond,
+                                                           "bound": lim.bound}))
+    return out
