@@ -100,7 +100,7 @@ class GroupLimit:
     black box's error (`reference`, None when the run is too short) and its frame, the
     part no time-invariant model can fit (`bound`; `resolved` False where the split was
     resolution-limited and the sensor noise stands for it), the noise, and, with a model,
-    its error split into within reach and beyond."""
+    its error split into within reach and beyond (None where resolution-limited)."""
 
     run: str
     group: str
@@ -143,13 +143,19 @@ class Limits:
     def noise(self) -> float | None:
         return self._mean("noise")
 
+    def _known(self, name: str) -> float | None:
+        vals = [v for g in self.groups if (v := getattr(g, name)) is not None]
+        return float(np.mean(vals)) if vals else None
+
     @property
     def within_reach(self) -> float | None:
-        return self._mean("within_reach")
+        """The mean over the groups whose split was made."""
+        return self._known("within_reach")
 
     @property
     def beyond(self) -> float | None:
-        return self._mean("beyond")
+        """The mean over the groups whose split was resolved."""
+        return self._known("beyond")
 
     def to_json(self) -> dict:
         return {"reference": self.reference, "bound": self.bound, "noise": self.noise,
@@ -203,9 +209,8 @@ def limits(runs: list[Run], predictions: dict[str, dict[str, np.ndarray]] | None
                     within, inc = stable_split(x[held], y[held] - y_hat[held], y[held],
                                                r.fs, nper)
                     within = min(within, err)  # spectra and time series differ a little
-                    # resolution-limited: what the coherent part leaves
-                    rest = math.sqrt(max(err**2 - within**2, 0.0)) if inc is None else inc
-                    beyond = math.sqrt(max(rest**2 - noise**2, 0.0))
+                    if inc is not None:  # resolution-limited: not known (None)
+                        beyond = math.sqrt(max(inc**2 - noise**2, 0.0))
             resolved = inc is not None
             bound = max(inc, noise) if resolved else noise
             out.append(GroupLimit(r.name, g, None if ref is None else ref[0],
