@@ -91,6 +91,18 @@ def _sensor_filter(x: np.ndarray, dt: float, cutoff_hz: float) -> np.ndarray:
     return signal.sosfilt(sos, x, axis=0)
 
 
+def _mount(x: np.ndarray, dt: float, f_m: float, zeta_m: float, f_c: float) -> np.ndarray:
+    """The accelerometer's mount (poles of s² + 2ζω_m s + ω_m², unit static gain) times a
+    2-pole Butterworth at f_c, as poles and gain, discretised exactly for inputs linear
+    between samples (first-order hold)."""
+    wm = 2 * np.pi * f_m
+    _, pb, kb = signal.butter(2, 2 * np.pi * f_c, analog=True, output="zpk")
+    poles = np.concatenate([np.roots([1.0, 2 * zeta_m * wm, wm * wm]), pb])
+    A, B, C, D = signal.zpk2ss([], poles, kb * wm * wm)
+    Ad, Bd, Cd, Dd, _ = signal.cont2discrete((A, B, C, D), dt, method="foh")
+    return signal.sosfilt(signal.zpk2sos(*signal.ss2zpk(Ad, Bd, Cd, Dd)), x)
+
+
 def simulate(table: Table, spec: Specimen, cmd: Command, fs: float = 256.0) -> Result:
     """Run `cmd` on `table` carrying `spec`; channels sampled at `fs` (any rate: the
     internal RK4 step is 1/(fs·n) ≤ 0.5 ms, smaller if `stable_step` asks)."""
@@ -102,7 +114,8 @@ def simulate(table: Table, spec: Specimen, cmd: Command, fs: float = 256.0) -> R
     ac = cmd.acceleration(th) if built.p[m.P_TA] != 0 and not built.fl[m.F_REFG] else (
         np.zeros_like(th))
     filt = table.effects.get("sensor_filter")
-    every = 1 if filt else n_sub
+    mount = table.effects.get("sensor_mount")
+    every = 1 if filt or mount else n_sub
     ndelay = round(2 * built.delay / dt) if built.delay > 0 else 0
     s0 = np.zeros(built.n_state)
     S, X, D = m.integrate(built.p, built.fl, built.Ms, built.Ks, built.Cs, built.hs, built.c2s,
@@ -110,10 +123,14 @@ def simulate(table: Table, spec: Specimen, cmd: Command, fs: float = 256.0) -> R
     if not np.all(np.isfinite(S)):
         raise TruthError("simulate: the response diverged (unstable configuration)")
     ch, internal = _channels(built, S, X, D)
+    if mount:
+        ch["avg_hacc"] = _mount(ch["avg_hacc"], dt, mount["f_m"], mount["zeta_m"], mount["f_c"])
     if filt:
         names = list(ch)
         arr = _sensor_filter(np.column_stack([ch[k] for k in names]), dt, filt["cutoff_hz"])
-        ch = {k: arr[::n_sub, j] for j, k in enumerate(names)}
+        ch = {k: arr[:, j] for j, k in enumerate(names)}
+    if filt or mount:
+        ch = {k: v[::n_sub] for k, v in ch.items()}
         internal = {k: v[::n_sub] for k, v in internal.items()}
     t = np.arange(n_out) / fs
     out = {"h_span": xc[0:2 * nsteps + 1:2 * n_sub]}

@@ -28,6 +28,10 @@ EFFECTS: dict[str, dict[str, tuple[str, float | None, float, float]]] = {
     "amplitude_dependent_damping": {"gamma": ("1/in", 0.01, 0.0, 5.0)},
     "foundation_compliance": {"f_f": ("Hz", 10.0, 0.5, 200.0), "xi_f": ("1", 0.1, 0.0, 2.0)},
     "sensor_filter": {"cutoff_hz": ("Hz", 100.0, 1.0, 1000.0)},
+    # the table accelerometer on a mount (resonance, damping) behind its conditioner's
+    # second-order Butterworth low-pass; only avg_hacc sees it
+    "sensor_mount": {"f_m": ("Hz", 60.0, 1.0, 1000.0), "zeta_m": ("1", 0.05, 1e-3, 2.0),
+                     "f_c": ("Hz", 100.0, 1.0, 1000.0)},
     # ---- outside vtable's catalog ----
     # a dead band between piston and platen: force passes only beyond ±gap/2
     "backlash": {"gap_in": ("in", 0.01, 0.0, 1.0)},

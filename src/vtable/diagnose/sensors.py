@@ -27,6 +27,7 @@ import scipy.signal
 
 from vtable.diagnose.groups import group_signal
 from vtable.diagnose.sampling import BANDS
+from vtable.effects.sensor import mount_ba
 from vtable.runs.model import Run
 
 #: the two channels are compared where their coherence is at least this
@@ -72,11 +73,10 @@ class SensorCheck:
 
 
 def mount_ratio(f: np.ndarray, f_m: float, z_m: float, f_c: float) -> np.ndarray:
-    """R(f) of the module docstring."""
-    s = 2j * math.pi * np.asarray(f, dtype=float)
-    wm, wc = 2 * math.pi * f_m, 2 * math.pi * f_c
-    return wm**2 / (s**2 + 2 * z_m * wm * s + wm**2) * wc**2 / (s**2 + math.sqrt(2) * wc * s
-                                                                 + wc**2)
+    """R(f) of the module docstring (`vtable.effects.sensor.mount_ba`: the law the
+    sensor_mount effect applies)."""
+    w = 2 * math.pi * np.asarray(f, dtype=float)
+    return scipy.signal.freqs(*mount_ba(f_m, z_m, f_c), worN=w)[1]
 
 
 def sensor_check(run: Run) -> SensorCheck | None:

@@ -160,8 +160,10 @@ class Assembly(Protocol):
     def add_storey_quadratic_damper(self, c2: float) -> None:
         """F = -c₂|v|v on every storey's drift velocity."""
 
-    def add_output_filter(self, fn: Callable[[Any, float], Any]) -> None:
-        """`fn(x, fs) -> x` applied to every measured response channel (sampled at fs)."""
+    def add_output_filter(self, fn: Callable[[Any, float], Any],
+                          channels: Sequence[str] | None = None) -> None:
+        """`fn(x, fs) -> x` applied to every measured response channel (sampled at fs), or
+        to those named in `channels` only (e.g. an accelerometer's mount)."""
 
 
 class Effect:

@@ -1,6 +1,7 @@
-"""The measurement chain's anti-aliasing filter (report §2.3: 100 Hz analog low-pass
-before sampling), applied the same way to the virtual table's and the reduced model's
-response channels: the analog 4-pole Butterworth (order assumed) applied exactly in the
+"""The measurement chain's analog filters, applied the same way to the virtual table's and
+the reduced model's response channels: the anti-aliasing filter (report §2.3: 100 Hz analog
+low-pass before sampling), and an accelerometer's mount and conditioner (`mount_ba`). The
+anti-aliasing filter is the analog 4-pole Butterworth (order assumed) applied exactly in the
 frequency domain (an FFT zero-padded by ten periods of the cut-off) at the simulation rate,
 before decimation. Being the analog response, the result does not depend on the simulation
 rate."""
@@ -17,13 +18,43 @@ ORDER = 4
 
 
 @lru_cache(maxsize=64)
-def _response(nfft: int, fs: float, cutoff_hz: float) -> np.ndarray:
-    """The analog filter's response on the FFT's frequencies (read-only: shared)."""
-    b, a = scipy.signal.butter(ORDER, 2 * np.pi * cutoff_hz, analog=True)
+def _response(nfft: int, fs: float, ba: tuple[tuple[float, ...], tuple[float, ...]]
+              ) -> np.ndarray:
+    """The analog filter (b, a)'s response on the FFT's frequencies (read-only: shared)."""
     w = 2 * np.pi * np.fft.rfftfreq(nfft, 1.0 / fs)
-    _, H = scipy.signal.freqs(b, a, worN=w)
+    _, H = scipy.signal.freqs(*ba, worN=w)
     H.flags.writeable = False
     return H
+
+
+def butterworth_ba(cutoff_hz: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The anti-aliasing low-pass: an analog `ORDER`-pole Butterworth at `cutoff_hz`."""
+    b, a = scipy.signal.butter(ORDER, 2 * np.pi * cutoff_hz, analog=True)
+    return tuple(map(float, b)), tuple(map(float, a))
+
+
+def mount_ba(f_m: float, z_m: float, f_c: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """An accelerometer on a mount of one resonance (f_m Hz, damping ratio z_m) behind its
+    conditioner's second-order Butterworth low-pass at f_c Hz, as an analog (b, a): what
+    the acceleration channel reads over the platen's acceleration,
+
+        R(s) = ω_m² / (s² + 2 ζ_m ω_m s + ω_m²) · ω_c² / (s² + √2 ω_c s + ω_c²)."""
+    wm, wc = 2 * np.pi * f_m, 2 * np.pi * f_c
+    a = np.polymul([1.0, 2 * z_m * wm, wm**2], [1.0, np.sqrt(2) * wc, wc**2])
+    return (float(wm**2 * wc**2),), tuple(map(float, a))
+
+
+def analog_filter(x: np.ndarray, fs: float,
+                  ba: tuple[tuple[float, ...], tuple[float, ...]], slowest_hz: float
+                  ) -> np.ndarray:
+    """`x` sampled at `fs` through the analog filter `ba`, exactly in the frequency domain
+    (zero-padded by `PAD_PERIODS` periods of `slowest_hz`, its slowest pole's frequency)."""
+    x = np.asarray(x, dtype=float)
+    n = len(x)
+    nfft = scipy.fft.next_fast_len(n + max(64, int(np.ceil(PAD_PERIODS * fs / slowest_hz))),
+                                   real=True)
+    H = _response(nfft, float(fs), ba)
+    return scipy.fft.irfft(scipy.fft.rfft(x, nfft) * H, nfft)[:n]
 
 
 #: zero padding, in periods of the cut-off: the filter's slowest poles decay as
@@ -32,9 +63,14 @@ PAD_PERIODS = 10.0
 
 
 def sensor_filter(x: np.ndarray, fs: float, cutoff_hz: float) -> np.ndarray:
-    x = np.asarray(x, dtype=float)
-    n = len(x)
-    nfft = scipy.fft.next_fast_len(n + max(64, int(np.ceil(PAD_PERIODS * fs / cutoff_hz))),
-                                   real=True)
-    H = _response(nfft, float(fs), float(cutoff_hz))
-    return scipy.fft.irfft(scipy.fft.rfft(x, nfft) * H, nfft)[:n]
+    """`x` through the anti-aliasing low-pass (`butterworth_ba`)."""
+    return analog_filter(x, fs, butterworth_ba(float(cutoff_hz)), cutoff_hz)
+
+
+def mount_filter(x: np.ndarray, fs: float, f_m: float, z_m: float, f_c: float
+                 ) -> np.ndarray:
+    """The platen's acceleration `x` as an accelerometer on a mount reads it (`mount_ba`);
+    the mount's resonance decays over 1/(ζ_m ω_m), so the padding counts its periods by
+    the damping too."""
+    slowest = min(f_m * max(z_m, 1e-3) * 2 * np.pi / 2.6, f_c)
+    return analog_filter(x, fs, mount_ba(float(f_m), float(z_m), float(f_c)), slowest)

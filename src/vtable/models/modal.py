@@ -56,8 +56,9 @@ class ModalOutputs:
         Y = simulate_modal(xc, phi, g0, g1, Cm, D, every)
         out = {c: Y[i] for i, c in enumerate(names)}
         if filters:
-            for fn in filters:
-                out = {c: fn(v, 1.0 / h) if np.any(v) else v for c, v in out.items()}
+            for fn, only in filters:
+                out = {c: fn(v, 1.0 / h) if np.any(v) and (only is None or c in only) else v
+                       for c, v in out.items()}
             out = {c: v[::up * step] for c, v in out.items()}
         return {c: out[a] for c, a in alias.items()}
 

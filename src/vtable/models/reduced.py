@@ -76,7 +76,8 @@ class ReducedAssembly:
         self.loops: list[tuple[str, float, float, float, float]] = []
         self.quadratic: list[tuple[str, float]] = []
         self.elements: list[ForceElement] = []
-        self.filters: list[Callable] = []
+        #: (fn(x, fs), the channels it applies to or None: all)
+        self.filters: list[tuple[Callable, frozenset | None]] = []
         self.moving, self.reaction = "x", None
         self.max_step = SIM_DT
         self.servo = phys.base_hydraulics(ph, vt)
@@ -167,8 +168,8 @@ class ReducedAssembly:
         for s in self.storeys:
             self.quadratic.append((s, c2))
 
-    def add_output_filter(self, fn: Callable) -> None:
-        self.filters.append(fn)
+    def add_output_filter(self, fn: Callable, channels=None) -> None:
+        self.filters.append((fn, None if channels is None else frozenset(channels)))
 
     # -- the matrices ------------------------------------------------------------------
     def matrices(self):
@@ -378,9 +379,11 @@ class ReducedModel(ModalOutputs):
         integration: `histories`)."""
         h, up, _xc, Q, Qd, Qdd, F, PL = self.histories(t, x_c)
         out = self._channels(Q, Qd, Qdd, F, PL)
-        for fn in self.assembly.filters:  # each distinct signal once (zeros stay zeros)
-            done: dict[int, np.ndarray] = {}
+        for fn, only in self.assembly.filters:  # each distinct signal once (zeros stay
+            done: dict[int, np.ndarray] = {}   # zeros), on its channels
             for k, v in out.items():
+                if only is not None and k not in only:
+                    continue
                 if id(v) not in done:
                     done[id(v)] = fn(v, 1.0 / h) if np.any(v) else v
                 out[k] = done[id(v)]

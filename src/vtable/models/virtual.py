@@ -55,7 +55,8 @@ class VirtualAssembly:
         self.stages: list[tuple[Stage, dict[str, float]]] = []
         self.table = TableView.of(self.vt, piston_area=base.area)
         self.controllers: list = []
-        self.filters: list[Callable] = []
+        #: (fn(x, fs), the channels it applies to or None: all)
+        self.filters: list[tuple[Callable, frozenset | None]] = []
         self.n_actuators = len(self.vt.group("horizontal"))
         self.max_step = MAX_STEP
         if vt.valve_lag:  # a lab table's own servovalve lag
@@ -136,8 +137,8 @@ class VirtualAssembly:
         self.controllers.append(OpenSeesSpecimen(load_model(spec.model), depth,
                                                  float(self.ts.spec.option.timestep)))
 
-    def add_output_filter(self, fn: Callable) -> None:
-        self.filters.append(fn)
+    def add_output_filter(self, fn: Callable, channels=None) -> None:
+        self.filters.append((fn, None if channels is None else frozenset(channels)))
 
     # -- the model ---------------------------------------------------------------------
     def finalize(self) -> tuple[BuiltModel, list]:

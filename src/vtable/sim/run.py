@@ -71,7 +71,7 @@ def standard_physics(specimen: Specimen, extra: Mapping[str, Mapping[str, float]
 
 
 def setup(ph: phys.Physics, vt: VirtualTable | None = None, timestep: float = MAX_STEP
-          ) -> tuple[BuiltModel, list, list[Callable]]:
+          ) -> tuple[BuiltModel, list, list[tuple[Callable, frozenset | None]]]:
     """(built model, controllers, output filters) realising `ph` on `vt` at `timestep`."""
     va = VirtualAssembly(ph, vt or virtual_table(), timestep)
     ph.apply(va, "virtual")
@@ -147,8 +147,9 @@ def simulate(physics: phys.Physics, command: Command, rate: float = OUTPUT_FS, *
                else {}),
             "specimen": specimen_table(spec), "command": command.table}
     run = result_run(res, meta, name or command.name, full_state=full_state)
-    for fn in filters:  # the effects' output filters, once, on the measured channels
+    for fn, only in filters:  # the effects' output filters, once, on measured channels
         run.channels = {c: v if c in COMMAND_CHANNELS or c.startswith("state_")
+                        or (only is not None and c not in only)
                         else fn(v, 1.0 / dt) for c, v in run.channels.items()}
     if filters:
         run.channels = {c: v[::k] for c, v in run.channels.items()}
