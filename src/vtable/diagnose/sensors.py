@@ -63,7 +63,8 @@ class SensorCheck:
         ratios = ", ".join(f"{m:.2f} at {b}" for b, m, _, _ in self.bands)
         out = (f"{self.run}: the table acceleration is not the second derivative of the "
                f"table displacement (|ẍ/s²x| {ratios}): the two sensors do not see one rigid "
-               "platen, and no effect on the platen can fit both channels")
+               "platen, and no effect on the platen can fit both channels (sensor_mount, "
+               "a filter on the acceleration channel alone, can)")
         if self.mount is not None:
             f_m, z_m, f_c = self.mount
             out += (f"; as an accelerometer on a mount, fitted: resonance {f_m:.1f} Hz, "
