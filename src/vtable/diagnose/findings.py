@@ -59,11 +59,12 @@ def finding(kind: str, what: str, action: str, runs: list[str] | None = None,
             "numbers": dict(numbers or {}), "action": action}
 
 
-def findings(d, sensors=(), notches: dict | None = None) -> list[dict[str, Any]]:
+def findings(d, sensors=(), notches: dict | None = None, plants=()) -> list[dict[str, Any]]:
     """The findings of a `Diagnosis` `d` (its rounds, unexplained residual, limits,
     declarations at their bounds, interruption), the campaign's acceleration channels that
     disagree with its displacement (`sensors`: `sensors.SensorCheck`) and the notches of
-    x_t/x_c that move within a run (`notches`: run -> (first Hz, last Hz, window s))."""
+    x_t/x_c that move within a run (`notches`: run -> (first Hz, last Hz, window s)) and
+    the pairs of runs that do not hold one plant (`plants`: `plants.PlantDifference`)."""
     out = []
     if d.interrupted:
         out.append(finding("interrupted", f"the diagnosis was interrupted after round "
@@ -95,6 +96,13 @@ def findings(d, sensors=(), notches: dict | None = None) -> list[dict[str, Any]]
         out.append(finding("sensor", c.text(), "check the acceleration channel's sensor, "
                            "its mount and its calibration against the displacement",
                            runs=[c.run]))
+    for p in plants:
+        out.append(finding(
+            "plants", p.text(), "a specimen that changed between the runs: declare each "
+            "state ([specimen] state) and diagnose them apart; or an amplitude dependence "
+            "no effect in the model follows", runs=list(p.runs),
+            numbers={"z2_mean": p.z2_mean, "z_max": p.z_max, "lines": p.lines,
+                     "at_hz": p.at_hz, "relative": p.relative}))
     for run, (f1, f2, w) in (notches or {}).items():
         out.append(finding(
             "softening", f"x_t/x_c's notch moves {f1:.2f} -> {f2:.2f} Hz within the run: the "

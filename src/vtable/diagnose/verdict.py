@@ -12,6 +12,7 @@ from vtable.diagnose.bounds import base_at_bounds, bounds_verdict
 from vtable.diagnose.findings import findings, headline
 from vtable.diagnose.limits import limits
 from vtable.diagnose.noise import NOISE_FACTOR
+from vtable.diagnose.plants import plant_differences
 from vtable.diagnose.prose import unexplained
 from vtable.diagnose.result import Diagnosis, Round, Stage
 from vtable.diagnose.stationarity import stationarity_check
@@ -108,5 +109,6 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
         c = stationarity_check(r)
         if c is not None and c.notch is not None:
             notches[r.name] = c.notch
-    diag.findings = findings(diag, d.campaign.sensors, notches)
+    plants = [] if preds is None else plant_differences(d.runs, preds)
+    diag.findings = findings(diag, d.campaign.sensors, notches, plants)
     return diag
