@@ -204,6 +204,13 @@ def _cases() -> list[Case]:
     out.append(C("pump_drop", "outside",
                  {"valve_flow_nonlinearity": {"supply_pressure": 3000.0},
                   "pump_pressure_drop": {"drop_psi_per_gpm": 5.0}}, **vary()))
+    # the table accelerometer on a mount (issue 32), appended so that no earlier case's
+    # rate, noise or seed changes: a stiff mount in front of the §2.3 filter, and the one
+    # LNEC's run shows (tests/test_sensor_mount.py)
+    for j, dose in enumerate(({"f_m": 40.0, "zeta_m": 0.1, "f_c": 100.0},
+                              {"f_m": 17.0, "zeta_m": 0.09, "f_c": 30.0})):
+        out.append(C(f"sensor_mount_{j + 1}", "in_catalog", {"sensor_mount": dose},
+                     **vary(record="elcentro" if j == 0 else "synthetic")))
     return out
 
 
