@@ -71,3 +71,15 @@ def test_a_hidden_mount_is_found_with_the_catalog(tmp_path_factory):
     assert d.final_error < 2 * d.noise_floor
     assert d.start_error > 3 * d.final_error
     assert len(d.headline) <= 200 and d.headline.startswith("added sensor_mount: ")
+
+
+def test_not_tried_where_the_table_channels_agree():
+    """Runs whose table acceleration is the second derivative of their displacement show no
+    mount: the diagnosis skips it, saying why (the virtual table's pitch campaign)."""
+    from conftest import effect_diagnosis
+
+    _, diag, d = effect_diagnosis(("pitch_flexibility",))
+    assert not diag.campaign.sensors
+    for r in d.rounds:
+        assert "the runs show no mount" in r.skipped["sensor_mount"]
+    assert "sensor_mount" not in [c.effect for r in d.rounds for c in r.ranking]

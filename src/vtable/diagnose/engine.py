@@ -248,7 +248,8 @@ class Diagnoser:
             for e in self.catalog:
                 if current.has(e):
                     continue
-                why = self._inapplicable(current.with_effect(e))
+                why = self._inapplicable(current.with_effect(e)) or \
+                    effect(e).unsupported(self.campaign)
                 if why:
                     skipped[e] = why
                 else:

@@ -186,6 +186,13 @@ class Effect:
         """How the effect enters the virtual table (default: `apply`)."""
         self.apply(v, p)
 
+    def unsupported(self, campaign: Any) -> str | None:
+        """Why the campaign's runs themselves hold nothing this effect could fit, or None
+        (the default). Such an effect is not tried in a diagnosis (the round lists it
+        under `skipped` with this reason). `campaign` is the diagnosis's prepared campaign
+        (`vtable.diagnose.campaign.Campaign`: its runs and the checks made on them)."""
+        return None
+
     def unseen(self, values: dict[str, float],
                predictions: Mapping[str, Mapping[str, Any]]) -> str | None:
         """Why the effect at its fitted `values` (its units) does not act in the fitted

@@ -35,6 +35,15 @@ class SensorMount(Effect):
               Param("f_c", "Hz", 100.0, 5.0, 400.0, log=True, source="§2.3 (100 Hz analog)",
                     doc="the conditioner's low-pass (second-order Butterworth)"))
 
+    def unsupported(self, campaign):
+        """Not tried where every run's table acceleration is the second derivative of its
+        table displacement (`vtable.diagnose.sensors`: no run in `campaign.sensors`, the
+        runs whose two table channels disagree): the runs show no mount to fit."""
+        if campaign.sensors:
+            return None
+        return ("no run's table acceleration departs from the second derivative of its table "
+                "displacement (or no run has both): the runs show no mount")
+
     def apply(self, m, p):
         f_m, z_m, f_c = p["f_m"], p["zeta_m"], p["f_c"]
         m.add_output_filter(lambda x, fs: mount_filter(x, fs, f_m, z_m, f_c), CHANNELS)
