@@ -12,7 +12,8 @@ whole command; the best of 256-, 512- and 1024-point frames (`FRAMES`). It is no
 a physics model of the right form has far fewer unknowns and should do at least as well.
 
 The bound is the part of y incoherent with the command on the held-out segment itself
-(`stationarity.stable_split`; on coarser frames when the segment is short, `_frames`),
+(`stationarity.stable_split`'s split, `_Split`; on coarser frames when the segment is
+short, `_frames`),
 split on the model's residual: for a linear model ŷ is a time-invariant function of x_c,
 so the incoherent part is y's own and no linear time-invariant model of the command can fit
 it; the model has taken out the sharp peak and notch that bias the split at a finite
@@ -41,7 +42,7 @@ import scipy.signal
 from vtable.diagnose.groups import group_prediction, group_signal, run_groups
 from vtable.diagnose.noise import group_noise
 from vtable.diagnose.sampling import segments
-from vtable.diagnose.stationarity import MIN_AVERAGES, _nperseg, stable_split
+from vtable.diagnose.stationarity import MIN_AVERAGES, STABLE, _nperseg
 from vtable.diagnose.statistics import nrms
 from vtable.ident.frames import averages
 from vtable.runs.model import Run
@@ -72,17 +73,22 @@ def _frames(n: int, fs: float) -> int | None:
 
 
 def black_box(x: np.ndarray, y: np.ndarray, train: slice, held: slice,
-              frames: tuple[int, ...] = FRAMES) -> tuple[float, int, np.ndarray] | None:
+              frames: tuple[int, ...] = FRAMES, _sxx: dict | None = None
+              ) -> tuple[float, int, np.ndarray] | None:
     """The reference predictor's held-out NRMS error, its frame length and its prediction
     of y: the H1 of y over x on `train` as a centred FIR, played on the whole command and
     scored on `held` (module docstring); None when the training segment is shorter than
-    two of every frame."""
+    two of every frame. `_sxx`: the command's spectra by frame length, kept across a run's
+    groups."""
     best = None
+    cache = {} if _sxx is None else _sxx
     for n in frames:
         if train.stop - (train.start or 0) < 2 * n:
             continue
         _, s_xy = scipy.signal.csd(x[train], y[train], nperseg=n)
-        _, s_xx = scipy.signal.welch(x[train], nperseg=n)
+        if n not in cache:
+            cache[n] = scipy.signal.welch(x[train], nperseg=n)[1]
+        s_xx = cache[n]
         # lines where the command has no power (`QUIET` below its peak: beyond its band)
         # carry no estimate: there H1 is noise over nothing, and it is left out (zero)
         s_xx = np.where(s_xx > QUIET * np.max(s_xx), s_xx, np.inf)
@@ -176,6 +182,35 @@ class Limits:
         return "\n".join(out)
 
 
+class _Split:
+    """`stationarity.stable_split` on one run's held-out command `x`, its spectrum taken
+    once for all the run's groups: of a residual r over a measured y, the RMS of r's parts
+    coherent (|S_xr|²/S_xx) and incoherent (S_rr − |S_xr|²/S_xx) with x over y's, the
+    incoherent None when halving the resolution raises it by more than `STABLE`."""
+
+    def __init__(self, x: np.ndarray, fs: float, nper: int) -> None:
+        self.x, self.fs, self.nper = x, fs, nper
+        self._sxx = {n: scipy.signal.welch(x, fs, nperseg=n)[1] for n in (nper, nper // 2)}
+
+    def _at(self, r: np.ndarray, y: np.ndarray, n: int) -> tuple[float, float]:
+        f, s_rr = scipy.signal.welch(r, self.fs, nperseg=n)
+        _, s_yy = scipy.signal.welch(y, self.fs, nperseg=n)
+        _, s_xr = scipy.signal.csd(self.x, r, self.fs, nperseg=n)
+        s_xx = self._sxx[n]
+        k = (f > 0) & (s_xx > 0) & (s_rr > 0)
+        total = float(np.sum(s_yy[f > 0]))
+        if total <= 0:
+            return 0.0, 0.0
+        coh = np.minimum(np.abs(s_xr[k]) ** 2 / (s_xx[k] * s_rr[k]), 1.0)
+        return (float(np.sqrt(np.sum(coh * s_rr[k]) / total)),
+                float(np.sqrt(np.sum((1 - coh) * s_rr[k]) / total)))
+
+    def __call__(self, r: np.ndarray, y: np.ndarray) -> tuple[float, float | None]:
+        fine = self._at(r, y, self.nper)
+        coarse = self._at(r, y, self.nper // 2)
+        return fine if coarse[1] <= STABLE * fine[1] else (fine[0], None)
+
+
 def _pct(v: float | None) -> str:
     return "-" if v is None else f"{v:.2%}"
 
@@ -193,21 +228,22 @@ def limits(runs: list[Run], predictions: dict[str, dict[str, np.ndarray]] | None
         train, held = segments(r)
         sigma = group_noise(r)
         nper = _frames(held.stop - held.start, r.fs)
+        split = None if nper is None else _Split(x[held], r.fs, nper)
+        sxx: dict = {}
         for g in run_groups(r):
             y = group_signal(r, g)
             if y is None:
                 continue
             rms = float(np.sqrt(np.mean(y[held] ** 2)))
             noise = min(sigma.get(g, 0.0) / rms, 1.0) if rms > 0 else 1.0
-            ref = black_box(x, y, train, held)
+            ref = black_box(x, y, train, held, _sxx=sxx)
             p = None if predictions is None else predictions.get(r.name)
             y_hat = None if p is None else group_prediction(p, r, g)
             inc = err = within = beyond = None
             if y_hat is not None:  # the model's residual: coherent, and incoherent
                 err = nrms(y_hat[held], y[held])
-                if nper is not None:
-                    within, inc = stable_split(x[held], y[held] - y_hat[held], y[held],
-                                               r.fs, nper)
+                if split is not None:
+                    within, inc = split(y[held] - y_hat[held], y[held])
                     within = min(within, err)  # spectra and time series differ a little
                     if inc is not None:  # resolution-limited: not known (None)
                         beyond = math.sqrt(max(inc**2 - noise**2, 0.0))
