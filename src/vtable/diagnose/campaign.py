@@ -85,6 +85,9 @@ class Campaign:
     targets: list[tuple[Run, str, np.ndarray, float]] = field(repr=False)
     #: runs whose table acceleration and displacement disagree (`sensors.sensor_check`)
     sensors: list = field(default_factory=list)
+    #: run -> (first Hz, last Hz, window s) of an x_t/x_c notch that moves within the run
+    #: (`stationarity.stationarity_check`)
+    notches: dict = field(default_factory=dict)
 
     @classmethod
     def of(cls, runs: Sequence[Run] | Campaign) -> Campaign:
@@ -102,15 +105,17 @@ class Campaign:
         notes, floor = campaign_notes(a), noise_floor(a)
         sensors = [c for c in map(sensor_check, a) if c is not None and not c.agree]
         notes += [c.text() for c in sensors]
+        notches = {}
         for c in map(stationarity_check, a):  # a notch that moves: the specimen changes
             if c is not None and c.notch is not None:
                 notes.append(c.text(floor, NOISE_FACTOR))
+                notches[c.run] = c.notch
         if floor < MODEL_RESOLUTION:
             notes.append(f"the runs' sensor noise ({floor:.2%} of the signals) is below what "
                          f"the reduced model resolves ({MODEL_RESOLUTION:.1%}, its agreement "
                          "with the multibody table); that is the noise floor used")
             floor = MODEL_RESOLUTION
-        return cls(list(runs), a, notes, floor, targets, sensors)
+        return cls(list(runs), a, notes, floor, targets, sensors, notches)
 
     @property
     def noise(self) -> dict[str, dict[str, float]]:

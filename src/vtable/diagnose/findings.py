@@ -132,21 +132,25 @@ def _limit_findings(d, lim) -> list[dict[str, Any]]:
             numbers={"model": lim._mean("error"), "reference": lim.reference}))
     if d.unexplained is None:
         return out
-    reach = [g for g in lim.groups if (g.within_reach or 0) > NOISE_FACTOR * floor]
-    if reach:
-        out.append(finding(
-            "within_reach", "a time-invariant model could still fit "
-            + ", ".join(f"{g.run} {g.group} {_pct(g.within_reach)}" for g in reach[:4]),
-            "a missing linear effect (or a change between training and held-out parts): "
-            "try a catalog effect with --effects, or write your own",
-            runs=sorted({g.run for g in reach}), numbers={"within_reach": lim.within_reach}))
-    beyond = [g for g in lim.groups if (g.beyond or 0) > NOISE_FACTOR * floor]
-    if beyond:
-        out.append(finding(
-            "beyond", "no time-invariant model of the command can fit "
-            + ", ".join(f"{g.run} {g.group} {_pct(g.beyond)}" for g in beyond[:4]),
-            "nonlinearity, a change during the run or a disturbance: a nonlinear or "
-            "time-varying effect, or runs split where the specimen changed",
-            runs=sorted({g.run for g in beyond}), numbers={"beyond": lim.beyond,
-                                                           "bound": lim.bound}))
+    out += _part(lim, "within_reach", NOISE_FACTOR * floor,
+                 "a time-invariant model could still fit ",
+                 "a missing linear effect (or a change between training and held-out parts): "
+                 "try a catalog effect with --effects, or write your own", {})
+    out += _part(lim, "beyond", NOISE_FACTOR * floor,
+                 "no time-invariant model of the command can fit ",
+                 "nonlinearity, a change during the run or a disturbance: a nonlinear or "
+                 "time-varying effect, or runs split where the specimen changed",
+                 {"bound": lim.bound})
     return out
+
+
+def _part(lim, name: str, above: float, lead: str, action: str,
+          numbers: dict[str, Any]) -> list[dict[str, Any]]:
+    """One finding (kind `name`) naming the groups whose part `name` of the model's error
+    (`limits.GroupLimit`) is above `above`, or none."""
+    groups = [g for g in lim.groups if (getattr(g, name) or 0) > above]
+    if not groups:
+        return []
+    what = lead + ", ".join(f"{g.run} {g.group} {_pct(getattr(g, name))}" for g in groups[:4])
+    return [finding(name, what, action, runs=sorted({g.run for g in groups}),
+                    numbers={name: getattr(lim, name), **numbers})]

@@ -12,8 +12,8 @@ whole command; the best of 256-, 512- and 1024-point frames (`FRAMES`). It is no
 a physics model of the right form has far fewer unknowns and should do at least as well.
 
 The bound is the part of y incoherent with the command on the held-out segment itself
-(`stationarity.stable_split`'s split, `_Split`; on coarser frames when the segment is
-short, `_frames`),
+(`stationarity.CoherentSplit`, the command's spectra taken once per run; on coarser
+frames when the segment is short, `_frames`),
 split on the model's residual: for a linear model ŷ is a time-invariant function of x_c,
 so the incoherent part is y's own and no linear time-invariant model of the command can fit
 it; the model has taken out the sharp peak and notch that bias the split at a finite
@@ -42,7 +42,7 @@ import scipy.signal
 from vtable.diagnose.groups import group_prediction, group_signal, run_groups
 from vtable.diagnose.noise import group_noise
 from vtable.diagnose.sampling import segments
-from vtable.diagnose.stationarity import MIN_AVERAGES, STABLE, _nperseg
+from vtable.diagnose.stationarity import MIN_AVERAGES, CoherentSplit, _nperseg
 from vtable.diagnose.statistics import nrms
 from vtable.ident.frames import averages
 from vtable.runs.model import Run
@@ -182,35 +182,6 @@ class Limits:
         return "\n".join(out)
 
 
-class _Split:
-    """`stationarity.stable_split` on one run's held-out command `x`, its spectrum taken
-    once for all the run's groups: of a residual r over a measured y, the RMS of r's parts
-    coherent (|S_xr|²/S_xx) and incoherent (S_rr − |S_xr|²/S_xx) with x over y's, the
-    incoherent None when halving the resolution raises it by more than `STABLE`."""
-
-    def __init__(self, x: np.ndarray, fs: float, nper: int) -> None:
-        self.x, self.fs, self.nper = x, fs, nper
-        self._sxx = {n: scipy.signal.welch(x, fs, nperseg=n)[1] for n in (nper, nper // 2)}
-
-    def _at(self, r: np.ndarray, y: np.ndarray, n: int) -> tuple[float, float]:
-        f, s_rr = scipy.signal.welch(r, self.fs, nperseg=n)
-        _, s_yy = scipy.signal.welch(y, self.fs, nperseg=n)
-        _, s_xr = scipy.signal.csd(self.x, r, self.fs, nperseg=n)
-        s_xx = self._sxx[n]
-        k = (f > 0) & (s_xx > 0) & (s_rr > 0)
-        total = float(np.sum(s_yy[f > 0]))
-        if total <= 0:
-            return 0.0, 0.0
-        coh = np.minimum(np.abs(s_xr[k]) ** 2 / (s_xx[k] * s_rr[k]), 1.0)
-        return (float(np.sqrt(np.sum(coh * s_rr[k]) / total)),
-                float(np.sqrt(np.sum((1 - coh) * s_rr[k]) / total)))
-
-    def __call__(self, r: np.ndarray, y: np.ndarray) -> tuple[float, float | None]:
-        fine = self._at(r, y, self.nper)
-        coarse = self._at(r, y, self.nper // 2)
-        return fine if coarse[1] <= STABLE * fine[1] else (fine[0], None)
-
-
 def _pct(v: float | None) -> str:
     return "-" if v is None else f"{v:.2%}"
 
@@ -228,7 +199,7 @@ def limits(runs: list[Run], predictions: dict[str, dict[str, np.ndarray]] | None
         train, held = segments(r)
         sigma = group_noise(r)
         nper = _frames(held.stop - held.start, r.fs)
-        split = None if nper is None else _Split(x[held], r.fs, nper)
+        split = None if nper is None else CoherentSplit(x[held], r.fs, nper)
         sxx: dict = {}
         for g in run_groups(r):
             y = group_signal(r, g)
@@ -243,7 +214,7 @@ def limits(runs: list[Run], predictions: dict[str, dict[str, np.ndarray]] | None
             if y_hat is not None:  # the model's residual: coherent, and incoherent
                 err = nrms(y_hat[held], y[held])
                 if split is not None:
-                    within, inc = split(y[held] - y_hat[held], y[held])
+                    within, inc = split.stable(y[held] - y_hat[held], y[held])
                     within = min(within, err)  # spectra and time series differ a little
                     if inc is not None:  # resolution-limited: not known (None)
                         beyond = math.sqrt(max(inc**2 - noise**2, 0.0))

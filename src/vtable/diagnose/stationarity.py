@@ -107,28 +107,52 @@ def _nperseg(n: int, fs: float, averages: int) -> int | None:
     return nper if frames.averages(n, nper) >= averages else None
 
 
+class CoherentSplit:
+    """The split of a residual by its coherence with one command `x` (module docstring),
+    the command's spectrum taken once at `nperseg` and half of it, for every residual split
+    against it: of a residual r over a measured y, the RMS of r's parts coherent
+    (|S_xr|²/S_xx) and incoherent (S_rr − |S_xr|²/S_xx) with x, over y's RMS."""
+
+    def __init__(self, x: np.ndarray, fs: float, nperseg: int) -> None:
+        self.x, self.fs, self.nperseg = x, fs, nperseg
+        self._sxx: dict[int, np.ndarray] = {}
+
+    def at(self, r: np.ndarray, y: np.ndarray, n: int) -> tuple[float, float]:
+        """(coherent, incoherent) on `n`-sample frames."""
+        if n not in self._sxx:
+            self._sxx[n] = scipy.signal.welch(self.x, self.fs, nperseg=n)[1]
+        f, s_rr = scipy.signal.welch(r, self.fs, nperseg=n)
+        _, s_yy = scipy.signal.welch(y, self.fs, nperseg=n)
+        _, s_xr = scipy.signal.csd(self.x, r, self.fs, nperseg=n)
+        s_xx = self._sxx[n]
+        k = (f > 0) & (s_xx > 0) & (s_rr > 0)
+        total = float(np.sum(s_yy[f > 0]))
+        if total <= 0:
+            return 0.0, 0.0
+        coh = np.minimum(np.abs(s_xr[k]) ** 2 / (s_xx[k] * s_rr[k]), 1.0)
+        return (float(np.sqrt(np.sum(coh * s_rr[k]) / total)),
+                float(np.sqrt(np.sum((1 - coh) * s_rr[k]) / total)))
+
+    def stable(self, r: np.ndarray, y: np.ndarray) -> tuple[float, float | None]:
+        """`at` on `nperseg`-sample frames, the incoherent part None when halving the
+        resolution raises it by more than `STABLE` (resolution-limited)."""
+        fine = self.at(r, y, self.nperseg)
+        coarse = self.at(r, y, self.nperseg // 2)
+        return fine if coarse[1] <= STABLE * fine[1] else (fine[0], None)
+
+
 def coherent_split(x: np.ndarray, r: np.ndarray, y: np.ndarray, fs: float,
                    nperseg: int) -> tuple[float, float]:
     """(coherent, incoherent): the RMS of the residual `r`'s parts coherent and incoherent
     with the command `x`, each over the RMS of the measured `y` (module docstring)."""
-    f, s_rr = scipy.signal.welch(r, fs, nperseg=nperseg)
-    _, s_yy = scipy.signal.welch(y, fs, nperseg=nperseg)
-    _, coh = scipy.signal.coherence(x, r, fs, nperseg=nperseg)
-    k = (f > 0) & np.isfinite(coh)
-    total = float(np.sum(s_yy[k]))
-    if total <= 0:
-        return 0.0, 0.0
-    return (float(np.sqrt(np.sum(coh[k] * s_rr[k]) / total)),
-            float(np.sqrt(np.sum((1 - coh[k]) * s_rr[k]) / total)))
+    return CoherentSplit(x, fs, nperseg).at(r, y, nperseg)
 
 
 def stable_split(x: np.ndarray, r: np.ndarray, y: np.ndarray, fs: float,
                  nperseg: int) -> tuple[float, float | None]:
     """`coherent_split` at `nperseg`, its incoherent part None when halving the
     resolution raises it by more than `STABLE` (resolution-limited)."""
-    fine = coherent_split(x, r, y, fs, nperseg)
-    coarse = coherent_split(x, r, y, fs, nperseg // 2)
-    return fine if coarse[1] <= STABLE * fine[1] else (fine[0], None)
+    return CoherentSplit(x, fs, nperseg).stable(r, y)
 
 
 def notches(x: np.ndarray, y: np.ndarray, fs: float, nperseg: int,

@@ -104,11 +104,6 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
     diag.headline = headline(added, st.start_err, err, floor,
                              None if lim is None else lim.bound,
                              None if lim is None else lim.reference, interrupted)
-    notches = {}
-    for r in d.runs:
-        c = stationarity_check(r)
-        if c is not None and c.notch is not None:
-            notches[r.name] = c.notch
     plants = [] if preds is None else plant_differences(d.runs, preds)
-    diag.findings = findings(diag, d.campaign.sensors, notches, plants)
+    diag.findings = findings(diag, d.campaign.sensors, d.campaign.notches, plants)
     return diag
