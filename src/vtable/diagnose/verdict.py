@@ -101,8 +101,10 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
                      list(st.stages), list(d.runs), base_at_bounds=at_bounds,
                      limits=None if preds is None else limits(d.runs, preds))
     lim = diag.limits
+    # a bound only where a split was resolved (elsewhere it is the noise standing in)
+    resolved = lim is not None and any(g.resolved for g in lim.groups)
     diag.headline = headline(added, st.start_err, err, floor,
-                             None if lim is None else lim.bound,
+                             lim.bound if resolved else None,
                              None if lim is None else lim.reference, interrupted)
     plants = [] if preds is None else plant_differences(d.runs, preds)
     diag.findings = findings(diag, d.campaign.sensors, d.campaign.notches, plants)
