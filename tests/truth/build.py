@@ -224,6 +224,12 @@ def build(table: Table, spec: Specimen, dt: float) -> Built:
             # c₂ = 3π m γ/4 with m the mass the storey carries (all floors above it):
             # equivalent ξ = 4 c₂ X/(3π m) = γ X for a drift amplitude X
             c2s[j] = 3 * math.pi * Ms[j:].sum() * gamma / 4
+    if "specimen_degradation" in eff:
+        if n == 0:
+            raise TruthError("specimen_degradation needs a sdof or shear_building specimen")
+        fl[m.F_DEGR] = 1
+        p[m.P_DLOSS] = eff["specimen_degradation"]["stiffness_loss"]
+        p[m.P_DE0] = eff["specimen_degradation"]["energy_kip_in"] * c.KIP * c.INCH  # J
     hy = np.zeros((max(n, 1), m.N_HY))
     h = spec.hysteresis
     if h is not None:

@@ -7,7 +7,8 @@ optional reaction mass x_f (foundation compliance), the specimen's floors x_i (a
 Platen (Lagrange, c.o.m. at height e, inertia I about the actuator line):
     [m_t + m_b        m_t e + m_b h_b ] [ẍ_t]   [F_x]
     [m_t e + m_b h_b  I + I_b + m_b h_b²] [θ̈ ] = [M_θ]
-Specimen (relative coordinates u_i = x_i - x_t - h_i θ, as eqs 7.1-7.2, 8.7-8.9):
+Specimen (relative coordinates u_i = x_i - x_t - h_i θ, as eqs 7.1-7.2, 8.7-8.9; with
+degradation K is scaled by 1 - L(1 - exp(-E/E0)), Ė = u̇ᵀ C u̇):
     m_i ẍ_i = -r_i,  r = K u + C u̇ + (storey nonlinearities),
     F_x += Σ r_i,  M_θ += Σ h_i r_i.
 Bouc–Wen storeys (F_HYST; Wen 1976, Baber & Wen 1981, A = 1): storey j's elastic force
@@ -30,8 +31,8 @@ from numba import njit
 
 # ---- state indices -----------------------------------------------------------------------
 (S_X, S_V, S_TH, S_OM, S_PL, S_PF, S_Q, S_XP, S_VP, S_XF, S_VF, S_MR, S_INT, S_Z, S_XR, S_VR,
- S_DF, S_XG, S_VG, S_N1A, S_N1B, S_N2A, S_N2B) = range(23)
-N_BASE = 23  # floors follow: x_i at N_BASE + i, v_i at N_BASE + n + i
+ S_DF, S_XG, S_VG, S_N1A, S_N1B, S_N2A, S_N2B, S_E) = range(24)
+N_BASE = 24  # floors follow: x_i at N_BASE + i, v_i at N_BASE + n + i
 
 # ---- parameter indices -------------------------------------------------------------------
 (P_MT, P_MTE, P_I, P_MB, P_MBH, P_IB, P_A, P_V, P_BETA, P_KCT, P_KT, P_KP, P_RC, P_PS,
@@ -39,8 +40,8 @@ N_BASE = 23  # floors follow: x_i at N_BASE + i, v_i at N_BASE + n + i
  P_KPAS, P_CPAS, P_MF, P_KF, P_CF, P_GAP, P_KC, P_CC, P_MP, P_PUMP, P_CPLAT, P_KQ, P_KD,
  P_PIDP, P_PIDI, P_PIDD, P_TV, P_K1, P_DY, P_ALPHA, P_BWN, P_MRES, P_KRES, P_CRES, P_TA,
  P_KVF, P_KAF, P_KDP, P_TDF, P_WG, P_ZG, P_N1W, P_N1ZZ, P_N1ZP, P_N2W, P_N2ZZ,
- P_N2ZP) = range(63)
-N_PARAM = 63
+ P_N2ZP, P_DLOSS, P_DE0) = range(65)
+N_PARAM = 65
 
 # ---- flags ---------------------------------------------------------------------------------
 # F_CTRL: 0 the analog three-variable loop in flow units (Table B.5), 1 the law in volts
@@ -48,8 +49,8 @@ N_PARAM = 63
 # storeys (then n states z_j follow the floors: z_j at N_BASE + 2n + j)
 (F_PITCH, F_CTRL, F_FFILT, F_ORIFICE, F_FRIC, F_SAT, F_LAG, F_DELAY, F_AIR, F_FOUND, F_BACK,
  F_PUMP, F_YIELD, F_ADD, F_RES, F_DFILT, F_REFG, F_NOTCH1, F_NOTCH2, F_LOADCELL,
- F_N, F_HYST) = range(22)
-N_FLAG = 22
+ F_N, F_HYST, F_DEGR) = range(23)
+N_FLAG = 23
 
 # ---- Bouc–Wen storeys: columns of the (n, N_HY) array hy, one row per storey --------------
 # H_ON 1 for a yielding storey; H_K its elastic stiffness (N/m, the same k as in Ks);
@@ -186,11 +187,23 @@ def rhs(t, s, xc, vc, ac, udel, p, fl, Ms, Ks, Cs, hs, c2s, hy, ds, aux):
             uu[i] = s[x0 + i] - s[S_X] - hs[i] * th
             ud[i] = s[v0 + i] - s[S_V] - hs[i] * om
         r = np.zeros(n)
+        # degradation (F_DEGR): the whole stiffness matrix scaled by
+        # 1 - L (1 - exp(-E/E0)), E the energy the specimen's viscous damping has
+        # dissipated (state S_E, Ė = u̇ᵀ C u̇)
+        ks = 1.0
+        if fl[F_DEGR]:
+            ks = 1.0 - p[P_DLOSS] * (1.0 - np.exp(-s[S_E] / p[P_DE0]))
+        power = 0.0
         for i in range(n):
             acc = 0.0
+            dmp = 0.0
             for j in range(n):
-                acc += Ks[i, j] * uu[j] + Cs[i, j] * ud[j]
-            r[i] = acc
+                acc += ks * Ks[i, j] * uu[j]
+                dmp += Cs[i, j] * ud[j]
+            r[i] = acc + dmp
+            power += ud[i] * dmp
+        if fl[F_DEGR]:
+            ds[S_E] = power
         # storey nonlinearities as storey forces f_j acting on drift d_j = u_j - u_{j-1}
         for j in range(n):
             dd = ud[j] - (ud[j - 1] if j > 0 else 0.0)

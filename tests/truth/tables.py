@@ -32,6 +32,10 @@ EFFECTS: dict[str, dict[str, tuple[str, float | None, float, float]]] = {
     # second-order Butterworth low-pass; only avg_hacc sees it
     "sensor_mount": {"f_m": ("Hz", 60.0, 1.0, 1000.0), "zeta_m": ("1", 0.05, 1e-3, 2.0),
                      "f_c": ("Hz", 100.0, 1.0, 1000.0)},
+    # the specimen's stiffness matrix scaled by 1 - stiffness_loss (1 - exp(-E/E0)), E the
+    # energy its viscous damping has dissipated since the run began (E0 = energy_kip_in)
+    "specimen_degradation": {"stiffness_loss": ("1", 0.15, 0.0, 0.9),
+                             "energy_kip_in": ("kip-in", 10.0, 1e-6, 1e9)},
     # ---- outside vtable's catalog ----
     # a dead band between piston and platen: force passes only beyond ±gap/2
     "backlash": {"gap_in": ("in", 0.01, 0.0, 1.0)},

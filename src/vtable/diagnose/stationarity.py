@@ -156,7 +156,8 @@ def stable_split(x: np.ndarray, r: np.ndarray, y: np.ndarray, fs: float,
 
 
 def notches(x: np.ndarray, y: np.ndarray, fs: float, nperseg: int,
-            coherent: np.ndarray | None = None) -> list[tuple[float, float]]:
+            coherent: np.ndarray | None = None,
+            prominence: float = NOTCH_PROMINENCE) -> list[tuple[float, float]]:
     """The dips of |H1(y/x)| at least `NOTCH_PROMINENCE` deep in log |H|, between
     `LOWEST_HZ` and the analysis bands' top (30 Hz): (frequency Hz, interpolated between
     lines on a parabola through log |H|; prominence). With `coherent` (a boolean per
@@ -167,7 +168,7 @@ def notches(x: np.ndarray, y: np.ndarray, fs: float, nperseg: int,
     if len(k) < 5:
         return []
     log_h = np.log(np.abs(s_xy[k]) / s_xx[k] + 1e-300)
-    idx, props = scipy.signal.find_peaks(-log_h, prominence=NOTCH_PROMINENCE)
+    idx, props = scipy.signal.find_peaks(-log_h, prominence=prominence)
     df = f[1] - f[0]
     out = []
     for i, prom in zip(idx, props["prominences"], strict=True):
@@ -191,18 +192,23 @@ def moved_notch(x: np.ndarray, y: np.ndarray, fs: float) -> tuple[float, float, 
     f, coh = scipy.signal.coherence(x, y, fs, nperseg=n3)
     half = max(1, round(COHERENT_SPAN_HZ / (f[1] - f[0])))
     around = np.array([np.median(coh[max(0, i - half):i + half + 1]) for i in range(len(f))])
-    first = notches(x[:third], y[:third], fs, n3, around >= NOTCH_COHERENCE)
-    last = notches(x[-third:], y[-third:], fs, n3, around >= NOTCH_COHERENCE)
+    ok = around >= NOTCH_COHERENCE
+    ends = (x[:third], y[:third]), (x[-third:], y[-third:])
+    deep = [notches(a, b, fs, n3, ok) for a, b in ends]
+    # a notch that moves within a third is smeared there: the other third's may be half
+    # as deep
+    shallow = [notches(a, b, fs, n3, ok, NOTCH_PROMINENCE / 2) for a, b in ends]
     lines = fs / n3
-    best = None
-    for f1, _ in sorted(first, key=lambda n: -n[1]):
-        near = [f2 for f2, _ in last if abs(f2 / f1 - 1) < 0.15]
+    pairs = [(f1, p, shallow[1]) for f1, p in deep[0]] + \
+        [(f2, p, shallow[0]) for f2, p in deep[1]]
+    for f, _, other in sorted(pairs, key=lambda n: -n[1]):
+        near = [g for g, _ in other if abs(g / f - 1) < 0.15]
         if near:
-            f2 = min(near, key=lambda v: abs(v - f1))
+            g = min(near, key=lambda v: abs(v - f))
+            f1, f2 = (f, g) if other is shallow[1] else (g, f)
             if abs(f2 - f1) >= NOTCH_LINES * lines:
-                best = (f1, f2, third / fs)
-                break
-    return best
+                return f1, f2, third / fs
+    return None
 
 
 def stationarity_check(run: Run, predictions: dict[str, np.ndarray] | None = None
