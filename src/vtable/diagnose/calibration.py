@@ -265,7 +265,8 @@ def _damping_params(spec, cal: Calibration) -> list[BaseParam]:
     return out
 
 
-def _specimen_params(spec, cal: Calibration) -> list[BaseParam]:
+def specimen_params(spec, cal: Calibration) -> list[BaseParam]:
+    """The specimen's calibrated parameters (frequencies, damping, masses) declared `spec`."""
     out: list[BaseParam] = []
     if isinstance(spec, NoSpecimen):
         return out
@@ -360,7 +361,7 @@ def base_params(spec, vt: VirtualTable, cal: Calibration, *, pitch: bool,
     out = [_loop_param(n, getattr(nominal, n)) for n in LOOP]
     if not cal.enabled:
         return out
-    out += _specimen_params(spec, cal)
+    out += specimen_params(spec, cal)
     m0 = _table_value("platen_mass", vt)
     out.append(_table_param("platen_mass", "table.platen_mass_kg", "kg", m0,
                             m0 * (1 - cal.mass), m0 * (1 + cal.mass), False,

@@ -4,6 +4,7 @@ targets (every channel group of every run, training segment, every other sample)
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -25,6 +26,7 @@ from vtable.errors import VtableError
 from vtable.params.lab import run_table
 from vtable.params.virtual import virtual_table_for
 from vtable.runs.model import Run
+from vtable.runs.read import check_configuration
 
 REQUIRED = ("h_span",)
 
@@ -34,7 +36,7 @@ def check_campaign(runs: Sequence[Run]) -> list[Run]:
     rate (`compare.analysis_run`)."""
     if not runs:
         raise VtableError("diagnosis needs at least one run")
-    ref = runs[0].configuration()
+    check_configuration(list(runs))
     out = []
     for r in runs:
         for c in REQUIRED:
@@ -50,9 +52,6 @@ def check_campaign(runs: Sequence[Run]) -> list[Run]:
             raise VtableError(f"{r.name}: channel 'h_span' (the command) is "
                               + ("zero throughout" if not np.any(x) else f"constant ({x[0]:g} m)")
                               + "; a model driven by it predicts no motion to compare")
-        if r.configuration() != ref:
-            raise VtableError(f"{r.name}: a different configuration ([table], [control] or "
-                              f"[specimen]) from {runs[0].name}; diagnose one configuration")
         if "specimen" not in r.meta:
             raise VtableError(f"{r.name}: no [specimen] table; the model needs the specimen")
         a = analysis_run(r)
@@ -71,6 +70,8 @@ def check_campaign(runs: Sequence[Run]) -> list[Run]:
 #: the resolution of each model it compares from the effects in it, measured
 #: (`vtable.diagnose.resolution`: 0.33 % for the base, 0.28-0.63 % with one catalog effect)
 MODEL_RESOLUTION = 0.005
+#: the state of the runs that declare none in a campaign where others do
+UNDECLARED = "(undeclared)"
 
 
 @dataclass
@@ -88,6 +89,9 @@ class Campaign:
     #: run -> (first Hz, last Hz, window s) of an x_t/x_c notch that moves within the run
     #: (`stationarity.stationarity_check`)
     notches: dict = field(default_factory=dict)
+    #: run -> the specimen's state it was made in ([specimen] state, or a state per run
+    #: the diagnosis gives runs that do not hold one plant: `with_states`); empty: one
+    state_of: dict = field(default_factory=dict)
 
     @classmethod
     def of(cls, runs: Sequence[Run] | Campaign) -> Campaign:
@@ -115,7 +119,38 @@ class Campaign:
                          f"the reduced model resolves ({MODEL_RESOLUTION:.1%}, its agreement "
                          "with the multibody table); that is the noise floor used")
             floor = MODEL_RESOLUTION
-        return cls(list(runs), a, notes, floor, targets, sensors, notches)
+        states = {r.name: r.state for r in a} if any(r.state for r in a) else {}
+        return cls(list(runs), a, notes, floor, targets, sensors, notches,
+                   {k: v or UNDECLARED for k, v in states.items()})
+
+    def with_states(self, state_of: dict[str, str]) -> Campaign:
+        """This campaign with the runs' states given (run name -> state)."""
+        return dataclasses.replace(self, state_of=dict(state_of))
+
+    @property
+    def states(self) -> dict[str, list[str]]:
+        """Each state -> its runs, in the order of first appearance (the first is the base
+        state: the model's `specimen`; empty when the campaign has one)."""
+        out: dict[str, list[str]] = {}
+        for r in self.runs:
+            if r.name in self.state_of:
+                out.setdefault(self.state_of[r.name], []).append(r.name)
+        return out if len(out) > 1 else {}
+
+    def state(self, run: Run | str) -> str | None:
+        """The state of `run` beyond the base state (None: the base state's)."""
+        name = run if isinstance(run, str) else run.name
+        st = self.states
+        if not st:
+            return None
+        s = self.state_of.get(name)
+        return None if s == next(iter(st)) else s
+
+    @property
+    def state_specimens(self) -> dict:
+        """Each state beyond the first -> the specimen its first run declares."""
+        by_name = {r.name: r for r in self.runs}
+        return {s: by_name[names[0]].specimen() for s, names in list(self.states.items())[1:]}
 
     @property
     def noise(self) -> dict[str, dict[str, float]]:

@@ -21,6 +21,7 @@ KeyboardInterrupt) carries the rounds finished.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -45,7 +46,15 @@ from vtable.diagnose.result import (
     localise,
 )
 from vtable.diagnose.screen import nonlinearity_evidence
-from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE, failing
+from vtable.diagnose.selection import (
+    MIN_SHARE,
+    NOISE_SHARE,
+    SELECTION,
+    Z_NOISE,
+    failing,
+    shown_by_runs,
+)
+from vtable.diagnose.states import split
 from vtable.diagnose.statistics import Comparison, held_out_gain
 from vtable.diagnose.verdict import State, diagnosis_of
 from vtable.effects.registry import default_candidates
@@ -95,6 +104,8 @@ class Diagnoser:
         self.catalog = list(catalog or default_candidates())
         for e in self.catalog:
             effect(e)
+        self.table_view = dataclasses.replace(self.table_view, evidence=shown_by_runs(
+            self.catalog, self.campaign, self.notes))
         self.progress = progress or (lambda i, n, s: None)
         self.max_rounds = max_rounds
         self.floor = self.campaign.floor
@@ -165,6 +176,7 @@ class Diagnoser:
         of the base: `calibration`'s bounds, default this diagnosis's)."""
         m = TableModel(stop=self._stop, calibration=calibration or self.calibration)
         m.vt, m.declared = self.vt, self.campaign.specimen
+        m.state_specimens, m.campaign_ = self.campaign.state_specimens, self.campaign
         return m
 
     def at_bounds(self, ph: Physics) -> list[str]:
@@ -238,7 +250,8 @@ class Diagnoser:
         self.widened = None  # the starting model refitted with its leaning bounds widened
         lean = self._leaning(current)
         reason = ""
-        seeds: dict[str, dict[str, float]] = {}  # each candidate's last fitted parameters
+        # each candidate's last fitted parameters (first: what the runs show of them)
+        seeds = {e: dict(v) for e, (v, _) in self.table_view.evidence.items()}
         spent: dict[str, float] = {}  # each candidate's last fit's CPU seconds
         backward: list[str] = []  # effects added before the last one: tested without each
         k = 0
@@ -319,6 +332,8 @@ class Diagnoser:
             self._backward(st, backward, left, progress, done, steps, k)
         if not reason:
             reason = f"stopped after {self.max_rounds} rounds"
+        progress(steps - 1, steps, "testing whether the runs hold one plant")
+        st.plants = split(self, st)
         final_cmp = self._detail(st)
         progress(steps - 1, steps, "testing the declarations the final model leans on")
         st.pushed = self._pushed_beyond(st)

@@ -96,13 +96,18 @@ def findings(d, sensors=(), notches: dict | None = None, plants=()) -> list[dict
         out.append(finding("sensor", c.text(), "check the acceleration channel's sensor, "
                            "its mount and its calibration against the displacement",
                            runs=[c.run]))
+    split = bool(getattr(d, "states", None)) and not getattr(d, "states_declared", False)
     for p in plants:
         out.append(finding(
-            "plants", p.text(), "a specimen that changed between the runs: declare each "
-            "state ([specimen] state) and diagnose them apart; or an amplitude dependence "
-            "no effect in the model follows", runs=list(p.runs),
+            "plants", p.text(), "fitted with a specimen state per run (the states finding); "
+            "declare each state ([specimen] state) in the run files" if split else
+            "a specimen that changed between the runs: declare each state ([specimen] "
+            "state) and diagnose them apart; or an amplitude dependence no effect in the "
+            "model follows", runs=list(p.runs),
             numbers={"z2_mean": p.z2_mean, "z_max": p.z_max, "lines": p.lines,
                      "at_hz": p.at_hz, "relative": p.relative}))
+    if getattr(d, "states", None):
+        out.append(_states_finding(d.states, d.states_declared))
     for run, (f1, f2, w) in (notches or {}).items():
         out.append(finding(
             "softening", f"x_t/x_c's notch moves {f1:.2f} -> {f2:.2f} Hz within the run: the "
@@ -111,6 +116,27 @@ def findings(d, sensors=(), notches: dict | None = None, plants=()) -> list[dict
             "effect whose stiffness changes during the run", runs=[run],
             numbers={"first_hz": f1, "last_hz": f2, "window_s": w}))
     return out
+
+
+def _states_finding(states: dict[str, dict[str, Any]], declared: bool) -> dict[str, Any]:
+    """The specimen's fitted parameters in each state (`states.state_rows`)."""
+    def text(s: str, row: dict[str, Any]) -> str:
+        sp = row["specimen"]
+        f = [v for k, v in sp.items() if k.endswith("frequency_hz")]
+        xi = [v for k, v in sp.items() if k.endswith("damping")]
+        return (f"{s} ({len(row['runs'])} run{'s' if len(row['runs']) != 1 else ''}): "
+                + (f"{'/'.join(f'{v:.3g}' for v in f)} Hz" if f else "no mode")
+                + (f", damping {'/'.join(f'{v:.2%}' for v in xi)}" if xi else ""))
+
+    what = (("the runs' declared states" if declared else "a state per run") + ", fitted: "
+            + "; ".join(text(s, r) for s, r in states.items()))
+    action = ("compare the states' specimens: the change between them is the specimen's"
+              if declared else "the runs do not hold one specimen: declare each run's state "
+              "([specimen] state) so that runs of one state share it")
+    numbers = {f"{s}.{k}": float(v) for s, r in states.items()
+               for k, v in r["specimen"].items()}
+    return finding("states", what, action, runs=[x for r in states.values() for x in r["runs"]],
+                   numbers=numbers)
 
 
 def _limit_findings(d, lim) -> list[dict[str, Any]]:

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from vtable.diagnose.calibration import BaseParam, base_params
+from vtable.diagnose.calibration import BaseParam, base_params, specimen_params
 from vtable.diagnose.campaign import Campaign
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
@@ -41,14 +41,46 @@ def pitches(ph: Physics, vt) -> bool:
     return "pitch" in m.active
 
 
+def with_states(ph: Physics, campaign: Campaign) -> Physics:
+    """`ph` with a specimen for each further state of `campaign` (its own where `ph` has
+    one, else the state's declared one); none when the campaign has one state."""
+    extra = campaign.state_specimens
+    if set(ph.states) == set(extra):
+        return ph
+    return dataclasses.replace(ph, states={s: ph.states.get(s, spec)
+                                           for s, spec in extra.items()})
+
+
+def state_params(state: str, declared, cal) -> list[BaseParam]:
+    """The specimen's calibrated parameters in a further state of the campaign (its runs'
+    declaration, the same bounds and priors): keys "specimen[STATE].param", read from and
+    written to `Physics.states[STATE]`."""
+    out = []
+    for p in specimen_params(declared, cal):
+        def get(ph: Physics, p=p) -> float:
+            return p.get(ph.in_state(state))
+
+        def put(ph: Physics, v: float, p=p) -> Physics:
+            spec = p.set(ph.in_state(state), v).specimen
+            return dataclasses.replace(ph, states={**ph.states, state: spec})
+
+        key = p.key.replace("specimen.", f"specimen[{state}].", 1)
+        out.append(dataclasses.replace(p, key=key, get=get, set=put))
+    return out
+
+
 class Layout:
     """`TableModel`'s parameter vector (the module docstring); it provides `declared`,
     `vt`, `calibration` and `_last`."""
 
     def base_params(self, ph: Physics) -> list[BaseParam]:
-        """Every calibrated base parameter of `ph` on this campaign's table."""
-        return base_params(self.declared if self.declared is not None else ph.specimen,
-                           self.vt, self.calibration, pitch=pitches(ph, self.vt))
+        """Every calibrated base parameter of `ph` on this campaign's table, and the
+        specimen's again for each further state of the campaign (`state_params`)."""
+        out = base_params(self.declared if self.declared is not None else ph.specimen,
+                          self.vt, self.calibration, pitch=pitches(ph, self.vt))
+        for state, spec in getattr(self, "state_specimens", {}).items():
+            out += state_params(state, spec, self.calibration)
+        return out
 
     def _layout(self, ph: Physics) -> list[BaseParam]:
         """The fitted parameters: the base's and the effects' continuous ones (a discrete

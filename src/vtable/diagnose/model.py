@@ -19,7 +19,7 @@ import copy
 import dataclasses
 import math
 import threading
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -29,7 +29,7 @@ from threadpoolctl import threadpool_limits
 from vtable.diagnose.calibration import LOOP, Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare, segments
-from vtable.diagnose.layout import Layout
+from vtable.diagnose.layout import Layout, with_states
 from vtable.diagnose.projected import Frame, projected_start
 from vtable.diagnose.reuse import model_at
 from vtable.diagnose.secant import REFRESH, Secant
@@ -137,11 +137,26 @@ class TableModel(Layout):
         self.physics_: Physics | None = None
         self.vt = None  # the campaign's table, known when fitting
         self.declared = None  # the campaign's declared specimen, known when fitting
+        self.state_specimens: dict = {}  # further states -> their declared specimen
+        self.campaign_: Campaign | None = None
 
     # -- simulate ----------------------------------------------------------------------
+    def _models(self, ph: Physics, campaign: Campaign) -> Callable[[Run], ReducedModel]:
+        """The reduced model of each run: `ph` in the run's specimen state
+        (`Campaign.state`), built once per state."""
+        vt, built = self.vt or campaign.table, {}
+
+        def of(run: Run) -> ReducedModel:
+            s = campaign.state(run)
+            if s not in built:
+                built[s] = ReducedModel(ph.in_state(s), vt)
+            return built[s]
+
+        return of
+
     def _predict(self, ph: Physics, campaign: Campaign, train_only: bool = False
                  ) -> dict[str, dict[str, np.ndarray]]:
-        model = ReducedModel(ph, self.vt or campaign.table)
+        model = self._models(ph, campaign)
         out = {}
         for r in campaign.runs:
             if self.stop is not None and self.stop.is_set():
@@ -150,7 +165,7 @@ class TableModel(Layout):
             key = (r.name, n)
             if key not in self._commands:  # one array per segment: its interpolation is kept
                 self._commands[key] = (r.time[:n], r.channel("h_span")[:n])
-            out[r.name] = model.simulate(*self._commands[key])
+            out[r.name] = model(r).simulate(*self._commands[key])
         return out
 
     def _train_outputs(self, ph: Physics, campaign: Campaign
@@ -158,7 +173,7 @@ class TableModel(Layout):
         """The channels the training targets need, at their samples (every other one of
         each run's training segment: `Campaign.targets`), of the model `ph`
         (`ReducedModel.outputs`)."""
-        model = ReducedModel(ph, self.vt or campaign.table)
+        model = self._models(ph, campaign)
         out = {}
         for r, names in campaign.target_channels:
             if self.stop is not None and self.stop.is_set():
@@ -167,7 +182,7 @@ class TableModel(Layout):
             key = (r.name, n)
             if key not in self._commands:  # one array per segment: its interpolation is kept
                 self._commands[key] = (r.time[:n], r.channel("h_span")[:n])
-            out[r.name] = model.outputs(*self._commands[key], names, step=2)
+            out[r.name] = model(r).outputs(*self._commands[key], names, step=2)
         return out
 
     def _residuals(self, ph: Physics, campaign: Campaign) -> np.ndarray:
@@ -214,7 +229,9 @@ class TableModel(Layout):
         self.campaign_ = campaign
         self.vt = campaign.table
         self.declared = campaign.specimen
-        start = self.start or Physics(nominal_open_loop(self.vt), campaign.specimen, {})
+        self.state_specimens = campaign.state_specimens
+        start = with_states(self.start or Physics(nominal_open_loop(self.vt),
+                                                  campaign.specimen, {}), campaign)
         for e in self.effects:
             if not start.has(e):
                 start = start.with_effect(e)
@@ -447,8 +464,10 @@ class TableModel(Layout):
         return self.comparison(runs, detail=False).error
 
     def predict(self, run: Run) -> dict[str, np.ndarray]:
-        """The run's predictable channels (SI) at the run's own sample rate."""
-        return ReducedModel(self.physics_, self.vt).predict(run)
+        """The run's predictable channels (SI) at the run's own sample rate (in its
+        specimen state, when the campaign the model was fitted on has several)."""
+        state = self.campaign_.state(run) if self.campaign_ is not None else None
+        return ReducedModel(self.physics_.in_state(state), self.vt).predict(run)
 
     # -- what the fit says about itself --------------------------------------------------
     def at_bounds(self, ph: Physics) -> list[str]:

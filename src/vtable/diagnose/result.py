@@ -132,6 +132,10 @@ class Diagnosis:
     #: one sentence and the findings a lab engineer reads (`findings`)
     headline: str = ""
     findings: list[dict[str, Any]] = field(default_factory=list)
+    #: the specimen's states (`states.state_rows`: state -> its runs and fitted specimen;
+    #: empty: one), declared by the runs or (not `states_declared`) one per run
+    states: dict[str, dict[str, Any]] = field(default_factory=dict)
+    states_declared: bool = False
 
     @property
     def final_effects(self) -> list[str]:
@@ -186,6 +190,8 @@ class Diagnosis:
             "limits": None if self.limits is None else self.limits.to_json(),
             "headline": self.headline,
             "findings": self.findings,
+            "states": self.states,
+            "states_declared": self.states_declared,
             "verdict": self.verdict,
             "interrupted": self.interrupted,
             "notes": self.notes,

@@ -7,6 +7,7 @@ import dataclasses
 from collections.abc import Mapping
 
 from vtable.diagnose.campaign import Campaign
+from vtable.diagnose.layout import with_states
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
@@ -20,7 +21,9 @@ def model_at(m, campaign: Campaign, values: Mapping[str, float], source: str = "
     outside its bounds, is an error naming `source` and the key. Sets `physics_`,
     `base_`, `flags_` (values at a bound) and `notes_`, as `fit` does."""
     m.campaign_, m.vt, m.declared = campaign, campaign.table, campaign.specimen
-    start = m.start or Physics(nominal_open_loop(m.vt), campaign.specimen, {})
+    m.state_specimens = campaign.state_specimens
+    start = with_states(m.start or Physics(nominal_open_loop(m.vt), campaign.specimen, {}),
+                        campaign)
     for e in m.effects:
         if not start.has(e):
             start = start.with_effect(e)

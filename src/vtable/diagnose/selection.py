@@ -67,7 +67,8 @@ SELECTION = (f"an effect is added when, on the held-out last 40 % of every run a
              f"scale where sensor noise and a systematic error add (the mean over runs and "
              f"channel groups of the squared NRMS error), its gain over the calibrated "
              f"current model, less the cost of its fitted parameters' distance from their "
-             f"declared defaults (each parameter (ln(fitted/default) / ln {PLAUSIBLE:g})^2, "
+             f"declared defaults (each parameter (ln(fitted/default) / ln {PLAUSIBLE:g})^2 "
+             f"(ln of its own spread for one whose typical value varies over decades), "
              f"a linear one ((fitted - default) / a quarter of its range)^2, times "
              f"{PRIOR_SHARE:.0%} of the current model's systematic residual (error^2 - "
              f"floor^2): a value far outside its physical range must buy that with "
@@ -93,25 +94,44 @@ SELECTION = (f"an effect is added when, on the held-out last 40 % of every run a
              "it no longer passes")
 
 
+def shown_by_runs(catalog, campaign, notes: list[str]) -> dict[str, tuple[dict, str]]:
+    """What the campaign's runs show of each catalog effect's parameters
+    (`Effect.evidence`), each said in `notes`: effect -> (values, where from)."""
+    out = {}
+    for name in catalog:
+        ev = effect(name).evidence(campaign)
+        if ev:
+            out[name] = ev
+            vals = ", ".join(f"{k} {v:.3g}" for k, v in ev[0].items())
+            notes.append(f"{name}: the runs show {vals} ({ev[1]}): its fit starts there and "
+                         "is charged for its distance from these, not from its defaults")
+    return out
+
+
 def implausibility(name: str, values: dict[str, float], table=None) -> list[tuple[str, float]]:
     """Each of effect `name`'s parameters in `values` (its units) as (what, z): z its
     distance from the default on `table` (a `vtable.effects.table.TableView`; None: the
     EERC table's) in prior widths (`PLAUSIBLE`)."""
     e, out = effect(name), []
+    shown, where = getattr(table, "evidence", {}).get(name, ({}, ""))
     for q in e.params:
         if q.name not in values or q.discrete:  # a choice (which storey), not a distance
             continue
         v = float(values[q.name])
         d = q.default if table is None else q.default_on(table)
+        source = q.source or "no source"
+        if q.name in shown:  # what the runs themselves show (`Effect.evidence`)
+            d, source = float(shown[q.name]), where
         u = "" if q.unit == "1" else f" {q.unit}"  # a ratio is printed bare
         if q.log and v > 0 and d > 0:
-            z = math.log(v / d) / math.log(PLAUSIBLE)
-            what = (f"{q.name} {v:.3g}{u} is {max(v / d, d / v):.3g} x its default "
-                    f"{d:.3g}{u}")
+            z = math.log(v / d) / math.log(q.spread or PLAUSIBLE)
+            what = (f"{q.name} {v:.3g}{u} is {max(v / d, d / v):.3g} x its "
+                    f"{'shown value' if q.name in shown else 'default'} {d:.3g}{u}")
         else:
             z = (v - d) / (0.25 * (q.upper - q.lower))
-            what = f"{q.name} {v:.3g}{u} against its default {d:.3g}"
-        out.append((f"{what} ({q.source or 'no source'})", z))
+            what = (f"{q.name} {v:.3g}{u} against its "
+                    f"{'shown value' if q.name in shown else 'default'} {d:.3g}")
+        out.append((f"{what} ({source})", z))
     return out
 
 

@@ -15,6 +15,7 @@ from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.plants import plant_differences
 from vtable.diagnose.prose import unexplained
 from vtable.diagnose.result import Diagnosis, Round, Stage
+from vtable.diagnose.states import state_rows
 from vtable.diagnose.stationarity import stationarity_check
 from vtable.diagnose.statistics import Comparison
 from vtable.models.physics import Physics
@@ -36,6 +37,10 @@ class State:
     #: declarations the final model leans on that a widened refit moves beyond their
     #: bounds (`bounds.pushed_beyond`)
     pushed: list[dict[str, Any]] = field(default_factory=list)
+    #: pairs of runs that did not hold one plant the model described (`states.split`),
+    #: and whether the campaign was then fitted with a specimen state per run
+    plants: list = field(default_factory=list)
+    split: bool = False
 
 
 
@@ -103,9 +108,12 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
     lim = diag.limits
     # a bound only where a split was resolved (elsewhere it is the noise standing in)
     resolved = lim is not None and any(g.resolved for g in lim.groups)
-    diag.headline = headline(added, st.start_err, err, floor,
+    diag.states = state_rows(base, d.campaign.states)
+    diag.states_declared = bool(diag.states) and not st.split
+    diag.headline = headline(added + (["a specimen state per run"] if st.split else []),
+                             st.start_err, err, floor,
                              lim.bound if resolved else None,
                              None if lim is None else lim.reference, interrupted)
-    plants = [] if preds is None else plant_differences(d.runs, preds)
+    plants = st.plants if st.split or preds is None else plant_differences(d.runs, preds)
     diag.findings = findings(diag, d.campaign.sensors, d.campaign.notches, plants)
     return diag

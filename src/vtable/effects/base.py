@@ -33,13 +33,17 @@ class Param:
     model's table when the effect is applied (`default` itself is the EERC table's);
     `source` says where the default comes from. A `discrete` parameter takes whole values
     from `lower` to `upper` (which storey, say): the fit tries each value the model can be
-    built with and keeps the best, rather than moving it by least squares."""
+    built with and keeps the best, rather than moving it by least squares. `spread` is
+    the factor from the default that counts as one σ of the diagnosis's prior on a log
+    parameter (`vtable.diagnose.selection.PLAUSIBLE` when None): wide for a parameter
+    whose typical value varies over decades from specimen to specimen."""
 
     def __init__(self, name: str, unit: str, default: float | Callable[..., float],
                  lower: float, upper: float, log: bool = False, source: str = "",
-                 doc: str = "", discrete: bool = False) -> None:
+                 doc: str = "", discrete: bool = False, spread: float | None = None) -> None:
         self.name, self.unit, self.lower, self.upper = name, unit, lower, upper
         self.log, self.source, self.doc, self.discrete = log, source, doc, discrete
+        self.spread = spread
         self._default = default
         self._of_table: Callable | None = None
         if callable(default) and len(inspect.signature(default).parameters) == 1:
@@ -191,6 +195,15 @@ class Effect:
         (the default). Such an effect is not tried in a diagnosis (the round lists it
         under `skipped` with this reason). `campaign` is the diagnosis's prepared campaign
         (`vtable.diagnose.campaign.Campaign`: its runs and the checks made on them)."""
+        return None
+
+    def evidence(self, campaign: Any) -> tuple[dict[str, float], str] | None:
+        """What the campaign's runs themselves show of this effect's parameters, measured
+        before any fit (identification, the checks on the runs): (values in the
+        parameters' units, where they come from), or None (the default). A diagnosis
+        starts the effect's fit there too and centres its prior on them instead of the
+        defaults (`vtable.diagnose.selection.implausibility`): what a run shows is not
+        charged as implausible."""
         return None
 
     def unseen(self, values: dict[str, float],

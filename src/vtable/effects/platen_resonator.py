@@ -12,6 +12,7 @@ peaks just above, where it swings with it. Its mass is a fraction of the run's t
 from __future__ import annotations
 
 import math
+import statistics
 
 from vtable.effects.base import Effect, Param
 
@@ -29,6 +30,23 @@ class PlatenResonator(Effect):
                     doc="its natural frequency on a fixed platen"),
               Param("xi_r", "1", 0.05, 0.005, 0.3, log=True, source="assumed",
                     doc="its damping ratio"))
+
+    def evidence(self, campaign):
+        """The resonance identify's structure check finds on the runs that declare no
+        specimen with a mode (`vtable.ident.undeclared`): the median over those runs of
+        its frequency, damping and mass ratio (eq 7.9's u, the platen's mass fraction)."""
+        from vtable.ident.undeclared import undeclared_resonance
+
+        found = [r for r in map(undeclared_resonance, campaign.runs) if r is not None]
+        if not found:
+            return None
+        med = statistics.median
+        values = {"m_r": 100.0 * med(r.u for r in found), "f_r": med(r.f_s for r in found),
+                  "xi_r": med(r.xi_s for r in found)}
+        values = {k: min(max(v, self.param(k).lower), self.param(k).upper)
+                  for k, v in values.items()}
+        runs = ", ".join(r.run for r in found)
+        return values, f"identified on {runs}'s x_t/x_c (eq 7.9 with the valve lag)"
 
     def apply(self, m, p):
         mass = p["m_r"] * m.table.platen_mass  # p["m_r"] is in SI: a fraction

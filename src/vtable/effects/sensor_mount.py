@@ -13,6 +13,8 @@ simulation rate, before decimation, as they apply the anti-aliasing filter (§2.
 
 from __future__ import annotations
 
+import statistics
+
 from vtable.effects.base import Effect, Param
 from vtable.effects.sensor import mount_filter
 
@@ -43,6 +45,18 @@ class SensorMount(Effect):
             return None
         return ("no run's table acceleration departs from the second derivative of its table "
                 "displacement (or no run has both): the runs show no mount")
+
+    def evidence(self, campaign):
+        """The mount `vtable.diagnose.sensors` fits to the runs' ẍ/s²x where their table
+        channels disagree: the median over those runs."""
+        fits = [c.mount for c in campaign.sensors if c.mount is not None]
+        if not fits:
+            return None
+        values = {k: statistics.median(f[i] for f in fits)
+                  for i, k in enumerate(("f_m", "zeta_m", "f_c"))}
+        values = {k: min(max(v, self.param(k).lower), self.param(k).upper)
+                  for k, v in values.items()}
+        return values, "fitted to the runs' ẍ/s²x (the sensor check)"
 
     def apply(self, m, p):
         f_m, z_m, f_c = p["f_m"], p["zeta_m"], p["f_c"]

@@ -4,7 +4,7 @@ so an effect is right on any table."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cache
 
 from vtable import units
@@ -26,6 +26,9 @@ class TableView:
     velocity_limit: float  # m/s: the table's horizontal velocity limit
     supply_pressure: float  # Pa
     rc: float  # s: the RC filter of the ΔP feedback (eq B.4)
+    #: what a campaign's runs show of the effects' parameters (`Effect.evidence`): effect ->
+    #: ({parameter: value in its units}, where from); the diagnosis's prior is centred there
+    evidence: dict = field(default_factory=dict, compare=False, hash=False)
 
     @property
     def n_horizontal(self) -> int:

@@ -33,6 +33,9 @@ class Physics:
     #: (effect, parameter) -> the value a table-dependent default was filled with (the
     #: EERC table's): still that value when applied, it is the run's table's default
     defaulted: dict = field(default_factory=dict, compare=False, repr=False)
+    #: the specimen in each further state of a campaign ([specimen] state): state name ->
+    #: its specimen; `specimen` is the first state's (the table and the effects are shared)
+    states: dict[str, Specimen] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         checked = {name: get(name).check(p, name) for name, p in self.effects.items()}
@@ -49,6 +52,13 @@ class Physics:
 
     def with_effect(self, name: str, params: dict[str, float] | None = None) -> Physics:
         return dataclasses.replace(self, effects={**self.effects, name: dict(params or {})})
+
+    def in_state(self, state: str | None) -> Physics:
+        """This model with the specimen of `state` (one of `states`); itself for the first
+        state (None, or a name not among `states`)."""
+        if state is None or state not in self.states:
+            return self
+        return dataclasses.replace(self, specimen=self.states[state], states={})
 
     def without(self, name: str) -> Physics:
         return dataclasses.replace(self, effects={k: v for k, v in self.effects.items()

@@ -50,6 +50,8 @@ class Declaration:
     units: dict[str, str] = field(default_factory=dict)
     notes: tuple[str, ...] = field(default=(), compare=False)
     meta: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    #: [specimen] state: the specimen's state the run was made in (None: not declared)
+    state: str | None = None
 
     @property
     def drive_file(self) -> Path | None:
@@ -73,9 +75,15 @@ def declare(meta: dict[str, Any], where: str, folder: Path | None = None) -> Dec
         notes.append(f"{where}: no [table]: the table the run was made on is not named")
     if "control" in meta:
         notes += check_control(meta["control"], f"{where} [control]")
-    specimen = None
+    specimen, state = None, None
     if "specimen" in meta:
-        specimen = specimen_from_dict(meta["specimen"], f"{where} [specimen]", folder)
+        given = dict(meta["specimen"])
+        if "state" in given:
+            state = given.pop("state")
+            if not isinstance(state, str) or not state.strip():
+                raise VtableError(f"{where} [specimen].state: expected a name (a non-empty "
+                                  f"string), got {state!r:.60}")
+        specimen = specimen_from_dict(given, f"{where} [specimen]", folder)
         notes += specimen_hints(specimen, f"{where} [specimen]")
         if isinstance(specimen, OpenSeesSpecimen):  # its model as data, never run
             specimen, note = as_building(specimen, f"{where} [specimen]")
@@ -91,7 +99,7 @@ def declare(meta: dict[str, Any], where: str, folder: Path | None = None) -> Dec
     return Declaration(title=title if isinstance(title, str) else None, table=table,
                        control=dict(meta.get("control", {})), specimen=specimen,
                        command=command, units=dict(meta.get("units", {})),
-                       notes=tuple(notes), meta=meta)
+                       notes=tuple(notes), meta=meta, state=state)
 
 
 def as_building(spec: OpenSeesSpecimen, where: str) -> tuple[Specimen, str]:

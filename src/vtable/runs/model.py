@@ -84,9 +84,18 @@ class Run:
         no [command]."""
         return self.declared.command
 
+    @property
+    def state(self) -> str | None:
+        """The specimen's state the run declares ([specimen] state), or None."""
+        return None if self.declared is None else self.declared.state
+
     def configuration(self) -> dict[str, Any]:
-        """What must agree across a campaign: table, control settings, specimen."""
-        return {k: self.meta.get(k) for k in ("table", "control", "specimen")}
+        """What must agree across a campaign: table, control settings, specimen (its
+        `state` apart: `vtable.runs.read.check_states` compares the specimens)."""
+        out = {k: self.meta.get(k) for k in ("table", "control", "specimen")}
+        if isinstance(out["specimen"], dict):
+            out["specimen"] = {k: v for k, v in out["specimen"].items() if k != "state"}
+        return out
 
 
 def with_noise(run: Run, fraction: float, seed: int = 0,

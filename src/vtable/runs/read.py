@@ -72,15 +72,39 @@ def read_any(path: str | Path) -> Run:
 
 
 def campaign(paths: list[str | Path]) -> list[Run]:
-    """Runs of one configuration: table, control settings and specimen must agree."""
+    """Runs of one configuration (`check_configuration`)."""
     runs = [read_any(p) for p in paths]
     if not runs:
         raise VtableError("a campaign needs at least one run")
+    check_configuration(runs)
+    return runs
+
+
+def check_configuration(runs: list[Run]) -> None:
+    """A campaign is one configuration: the runs' [table] and [control] agree, and their
+    [specimen] agrees among the runs of one state ([specimen] state; the runs that declare
+    none are one state). Runs of different states may declare different values of one kind
+    of specimen (a building of as many storeys)."""
     ref = runs[0].configuration()
+    first: dict[str | None, Run] = {}
     for r in runs[1:]:
         cfg = r.configuration()
-        for k in ref:
+        for k in ("table", "control"):
             if cfg[k] != ref[k]:
                 raise VtableError(f"{r.name}: [{k}] differs from {runs[0].name}'s; a campaign "
                                   "is one configuration")
-    return runs
+    for r in runs:
+        f = first.setdefault(r.state, r)
+        if r.configuration()["specimen"] != f.configuration()["specimen"]:
+            where = f" (state {r.state!r})" if r.state else ""
+            raise VtableError(f"{r.name}: [specimen] differs from {f.name}'s{where}; runs of "
+                              "one specimen state declare one specimen (declare [specimen] "
+                              "state to tell states apart)")
+    a = runs[0].specimen()
+    for r in first.values():
+        b = r.specimen()
+        if type(a) is not type(b) or len(getattr(a, "weights", ())) != \
+                len(getattr(b, "weights", ())):
+            raise VtableError(f"{r.name}: its [specimen] (state {r.state!r}) is not the kind "
+                              f"of specimen {runs[0].name} declares; the states of a campaign "
+                              "are states of one specimen")

@@ -1,0 +1,71 @@
+"""Campaigns of several specimen states (issue 32, deliverable 3).
+
+Runs that declare `[specimen] state` are fitted with the specimen's parameters per state
+from the start (`Campaign.states`, `layout.state_params`): the table, the servo loop and
+every effect are shared. A campaign that declares none, whose runs do not hold one plant the
+final model describes (`plants.plant_differences`: x_t/x_c differ beyond their confidence
+and beyond the model's own difference), is refitted with a state per run (`split`), kept
+when its held-out gain passes the selection's statistical criteria as an effect's must
+(`selection.failing`; no prior: each state's specimen keeps its declaration's bounds and
+priors) and removes `STATES_SHARE` of the systematic residual. Either way the states'
+fitted specimens are reported (`state_rows`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from vtable.diagnose.compare import compare
+from vtable.diagnose.plants import PlantDifference, plant_differences
+from vtable.diagnose.result import Stage
+from vtable.diagnose.selection import failing
+from vtable.diagnose.statistics import held_out_gain
+
+#: the share of the systematic residual a state per run must remove (an effect needs
+#: `selection.MIN_SHARE`; the states bring a specimen's parameters per run, and a model-form
+#: difference between runs of one specimen, a law not quite the truth's, is not a state)
+STATES_SHARE = 0.5
+
+
+def split(dg, st) -> list[PlantDifference]:
+    """Diagnoser `dg`'s final model refitted with a specimen state per run, where its
+    campaign declares no states and its runs do not hold one plant; the refit becomes the
+    last stage (and `dg.campaign` the split campaign) when it passes. Returns the pairs of
+    runs that differed (empty: none, or the campaign declares its states)."""
+    camp = dg.campaign
+    if camp.states or len(dg.runs) < 2 or st.current is None or not dg.calibration.enabled:
+        return []
+    pairs = plant_differences(dg.runs, st.stages[-1].predictions)
+    if not pairs:
+        return []
+    per_run = camp.with_states({r.name: r.name for r in dg.runs})
+    m = dg.model(st.current).fit(per_run)
+    pred = m.predictions(per_run)
+    err = compare(pred, dg.runs, scored="held", floor=dg.floor).error
+    g = held_out_gain(st.stages[-1].predictions, pred, dg.runs, camp.noise)
+    why = failing(g)
+    if g.share < STATES_SHARE:
+        why.append(f"it removes {max(g.share, 0):.0%} of the systematic residual (a state "
+                   f"per run needs {STATES_SHARE:.0%}: it has a specimen's parameters per run)")
+    if why:
+        dg.notes.append(f"a specimen state per run would change the held-out error "
+                        f"{st.err:.2%} -> {err:.2%}, not kept: {'; '.join(why)}")
+        return pairs
+    dg.campaign = per_run
+    st.current, st.err, st.cmp = m.physics_, err, None
+    st.stages.append(Stage(f"{len(st.stages)}_states", m.physics_, pred))
+    st.split = True
+    return pairs
+
+
+def state_rows(base: dict[str, dict[str, Any]], states: dict[str, list[str]]
+               ) -> dict[str, dict[str, Any]]:
+    """Each state -> its runs and its specimen's fitted parameters (the `base` table's
+    "specimen.*" rows for the first state, "specimen[STATE].*" for the others)."""
+    out = {}
+    for i, (s, runs) in enumerate(states.items()):
+        prefix = "specimen." if i == 0 else f"specimen[{s}]."
+        out[s] = {"runs": list(runs),
+                  "specimen": {k.removeprefix(prefix): v["fitted"] for k, v in base.items()
+                               if k.startswith(prefix)}}
+    return out

@@ -1,0 +1,54 @@
+"""What identification finds that a run does not declare: a resonance on the platen
+(`vtable.ident.resonator`), read from x_t/x_c by identify's structure check
+(`loop.compare_structures`, eq 7.9 with the valve lag against the loop alone). The
+diagnosis takes it as evidence for `platen_resonator` (issue 32: a heavy undocumented
+specimen is not charged as implausible when the run's own x_t/x_c shows it)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from vtable.errors import VtableError
+from vtable.ident import channels
+from vtable.ident.frames import MIN_AVERAGES, frame_for_averages
+from vtable.ident.loop import LoopData, compare_structures, prior_of
+from vtable.ident.report import servo_band
+from vtable.ident.tf import transfer_function
+from vtable.params.lab import run_table
+from vtable.params.specimen import NoSpecimen, RigidBlock
+from vtable.runs.model import Run
+
+
+@dataclass(frozen=True)
+class Resonance:
+    """A resonance on the platen a run does not declare: its frequency (Hz), damping ratio
+    and mass over the platen's (u = m_s/m_t, eq 7.9)."""
+
+    run: str
+    f_s: float
+    xi_s: float
+    u: float
+
+
+def undeclared_resonance(run: Run) -> Resonance | None:
+    """The resonance identify's structure check finds on `run`'s x_t/x_c, where the run
+    declares no specimen with a mode (none, or a rigid block) and the resonator structure
+    wins (`loop.compare_structures`); None otherwise, or when the run cannot be fitted."""
+    spec = run.specimen()
+    if not isinstance(spec, NoSpecimen | RigidBlock):
+        return None
+    try:
+        table = run_table(run)
+        x_c, x_t = channels.require(run, "h_span", "avg_hdisp", purpose="x_t/x_c")
+        n = frame_for_averages(len(run.time), MIN_AVERAGES, longest=2048)
+        if n is None:
+            return None
+        tf = transfer_function(x_c, x_t, run.fs, n)
+        ls = compare_structures(LoopData.from_tf(tf, servo_band(run, table)),
+                                prior_of(table))
+    except VtableError:
+        return None
+    if not ls.fits_eq_6_15 or ls.best != "resonator":
+        return None
+    fit = ls.fits["resonator"]
+    return Resonance(run.name, float(fit["f_s"]), float(fit["xi_s"]), float(fit["u"]))
