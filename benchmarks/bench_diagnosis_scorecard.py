@@ -74,7 +74,7 @@ def line(case: sc.Case, r: dict) -> str:
 
 
 def _case(name: str) -> sc.Case | sc.Case18:
-    for by in (sc.BY_NAME, sc.BY_NAME_18, sc.BY_NAME_21):
+    for by in (sc.BY_NAME, sc.BY_NAME_18, sc.BY_NAME_21, sc.BY_NAME_32):
         if name in by:
             return by[name]
     raise KeyError(name)
@@ -172,9 +172,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--fresh", action="store_true", help="ignore cached results")
     ap.add_argument("--json", help="write every result to this file")
     ap.add_argument("--list", action="store_true", help="list the cases and exit")
-    ap.add_argument("--set", choices=("12", "18", "21", "all"), default="12",
+    ap.add_argument("--set", choices=("12", "18", "21", "32", "all"), default="12",
                     help="issue 12's 40 cases (default), issue 18's 30, issue 21's yielding "
-                         "set, or all three")
+                         "set, issue 32's (degradation, mount, two states), or 12, 18 and "
+                         "21 (all)")
     a = ap.parse_args(argv)
     if a.list:
         for c in sc.CASES if a.set in ("12", "all") else []:
@@ -189,13 +190,14 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     names = ([c.name for c in sc.CASES] if a.set in ("12", "all") else []) + (
         [c.name for c in sc.CASES_18] if a.set in ("18", "all") else []) + (
-        [c.name for c in sc.CASES_21] if a.set in ("21", "all") else [])
+        [c.name for c in sc.CASES_21] if a.set in ("21", "all") else []) + (
+        [c.name for c in sc.CASES_32] if a.set == "32" else [])
     if a.quick:
         names = list(sc.QUICK)
     if a.cases:
         names = [n.strip() for n in a.cases.split(",") if n.strip()]
         bad = [n for n in names if n not in sc.BY_NAME and n not in sc.BY_NAME_18
-               and n not in sc.BY_NAME_21]
+               and n not in sc.BY_NAME_21 and n not in sc.BY_NAME_32]
         if bad:
             print(f"unknown case(s) {', '.join(bad)}; --list shows them", file=sys.stderr)
             return 2
@@ -223,7 +225,9 @@ def main(argv: list[str] | None = None) -> int:
     done_all = [(_case(n), results[n]) for n in names]
     done21 = [(c, r) for c, r in done_all if isinstance(c, sc.Case21)]
     done = [(c, r) for c, r in done_all if isinstance(c, sc.Case) and not isinstance(c, sc.Case21)]
-    done18 = [(c, r) for c, r in done_all if isinstance(c, sc.Case18)]
+    done18 = [(c, r) for c, r in done_all
+              if isinstance(c, sc.Case18) and not isinstance(c, sc.Case32)]
+    done32 = [(c, r) for c, r in done_all if isinstance(c, sc.Case32)]
     tot = sc.totals(done)
     tot18 = sc.totals18(done18)
 
@@ -242,20 +246,31 @@ def main(argv: list[str] | None = None) -> int:
               f"{tot21['false_storey_yield'] or 'none'} (acceptance: none)")
         print(f"  outside the catalog, unexplained: {_frac(tot21['outside'])} "
               "(acceptance: all)")
+    tot32 = sc.totals32(done32)
+    if done32:
+        for kind, k in tot32.items():
+            if kind == "time_s":
+                continue
+            print(f"issue 32, {kind}: right in {k['right']}/{k['of']} "
+                  f"({k['right'] / k['of']:.0%}; acceptance >= 90 % of >= 12); beyond the "
+                  f"truth: {'; '.join(k['false_positives']) or 'nothing'}")
     n_new = sum(not r.get("cached") for _, r in done_all)
     t_all = sum(r["time_s"] for _, r in done_all)
     per = t_all / len(done_all) if done_all else 0.0
     print(f"diagnosis time: {t_all:.0f} s in all, {per:.0f} s per case "
           f"({n_new} diagnosed now, {len(done_all) - n_new} from the cache); wall {wall:.0f} s")
     met = ((not done or tot["accepted"]) and (not done18 or tot18["accepted"])
-           and (not done21 or tot21["accepted"]))
+           and (not done21 or tot21["accepted"])
+           and all(k["right"] >= 0.9 * k["of"] and not k["false_positives"]
+                   for kind, k in tot32.items() if kind != "time_s"))
     print("acceptance on these cases: " + ("MET" if met else "NOT MET")
           + (" (issue 18's set alone; the whole scorecard below)" if done and done18 else ""))
     if done and done18:
         _combined(done, done18, tot, tot18)
     if a.json:
         Path(a.json).write_text(json.dumps({"totals": tot, "totals_18": tot18,
-                                            "totals_21": tot21, "results": results}, indent=1,
+                                            "totals_21": tot21, "totals_32": tot32,
+                                            "results": results}, indent=1,
                                            default=str))
     return 0
 

@@ -368,6 +368,8 @@ def _cached(case: Case, root: Path | None = None) -> bool:
 
 def judge(case: Case | Case18, r: dict) -> dict:
     """The acceptance rule for one case: {"ok": bool, "why": str}."""
+    if isinstance(case, Case32):
+        return judge32(case, r)
     if isinstance(case, Case18):
         return judge18(case, r)
     if isinstance(case, Case21):
@@ -953,6 +955,7 @@ def _cases_32() -> list[Case32]:
     b3 = truth.building([25.0, 25.0, 25.0], [110.0, 160.0, 210.0],
                         storey_k_kip_in=[120.0, 100.0, 80.0], xi=0.02)
     l_sdof = truth.sdof(4.4, 40.0, 8.3, 0.02)
+    none_spec = truth.none()
     E, Ln = truth.eerc_table, truth.lnec_table
     out: list[Case32] = []
 
@@ -1000,6 +1003,28 @@ def _cases_32() -> list[Case32]:
             Ln(effects={"specimen_degradation": {"stiffness_loss": loss, "energy_kip_in": e0}}),
             l_sdof, ["specimen_degradation"],
             cmds((0.2, 0.6), peak=0.8, pink=True, band=(0.5, 25.0)), fs=fs, noise=noise)
+    # the table accelerometer on a mount (resonance f_m, damping, conditioner low-pass f_c)
+    mounts = [  # (table, specimen, f_m, zeta_m, f_c, rate, noise)
+        ("eerc", sdof, 40.0, 0.1, 100.0, 200.0, 0.02),
+        ("eerc", sdof, 25.0, 0.05, 60.0, 256.0, 0.01),
+        ("eerc", b3, 30.0, 0.15, 80.0, 200.0, 0.02),
+        ("eerc", none_spec, 20.0, 0.08, 45.0, 200.0, 0.015),
+        ("eerc", sdof, 60.0, 0.05, 100.0, 500.0, 0.02),
+        ("eerc", b3, 18.0, 0.1, 35.0, 256.0, 0.02),
+        ("lnec", l_sdof, 17.0, 0.09, 30.0, 200.0, 0.02),
+        ("lnec", none_spec, 17.0, 0.09, 30.0, 256.0, 0.01),
+        ("lnec", l_sdof, 35.0, 0.12, 80.0, 256.0, 0.02),
+        ("lnec", l_sdof, 22.0, 0.06, 50.0, 500.0, 0.015),
+        ("lnec", none_spec, 45.0, 0.2, 100.0, 200.0, 0.02),
+        ("eerc", sdof, 15.0, 0.2, 40.0, 200.0, 0.03),
+    ]
+    for j, (lab, spec, f_m, z_m, f_c, fs, noise) in enumerate(mounts):
+        eff = {"sensor_mount": {"f_m": f_m, "zeta_m": z_m, "f_c": f_c}}
+        c = (cmds((0.2, 0.6), peak=0.8, pink=True, band=(0.5, 25.0)) if lab == "lnec"
+             else cmds((0.1, 0.5), "elcentro" if j % 2 else "synthetic"))
+        add(f"mount_{lab}_{j + 1}", "in_catalog", (Ln if lab == "lnec" else E)(effects=eff),
+            spec, ["sensor_mount"], c, fs=fs, noise=noise, random_s=20.0,
+            declared=none_spec if spec is none_spec else None)
     # two specimen states: the last two runs on a specimen changed after the first (its
     # frequency and damping), declared ([specimen] state, re-declared or not) or not
     def changed(spec, df, xi):
@@ -1017,6 +1042,12 @@ def _cases_32() -> list[Case32]:
         (b3, -0.04, 0.03, True, False, 200.0, 0.02),
         (l_sdof, -0.08, 0.03, True, True, 256.0, 0.02),
         (l_sdof, -0.03, 0.025, False, False, 256.0, 0.015),
+        (sdof, -0.05, 0.03, True, False, 256.0, 0.02),
+        (b3, -0.04, 0.025, False, False, 256.0, 0.015),
+        (l_sdof, -0.05, 0.03, True, False, 200.0, 0.02),
+        (sdof, -0.04, 0.025, False, False, 500.0, 0.02),
+        (b3, -0.08, 0.035, True, True, 200.0, 0.02),
+        (l_sdof, -0.04, 0.03, False, False, 200.0, 0.02),
     ]
     for j, (spec, df, xi, declared, again, fs, noise) in enumerate(two):
         after = changed(spec, df, xi)
@@ -1026,11 +1057,70 @@ def _cases_32() -> list[Case32]:
         redeclared = truth.perturb(after, seed=700 + j) if again else None
         states = tuple((name, after, "after" if declared else "", redeclared)
                        for name in ("random_1", "earthquake"))
+        # declared close to the truth (0.5-1 %): the change itself stays within the
+        # calibration's ±5 % of one declaration where the later state is not re-declared
+        near = truth.perturb(spec, seed=800 + j, frequency=0.01, damping=1.3, weight=0.03)
         add(f"two_states_{'declared' if declared else 'undeclared'}_{j + 1}", "in_catalog",
-            Ln() if lnec else E(), spec, [], c, fs=fs, noise=noise,
-            states=states)
+            Ln() if lnec else E(), spec, [], c, fs=fs, noise=noise, states=states,
+            declared=near)
     return out
 
 
 CASES_32: list[Case32] = _cases_32()
 BY_NAME_32: dict[str, Case32] = {c.name: c for c in CASES_32}
+
+
+#: a state's fitted first-mode frequency within this of the truth's (relative)
+STATE_FREQUENCY = 0.02
+
+
+def judge32(case: Case32, r: dict) -> dict:
+    """An issue-32 case's rule: the effect set exactly the hidden one (judge18), and the
+    specimen's states right: a campaign of one specimen fitted with one (no state per run
+    claimed); two states declared: each state's first mode within `STATE_FREQUENCY` of
+    the truth's; undeclared: a state per run, each run's within it. `false_positive`
+    lists what was added or claimed beyond the truth (effects, states)."""
+    out = judge18(case, r)
+    fp = list(set(r["found"]) - set(case.hidden))
+    states = (r.get("diagnosis") or {}).get("states") or {}
+    why = [out["why"]] if out["why"] else []
+    if not case.states:
+        if states:
+            why.append("states claimed on one specimen")
+            fp.append("states")
+    elif not states:
+        why.append("one specimen fitted to two states")
+    else:
+        truth_f = case.true_states()
+        off = []
+        for row in states.values():
+            f = next((v for k, v in row["specimen"].items() if k.endswith("frequency_hz")),
+                     None)
+            for run in row["runs"]:
+                ft = truth_f[Path(run).name]
+                if f is None or abs(f / ft - 1) > STATE_FREQUENCY:
+                    off.append(f"{Path(run).name} {f} Hz vs {ft:.3f}")
+        declared = bool(case.first_state)
+        if declared != bool((r.get("diagnosis") or {}).get("states_declared")):
+            why.append("states declared but refitted per run" if declared
+                       else "states said to be declared")
+        if not declared and len(states) != len(case.commands):
+            why.append(f"{len(states)} states for {len(case.commands)} runs")
+        if off:
+            why.append("state frequencies off: " + "; ".join(off))
+    return {"ok": not why, "why": "; ".join(why), "false_positive": fp}
+
+
+def totals32(results: list[tuple[Case32, dict]]) -> dict[str, Any]:
+    """Issue 32's figures per physics (degradation, mount, two states): right, of, and
+    the false positives (effects or states beyond the truth)."""
+    out: dict[str, Any] = {}
+    for c, r in results:
+        kind = c.name.split("_")[0] if not c.name.startswith("two_states") else "two_states"
+        k = out.setdefault(kind, {"right": 0, "of": 0, "false_positives": []})
+        k["right"] += bool(r["ok"])
+        k["of"] += 1
+        if r.get("false_positive"):
+            k["false_positives"].append(f"{c.name}: {','.join(r['false_positive'])}")
+    out["time_s"] = sum(r["time_s"] for _, r in results)
+    return out
