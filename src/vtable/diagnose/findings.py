@@ -59,12 +59,15 @@ def finding(kind: str, what: str, action: str, runs: list[str] | None = None,
             "numbers": dict(numbers or {}), "action": action}
 
 
-def findings(d, sensors=(), notches: dict | None = None, plants=()) -> list[dict[str, Any]]:
+def findings(d, sensors=(), notches: dict | None = None, plants=(),
+             shown: dict | None = None) -> list[dict[str, Any]]:
     """The findings of a `Diagnosis` `d` (its rounds, unexplained residual, limits,
     declarations at their bounds, interruption), the campaign's acceleration channels that
     disagree with its displacement (`sensors`: `sensors.SensorCheck`) and the notches of
     x_t/x_c that move within a run (`notches`: run -> (first Hz, last Hz, window s)) and
-    the pairs of runs that do not hold one plant (`plants`: `plants.PlantDifference`)."""
+    the pairs of runs that do not hold one plant (`plants`: `plants.PlantDifference`), and
+    what the runs show of effects the final model does not hold (`shown`: effect ->
+    (values, where from), `Effect.evidence`)."""
     out = []
     if d.interrupted:
         out.append(finding("interrupted", f"the diagnosis was interrupted after round "
@@ -108,6 +111,15 @@ def findings(d, sensors=(), notches: dict | None = None, plants=()) -> list[dict
                      "at_hz": p.at_hz, "relative": p.relative}))
     if getattr(d, "states", None):
         out.append(_states_finding(d.states, d.states_declared))
+    for name, (values, where) in (shown or {}).items():
+        if name in d.final_effects:
+            continue
+        vals = ", ".join(f"{k} {v:.3g}" for k, v in values.items())
+        out.append(finding(
+            "shown", f"the runs show {name} ({vals}; {where}) that the final model does not "
+            "hold", f"if it is real, declare it (a specimen: [specimen]) or keep {name} in the "
+            f"model (--effects {name}); the diagnosis fitted it from there and did not add it",
+            numbers={k: float(v) for k, v in values.items()}))
     for run, (f1, f2, w) in (notches or {}).items():
         out.append(finding(
             "softening", f"x_t/x_c's notch moves {f1:.2f} -> {f2:.2f} Hz within the run: the "

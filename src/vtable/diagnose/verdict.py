@@ -115,5 +115,6 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
                              lim.bound if resolved else None,
                              None if lim is None else lim.reference, interrupted)
     plants = st.plants if st.split or preds is None else plant_differences(d.runs, preds)
-    diag.findings = findings(diag, d.campaign.sensors, d.campaign.notches, plants)
+    diag.findings = findings(diag, d.campaign.sensors, d.campaign.notches, plants,
+                             getattr(d.table_view, "evidence", None))
     return diag
