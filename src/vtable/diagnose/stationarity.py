@@ -56,6 +56,9 @@ NOTCH_COHERENCE = 0.8
 COHERENT_SPAN_HZ = 1.0
 #: the notch is looked for in the analysis bands, from this frequency (Hz) up to their top
 LOWEST_HZ = 0.5
+#: ... and below this fraction of the command's band top, when the run declares it (the
+#: band's edge makes a dip of x_t/x_c that is the command's, not the specimen's)
+EDGE = 0.9
 
 
 @dataclass(frozen=True)
@@ -181,10 +184,12 @@ def notches(x: np.ndarray, y: np.ndarray, fs: float, nperseg: int,
     return out
 
 
-def moved_notch(x: np.ndarray, y: np.ndarray, fs: float) -> tuple[float, float, float] | None:
-    """x_t/x_c's most prominent notch (in coherent surroundings) that moves by
-    `NOTCH_LINES` lines or more between the first and the last third of the run:
-    (first Hz, last Hz, the window in s), or None."""
+def moved_notch(x: np.ndarray, y: np.ndarray, fs: float, top: float | None = None
+                ) -> tuple[float, float, float] | None:
+    """x_t/x_c's most prominent notch (in coherent surroundings, below `top` Hz when
+    given) that moves down by `NOTCH_LINES` lines or more between the first and the last
+    third of the run (the specimen softening): (first Hz, last Hz, the window in s), or
+    None."""
     third = len(x) // 3
     n3 = _nperseg(third, fs, NOTCH_AVERAGES)
     if n3 is None:
@@ -192,7 +197,7 @@ def moved_notch(x: np.ndarray, y: np.ndarray, fs: float) -> tuple[float, float, 
     f, coh = scipy.signal.coherence(x, y, fs, nperseg=n3)
     half = max(1, round(COHERENT_SPAN_HZ / (f[1] - f[0])))
     around = np.array([np.median(coh[max(0, i - half):i + half + 1]) for i in range(len(f))])
-    ok = around >= NOTCH_COHERENCE
+    ok = (around >= NOTCH_COHERENCE) & (f < (top if top is not None else np.inf))
     ends = (x[:third], y[:third]), (x[-third:], y[-third:])
     deep = [notches(a, b, fs, n3, ok) for a, b in ends]
     # a notch that moves within a third is smeared there: the other third's may be half
@@ -206,7 +211,7 @@ def moved_notch(x: np.ndarray, y: np.ndarray, fs: float) -> tuple[float, float, 
         if near:
             g = min(near, key=lambda v: abs(v - f))
             f1, f2 = (f, g) if other is shallow[1] else (g, f)
-            if abs(f2 - f1) >= NOTCH_LINES * lines:
+            if f1 - f2 >= NOTCH_LINES * lines:
                 return f1, f2, third / fs
     return None
 
@@ -244,5 +249,8 @@ def stationarity_check(run: Run, predictions: dict[str, np.ndarray] | None = Non
                 y, yh = y[held], yh[held]
                 splits.append((g, *stable_split(x[held], y - yh, y, fs, nper)))
     y = group_signal(run, "table displacement")
-    notch = None if y is None else moved_notch(x, y, fs)
+    drive = run.drive()
+    top = EDGE * drive.band[1] if drive is not None and drive.band and drive.band[1] > 0 \
+        else None
+    notch = None if y is None else moved_notch(x, y, fs, top)
     return StationarityCheck(run.name, tuple(splits), notch)
