@@ -88,3 +88,21 @@ def test_what_identification_finds_is_the_resonators_evidence():
     assert max(abs(z) for _, z in implausibility("platen_resonator", values, plain)) > 0.5
     declared = Campaign.of([read_run(p) for p in resonator_campaign()])
     assert e.evidence(declared) is None
+
+
+def test_a_diagnosis_starts_the_resonator_where_identify_found_it():
+    """The undocumented resonator's campaign diagnosed: the notes say what the runs show,
+    the resonator is added near the truth's; with no round run, the finding `shown` says
+    what the runs show that the model does not hold."""
+    from vtable.diagnose.engine import Diagnoser
+    from vtable.runs import read_run
+
+    runs = [read_run(p) for p in undocumented_campaign()]
+    d = Diagnoser(runs, catalog=["platen_resonator", "sensor_filter"], workers=1).diagnose()
+    assert any(n.startswith("platen_resonator: the runs show") for n in d.notes)
+    assert d.final_effects == ["platen_resonator"], d.verdict
+    assert d.final.effects["platen_resonator"]["f_r"] == pytest.approx(8.3, rel=0.03)
+    none = Diagnoser(runs, catalog=["platen_resonator"], workers=1, max_rounds=0).diagnose()
+    shown = [f for f in none.findings if f["kind"] == "shown"]
+    assert len(shown) == 1 and "platen_resonator" in shown[0]["what"]
+    assert shown[0]["numbers"]["f_r"] == pytest.approx(8.3, rel=0.05)

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import truth
 
+from vtable.analytic.structure import building_stiffnesses, specimen_frequencies
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.model import TableModel
 from vtable.diagnose.stationarity import moved_notch
@@ -22,8 +23,14 @@ from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
 from vtable.models.reduced import ReducedModel
 from vtable.params import presets
+from vtable.params.specimen import specimen_from_dict
 from vtable.runs import read_run
+from vtable.units import INCH
 
+#: a 3-storey shear building: 3 x 25 kip at 110/160/210 in, storeys 120/100/80 kip/in
+BUILDING = {"kind": "shear_building", "weights_kip": [25.0, 25.0, 25.0],
+            "heights_in": [110.0, 160.0, 210.0], "stiffnesses_kip_per_in": [120.0, 100.0, 80.0],
+            "damping": 0.02}
 DOSE = {"stiffness_loss": 0.35, "energy_kip_in": 80.0}
 
 
@@ -49,14 +56,23 @@ def test_the_law_integrated_by_hand():
 
 def test_each_storey_s_reference_energy_and_damping():
     """The frame's storey: c_s = 2ξωm and E_ref = ½ k (h/100)²; a building's storeys take
-    the first mode's stiffness-proportional damping 2ξ₁k_i/ω₁; a bare table has none and
-    the effect cannot be built there."""
+    the first mode's stiffness-proportional damping 2ξ₁k_i/ω₁ and their floor-to-floor
+    heights; a bare table has none and the effect cannot be built there."""
     frame = presets.specimen("sdof_frame")
     ((k, m, c, h),) = storeys(frame)
     w = 2 * math.pi * frame.frequency
     assert c == pytest.approx(2 * frame.damping * w * m, rel=1e-12)
     assert k == pytest.approx(m * w * w, rel=1e-12)
-    assert 0.5 * k * (REFERENCE_DRIFT * h) ** 2 > 0
+    assert h == pytest.approx(frame.height, rel=1e-12)
+    b = specimen_from_dict(BUILDING, "building")
+    w1 = 2 * math.pi * specimen_frequencies(b)[0]
+    rows = storeys(b)
+    assert [h for *_, h in rows] == pytest.approx([110 * INCH, 50 * INCH, 50 * INCH])
+    for (k_i, m_i, c_i, _), k_b, m_b in zip(rows, building_stiffnesses(b), b.masses,
+                                            strict=True):
+        assert (k_i, m_i) == pytest.approx((k_b, m_b), rel=1e-12)
+        assert c_i == pytest.approx(2 * 0.02 * k_b / w1, rel=1e-12)
+    assert REFERENCE_DRIFT == 0.01
     with pytest.raises(VtableError, match="no storey to degrade"):
         ReducedModel(Physics(nominal_open_loop(), presets.specimen("none"),
                              {"specimen_degradation": {}}))

@@ -56,8 +56,8 @@ def _files(tmp: str) -> tuple[Path, Path]:
     return out[0], out[1]
 
 
-def test_the_state_is_read_and_checked(tmp_path):
-    a, b = _files(str(tmp_path))
+def test_the_state_is_read_and_checked(tmp_path_factory):
+    a, b = _files(str(tmp_path_factory.getbasetemp()))
     ra, rb = read_run(_with_state(a, "as built")), read_run(_with_state(b, "after run 5"))
     assert (ra.state, rb.state) == ("as built", "after run 5")
     assert read_run(a).state is None
@@ -70,19 +70,28 @@ def test_the_state_is_read_and_checked(tmp_path):
     same = _with_state(a, "after run 5")
     with pytest.raises(VtableError, match=r"\[specimen\] differs from .*state 'after run 5'"):
         read_campaign([other, same])
-    bad = _with_state(a, "x")
-    bad.write_text(bad.read_text().replace('state = "x"', "state = 3"))
-    with pytest.raises(VtableError, match=r"\[specimen\]\.state: expected a name"):
-        read_run(bad)
+    for given in ("3", '"(undeclared)"', '" after"', '""'):
+        bad = _with_state(a, "x")
+        bad.write_text(bad.read_text().replace('state = "x"', f"state = {given}"))
+        with pytest.raises(VtableError, match=r"\[specimen\]\.state: expected a name"):
+            read_run(bad)
+    # the states of a campaign are states of one specimen
+    block = _with_state(a, "blocks")
+    text = block.read_text()
+    spec = text[text.index("[specimen]"):text.index("[command]")]
+    block.write_text(text.replace(spec, '[specimen]\nstate = "blocks"\nkind = "rigid"\n'
+                                  'weight_kip = 10.0\nheight_in = 20.0\n\n'))
+    with pytest.raises(VtableError, match="not the kind of specimen"):
+        read_campaign([_with_state(a, "as built"), block])
 
 
-def test_each_state_has_its_own_specimen(tmp_path):
+def test_each_state_has_its_own_specimen(tmp_path_factory):
     """Declared states (the second re-declared as the lab measured it): the fit gives each
     state its specimen (frequency within 1 % of the truth's, the change between them -8 %),
     the base table names the second state's."""
-    a, b = _files(str(tmp_path))
-    camp = Campaign.of([read_run(_with_state(a, "as built")),
-                        read_run(_redeclared(b, "after", 0.92))])
+    a, b = _files(str(tmp_path_factory.getbasetemp()))
+    built, after = read_run(_with_state(a, "as built")), read_run(_redeclared(b, "after", 0.92))
+    camp = Campaign.of([built, after])
     assert list(camp.states) == ["as built", "after"]
     m = TableModel().fit(camp)
     f_built = m.base_["specimen.frequency_hz"]["fitted"]
@@ -92,14 +101,21 @@ def test_each_state_has_its_own_specimen(tmp_path):
     assert m.base_["specimen[after].damping"]["fitted"] > m.base_["specimen.damping"]["fitted"]
     one = TableModel().fit(Campaign.of([read_run(a), read_run(b)]))
     assert m.score() < 0.6 * one.score()
+    # a run scored alone is predicted in its own state, found by its name: undeclared, the
+    # same run is predicted with the base state's specimen, far worse
+    alone = m.score([after])
+    assert alone < 0.02 and m.score([read_run(b)]) > 3 * alone
+    other = read_run(_with_state(b, "elsewhere"))
+    with pytest.raises(VtableError, match="holds no specimen for state 'elsewhere'"):
+        m.score([other])
 
 
-def test_undeclared_runs_that_differ_get_a_state_each(tmp_path):
+def test_undeclared_runs_that_differ_get_a_state_each(tmp_path_factory):
     """The same runs declaring no state: the diagnosis names them as different plants and
     fits a state per run: the first's frequency the truth's, the second's moved down to its
     bound (-5 % of the one declaration: the change is -8 %), which the findings name; the
     JSON says so."""
-    a, b = _files(str(tmp_path))
+    a, b = _files(str(tmp_path_factory.getbasetemp()))
     d = Diagnoser([read_run(a), read_run(b)], catalog=["sensor_filter"], workers=1).diagnose()
     assert any(f["kind"] == "plants" for f in d.findings)
     assert not d.states_declared and len(d.states) == 2

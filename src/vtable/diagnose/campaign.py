@@ -36,6 +36,9 @@ def check_campaign(runs: Sequence[Run]) -> list[Run]:
     rate (`compare.analysis_run`)."""
     if not runs:
         raise VtableError("diagnosis needs at least one run")
+    for r in runs:
+        if "specimen" not in r.meta:
+            raise VtableError(f"{r.name}: no [specimen] table; the model needs the specimen")
     check_configuration(list(runs))
     out = []
     for r in runs:
@@ -52,8 +55,6 @@ def check_campaign(runs: Sequence[Run]) -> list[Run]:
             raise VtableError(f"{r.name}: channel 'h_span' (the command) is "
                               + ("zero throughout" if not np.any(x) else f"constant ({x[0]:g} m)")
                               + "; a model driven by it predicts no motion to compare")
-        if "specimen" not in r.meta:
-            raise VtableError(f"{r.name}: no [specimen] table; the model needs the specimen")
         a = analysis_run(r)
         if len(a.time) < 512:
             raise VtableError(f"{r.name}: {len(a.time)} samples ({r.duration:.2f} s) at "
@@ -138,13 +139,12 @@ class Campaign:
         return out if len(out) > 1 else {}
 
     def state(self, run: Run | str) -> str | None:
-        """The state of `run` beyond the base state (None: the base state's)."""
+        """The specimen's state of `run` (its name: `state_of`, else what the run itself
+        declares), None when neither says."""
         name = run if isinstance(run, str) else run.name
-        st = self.states
-        if not st:
-            return None
-        s = self.state_of.get(name)
-        return None if s == next(iter(st)) else s
+        if name in self.state_of:
+            return self.state_of[name]
+        return None if isinstance(run, str) else run.state
 
     @property
     def state_specimens(self) -> dict:

@@ -45,10 +45,11 @@ def with_states(ph: Physics, campaign: Campaign) -> Physics:
     """`ph` with a specimen for each further state of `campaign` (its own where `ph` has
     one, else the state's declared one); none when the campaign has one state."""
     extra = campaign.state_specimens
-    if set(ph.states) == set(extra):
+    base = next(iter(campaign.states), None)
+    if set(ph.states) == set(extra) and ph.base_state == base:
         return ph
     return dataclasses.replace(ph, states={s: ph.states.get(s, spec)
-                                           for s, spec in extra.items()})
+                                           for s, spec in extra.items()}, base_state=base)
 
 
 def state_params(state: str, declared, cal) -> list[BaseParam]:

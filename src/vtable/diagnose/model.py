@@ -466,7 +466,7 @@ class TableModel(Layout):
     def predict(self, run: Run) -> dict[str, np.ndarray]:
         """The run's predictable channels (SI) at the run's own sample rate (in its
         specimen state, when the campaign the model was fitted on has several)."""
-        state = self.campaign_.state(run) if self.campaign_ is not None else None
+        state = self.campaign_.state(run) if self.campaign_ is not None else run.state
         return ReducedModel(self.physics_.in_state(state), self.vt).predict(run)
 
     # -- what the fit says about itself --------------------------------------------------

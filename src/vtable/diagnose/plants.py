@@ -23,6 +23,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -68,10 +69,7 @@ class PlantDifference:
 
 def frame_for(n: int) -> int:
     """The frame two runs of at least `n` samples are compared on (`FRAME`, `AVERAGES`)."""
-    nper = FRAME
-    while frames.averages(n, 2 * nper) >= AVERAGES:
-        nper *= 2
-    return nper
+    return max(FRAME, frames.frame_for_averages(n, AVERAGES) or FRAME)
 
 
 def _estimate(run: Run, predictions, nper: int):
@@ -95,11 +93,17 @@ def plant_differences(runs: list[Run], predictions: dict[str, dict[str, np.ndarr
     """The pairs of `runs` (at one analysis rate) that do not hold one plant the model
     with `predictions` ({run: channels}) describes (module docstring), largest first."""
     by_name = {r.name: r for r in runs}
+    memo: dict[tuple[str, int], Any] = {}
+
+    def estimate(name: str, nper: int):
+        if (name, nper) not in memo:
+            memo[name, nper] = _estimate(by_name[name], predictions.get(name), nper)
+        return memo[name, nper]
+
     out = []
     for a, b in itertools.combinations(by_name, 2):
         nper = frame_for(min(len(by_name[a].time), len(by_name[b].time)))
-        ea = _estimate(by_name[a], predictions.get(a), nper)
-        eb = _estimate(by_name[b], predictions.get(b), nper)
+        ea, eb = estimate(a, nper), estimate(b, nper)
         if ea is None or eb is None:
             continue
         fa, Ha, Pa, sa, oka = ea

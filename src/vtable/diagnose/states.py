@@ -27,14 +27,15 @@ from vtable.diagnose.statistics import held_out_gain
 STATES_SHARE = 0.5
 
 
-def split(dg, st) -> list[PlantDifference]:
+def split(dg, st) -> list[PlantDifference] | None:
     """Diagnoser `dg`'s final model refitted with a specimen state per run, where its
     campaign declares no states and its runs do not hold one plant; the refit becomes the
     last stage (and `dg.campaign` the split campaign) when it passes. Returns the pairs of
-    runs that differed (empty: none, or the campaign declares its states)."""
+    runs that differed before it (empty: none), None when not looked for (the campaign
+    declares its states, has one run, or the model is not calibrated)."""
     camp = dg.campaign
     if camp.states or len(dg.runs) < 2 or st.current is None or not dg.calibration.enabled:
-        return []
+        return None
     pairs = plant_differences(dg.runs, st.stages[-1].predictions)
     if not pairs:
         return []

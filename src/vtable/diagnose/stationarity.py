@@ -161,7 +161,7 @@ def stable_split(x: np.ndarray, r: np.ndarray, y: np.ndarray, fs: float,
 def notches(x: np.ndarray, y: np.ndarray, fs: float, nperseg: int,
             coherent: np.ndarray | None = None,
             prominence: float = NOTCH_PROMINENCE) -> list[tuple[float, float]]:
-    """The dips of |H1(y/x)| at least `NOTCH_PROMINENCE` deep in log |H|, between
+    """The dips of |H1(y/x)| at least `prominence` (`NOTCH_PROMINENCE`) deep in log |H|, between
     `LOWEST_HZ` and the analysis bands' top (30 Hz): (frequency Hz, interpolated between
     lines on a parabola through log |H|; prominence). With `coherent` (a boolean per
     line of these frames), only dips whose surroundings are coherent."""

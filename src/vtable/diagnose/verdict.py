@@ -39,7 +39,7 @@ class State:
     pushed: list[dict[str, Any]] = field(default_factory=list)
     #: pairs of runs that did not hold one plant the model described (`states.split`),
     #: and whether the campaign was then fitted with a specimen state per run
-    plants: list = field(default_factory=list)
+    plants: list | None = None
     split: bool = False
 
 
@@ -114,7 +114,8 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
                              st.start_err, err, floor,
                              lim.bound if resolved else None,
                              None if lim is None else lim.reference, interrupted)
-    plants = st.plants if st.split or preds is None else plant_differences(d.runs, preds)
+    plants = st.plants if st.plants is not None else (
+        [] if preds is None else plant_differences(d.runs, preds))
     diag.findings = findings(diag, d.campaign.sensors, d.campaign.notches, plants,
                              getattr(d.table_view, "evidence", None))
     return diag

@@ -80,6 +80,10 @@ class Param:
             if not isinstance(v, int | float) or isinstance(v, bool) or not math.isfinite(v):
                 raise VtableError(f"{where}: parameter {self.name!r} needs a finite {k} "
                                   f"bound, got {v!r}")
+        if self.spread is not None and (not self.log or not isinstance(self.spread, int | float)
+                                        or not self.spread > 1):
+            raise VtableError(f"{where}: parameter {self.name!r}: spread {self.spread!r} needs "
+                              "a log parameter and a factor above 1")
         if not self.lower < self.upper:
             raise VtableError(f"{where}: parameter {self.name!r}: lower bound {self.lower:g} is "
                               f"not below the upper bound {self.upper:g}")

@@ -15,6 +15,7 @@ import math
 import statistics
 
 from vtable.effects.base import Effect, Param
+from vtable.ident.undeclared import undeclared_resonance
 
 
 class PlatenResonator(Effect):
@@ -35,8 +36,6 @@ class PlatenResonator(Effect):
         """The resonance identify's structure check finds on the runs that declare no
         specimen with a mode (`vtable.ident.undeclared`): the median over those runs of
         its frequency, damping and mass ratio (eq 7.9's u, the platen's mass fraction)."""
-        from vtable.ident.undeclared import undeclared_resonance
-
         found = [r for r in map(undeclared_resonance, campaign.runs) if r is not None]
         if not found:
             return None

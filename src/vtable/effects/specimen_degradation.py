@@ -9,15 +9,18 @@ function grows linearly with the dissipated energy:
     k_i(t) = k_i / (1 + δ ε_i(t)ⁿ),   ε_i = E_i / E_ref,i,   Ė_i = c_i ḋ_i²,
 
 with ḋ_i the storey's drift velocity, c_i its viscous coefficient (a SDOF frame's
-c_s = 2ξωm; a building's stiffness-proportional share 2ξ₁k_i/ω₁ of its first mode's
+c_s = 2ξωm; for a building, whose damping is modal, the measure 2ξ₁k_i/ω₁: the storey's
+share of its first mode's damping were it stiffness-proportional — E_i measures what the
+storey dissipates, it is not the model's exact dissipation under Rayleigh or per-mode
 damping), and E_ref,i = ½ k_i (h_i/100)² its elastic energy at a 1 % drift ratio (h_i
-the storey's height), so that δ is the stiffness fraction lost per such unit of
-energy, and n (1 in Baber & Noori's law) lets the loss slow down (n < 1) or speed up as
-the damage accumulates. The law is causal: the stiffness at t depends only on the run up to
-t, so a fit on a run's first 60 % predicts its end. The storey force it adds to the
-elastic −k_i d is +k_i w/(1 + w) d with w = δ εⁿ, the state ε (dimensionless),
-ε̇ = c_i ḋ²/E_ref,i. Every run starts from the specimen as the model holds it (a run of
-another state declares it: [specimen] state).
+the storey's height as the run declares it: a SDOF frame's mass height, a building's
+floor-to-floor height, the first above the actuator line), so that δ is the stiffness
+fraction lost per such unit of energy, and n (1 in Baber & Noori's law) lets the loss
+slow down (n < 1) or speed up as the damage accumulates. The law is causal: the
+stiffness at t depends only on the run up to t, so a fit on a run's first 60 % predicts
+its end. The storey force it adds to the elastic −k_i d is +k_i w/(1 + w) d with
+w = δ εⁿ, the state ε (dimensionless), ε̇ = c_i ḋ²/E_ref,i. Every run starts from the
+specimen as the model holds it (a run of another state declares it: [specimen] state).
 
 A bare table or a rigid block has no storey. Where no run's x_t/x_c notch (the specimen's
 fixed-base frequency) moves within the run (`vtable.diagnose.stationarity`), the runs show
@@ -95,7 +98,10 @@ class SpecimenDegradation(Effect):
             raise VtableError("specimen_degradation: the specimen has no storey to degrade "
                               f"({type(spec).__name__})")
         for i, (k, mass, c, h) in enumerate(storeys(spec), start=1):
-            e_ref = 0.5 * k * (REFERENCE_DRIFT * max(h, 1e-3)) ** 2
+            if not h > 0:
+                raise VtableError(f"specimen_degradation: storey {i} has no height (its "
+                                  "unit of energy is its elastic energy at a 1 % drift ratio)")
+            e_ref = 0.5 * k * (REFERENCE_DRIFT * h) ** 2
             m.add_force(degrading_storey, storey_coordinate(spec, i), None,
                         {"k": k, "r": c / e_ref, "delta": p["delta"], "n": p["exponent"]},
                         states=1, mass=mass,

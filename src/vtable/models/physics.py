@@ -34,8 +34,10 @@ class Physics:
     #: EERC table's): still that value when applied, it is the run's table's default
     defaulted: dict = field(default_factory=dict, compare=False, repr=False)
     #: the specimen in each further state of a campaign ([specimen] state): state name ->
-    #: its specimen; `specimen` is the first state's (the table and the effects are shared)
+    #: its specimen; `specimen` is the state `base_state`'s (the table and the effects are
+    #: shared)
     states: dict[str, Specimen] = field(default_factory=dict)
+    base_state: str | None = None
 
     def __post_init__(self) -> None:
         checked = {name: get(name).check(p, name) for name, p in self.effects.items()}
@@ -54,11 +56,17 @@ class Physics:
         return dataclasses.replace(self, effects={**self.effects, name: dict(params or {})})
 
     def in_state(self, state: str | None) -> Physics:
-        """This model with the specimen of `state` (one of `states`); itself for the first
-        state (None, or a name not among `states`)."""
-        if state is None or state not in self.states:
+        """This model with the specimen of `state`: itself for `base_state`, for None and
+        for any state when it holds one specimen; one of `states` else (a state it does
+        not hold is an error naming those it does)."""
+        if state is None or state == self.base_state or not self.states:
             return self
-        return dataclasses.replace(self, specimen=self.states[state], states={})
+        if state not in self.states:
+            held = ", ".join(repr(s) for s in (self.base_state, *self.states))
+            raise VtableError(f"the model holds no specimen for state {state!r} (it holds "
+                              f"{held}): fit it on runs of that state")
+        return dataclasses.replace(self, specimen=self.states[state], states={},
+                                   base_state=state)
 
     def without(self, name: str) -> Physics:
         return dataclasses.replace(self, effects={k: v for k, v in self.effects.items()

@@ -80,9 +80,11 @@ def declare(meta: dict[str, Any], where: str, folder: Path | None = None) -> Dec
         given = dict(meta["specimen"])
         if "state" in given:
             state = given.pop("state")
-            if not isinstance(state, str) or not state.strip():
+            if not isinstance(state, str) or not state.strip() or state != state.strip() \
+                    or state.startswith("("):
                 raise VtableError(f"{where} [specimen].state: expected a name (a non-empty "
-                                  f"string), got {state!r:.60}")
+                                  "string, without spaces at its ends, not starting with "
+                                  f"'('), got {state!r:.60}")
         specimen = specimen_from_dict(given, f"{where} [specimen]", folder)
         notes += specimen_hints(specimen, f"{where} [specimen]")
         if isinstance(specimen, OpenSeesSpecimen):  # its model as data, never run

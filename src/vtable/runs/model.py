@@ -91,7 +91,7 @@ class Run:
 
     def configuration(self) -> dict[str, Any]:
         """What must agree across a campaign: table, control settings, specimen (its
-        `state` apart: `vtable.runs.read.check_states` compares the specimens)."""
+        `state` apart: `vtable.runs.read.check_configuration` compares the specimens)."""
         out = {k: self.meta.get(k) for k in ("table", "control", "specimen")}
         if isinstance(out["specimen"], dict):
             out["specimen"] = {k: v for k, v in out["specimen"].items() if k != "state"}

@@ -80,7 +80,10 @@ def load_specimen(name_or_path: str | None) -> Specimen:
     p = Path(name_or_path)
     if name_or_path.endswith(".toml") or p.is_file():
         d = read_toml(p)
-        spec = specimen_from_dict(d.get("specimen", d), f"{p} [specimen]", p.parent)
+        given = d.get("specimen", d)
+        if isinstance(given, dict):  # a run's state says when it was made, not what it is
+            given = {k: v for k, v in given.items() if k != "state"}
+        spec = specimen_from_dict(given, f"{p} [specimen]", p.parent)
         if isinstance(spec, OpenSeesSpecimen):  # simulate steps it: built and checked now
             try:
                 load_model(spec.model)
