@@ -117,8 +117,9 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
         vals = ", ".join(f"{k} {v:.3g}" for k, v in values.items())
         out.append(finding(
             "shown", f"the runs show {name} ({vals}; {where}) that the final model does not "
-            "hold", f"if it is real, declare it (a specimen: [specimen]) or keep {name} in the "
-            f"model (--effects {name}); the diagnosis fitted it from there and did not add it",
+            "hold", f"the diagnosis fitted {name} from there and did not add it: start from it "
+            f"(--with {name}) to see it fitted in, or declare what it stands for (an "
+            "undocumented specimen in [specimen])",
             numbers={k: float(v) for k, v in values.items()}))
     for run, (f1, f2, w) in (notches or {}).items():
         out.append(finding(
