@@ -14,6 +14,7 @@ import truth
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.engine import Diagnoser
 from vtable.diagnose.model import TableModel
+from vtable.drive.compensate import driven
 from vtable.errors import VtableError
 from vtable.runs import read_run
 from vtable.runs.read import campaign as read_campaign
@@ -105,6 +106,9 @@ def test_each_state_has_its_own_specimen(tmp_path_factory):
     # same run is predicted with the base state's specimen, far worse
     alone = m.score([after])
     assert alone < 0.02 and m.score([read_run(b)]) > 3 * alone
+    # a drive is for the specimen as the last run left it
+    ph, state = driven(m)
+    assert state == "after" and ph.specimen.frequency == pytest.approx(f_after, rel=1e-12)
     other = read_run(_with_state(b, "elsewhere"))
     with pytest.raises(VtableError, match="holds no specimen for state 'elsewhere'"):
         m.score([other])

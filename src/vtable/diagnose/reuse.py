@@ -39,6 +39,11 @@ def model_at(m, campaign: Campaign, values: Mapping[str, float], source: str = "
     keys = [p.key for p in lay]
     unknown = sorted(set(values) - set(keys))
     missing = [k for k in keys if k not in values]
+    states = [k for k in unknown if k.startswith("specimen[")]
+    if states:
+        raise VtableError(f"{source}: {states[0]!r}: the model was fitted on runs of several "
+                          "specimen states; give runs of those states ([specimen] state) to "
+                          "reuse it")
     if unknown or missing:
         raise VtableError(f"{source}: " + (f"{unknown[0]!r} is not a parameter of the "
                                            "model of these runs" if unknown else

@@ -83,6 +83,17 @@ UPDATE_BAND_HZ = 5.0
 UPDATE_CROSSOVER_HZ = 2.0
 
 
+def driven(model: TableModel):
+    """(the model's physics a drive is played on, its specimen state or None): of a model
+    fitted on several specimen states, the state of the campaign's last run (the specimen
+    as the runs left it)."""
+    camp = getattr(model, "campaign_", None)
+    if camp is None or not model.physics_.states:
+        return model.physics_, None
+    state = camp.state(camp.runs[-1])
+    return model.physics_.in_state(state), state
+
+
 @dataclass
 class DrivePlant:
     """The calibrated model a drive is played on: the fitted `TableModel`'s reduced model
@@ -92,7 +103,8 @@ class DrivePlant:
     h: float
 
     def __post_init__(self) -> None:
-        self.reduced = ReducedModel(self.model.physics_, self.model.vt)
+        self.physics, self.state = driven(self.model)
+        self.reduced = ReducedModel(self.physics, self.model.vt)
 
     def play(self, t: np.ndarray, d: np.ndarray) -> dict[str, np.ndarray]:
         """The model's channels (SI) under drive `d`, with x_t, x_eff and the storey
@@ -228,7 +240,7 @@ def capped_near_fixed_base(plant: DrivePlant, t: np.ndarray, T: np.ndarray, d: n
     (before and after the cap), and where."""
     f, G, D = amplification(T, d, fs)
     near = np.zeros(len(f), dtype=bool)
-    for fb in specimen_frequencies(plant.model.physics_.specimen):
+    for fb in specimen_frequencies(plant.physics.specimen):
         near |= np.abs(f - fb) <= NEAR_FIXED_BASE * fb
     before = float(np.max(G[near])) if near.any() else None
     capped = False
@@ -348,6 +360,10 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
                      f"{100 * above[1]:.0f} % of the target's: the correction asks the table "
                      f"for content where its performance is not rated (--band {bw:g} keeps "
                      "the correction within it; the spectrum near it is then not corrected)")
+    if plant.state is not None:
+        notes.append(f"the model holds several specimen states: the drive is for "
+                     f"{plant.state!r}, the state of the runs' last "
+                     f"({model.campaign_.runs[-1].name})")
     if measured is not None:  # the prediction carries what the lab's run showed
         out = {**out, key: out[key] + bias}
         notes.append("corrected from a measured run: the prediction is the model's plus "
@@ -402,7 +418,7 @@ def fixed_base_peak(model: TableModel, x: np.ndarray, fs: float) -> float | None
     """The peak relative displacement of the specimen on a rigid, unmoving base driven by
     `x` (SDOF: the declared f and ξ, its response-spectrum ordinate; None for other
     specimens)."""
-    spec = model.physics_.specimen
+    spec = driven(model)[0].specimen
     if not isinstance(spec, SDOFSpecimen):
         return None
     return float(response_spectrum(acceleration(x, fs), 1 / fs, 1 / spec.frequency,
@@ -414,7 +430,7 @@ def _elongated(plant: DrivePlant, target: Target, model: TableModel, fs: float) 
     frequency: the peak of the model's drift over the drive), so that the specimen meets
     its content at the frequency interaction has lowered it to. The record is changed on
     purpose: the specimen's response is the measure, not the time history."""
-    spec = model.physics_.specimen
+    spec = driven(model)[0].specimen
     if not isinstance(spec, SDOFSpecimen):
         return Played("time-scale elongation", target.x, {}, {
             "drive_peak_in": float(np.max(np.abs(target.x)) / 0.0254),
