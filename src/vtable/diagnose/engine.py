@@ -21,7 +21,6 @@ KeyboardInterrupt) carries the rounds finished.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -32,6 +31,7 @@ from vtable.diagnose.bounds import base_at_bounds, pushed_beyond
 from vtable.diagnose.calibration import Calibration, bounding_setting
 from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import compare
+from vtable.diagnose.evidence import evidence_view
 from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
 from vtable.diagnose.projected import Frame
@@ -46,20 +46,12 @@ from vtable.diagnose.result import (
     localise,
 )
 from vtable.diagnose.screen import nonlinearity_evidence
-from vtable.diagnose.selection import (
-    MIN_SHARE,
-    NOISE_SHARE,
-    SELECTION,
-    Z_NOISE,
-    failing,
-    shown_by_runs,
-)
+from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE, failing
 from vtable.diagnose.states import split
 from vtable.diagnose.statistics import Comparison, held_out_gain
 from vtable.diagnose.verdict import State, diagnosis_of
 from vtable.effects.registry import default_candidates
 from vtable.effects.registry import get as effect
-from vtable.effects.table import TableView
 from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
 from vtable.models.reduced import ReducedModel
@@ -97,15 +89,14 @@ class Diagnoser:
             effect(e)
         self.notes = self.campaign.notes
         self.vt = self.campaign.table
-        self.table_view = TableView.of(self.vt)  # the effects' defaults (`SELECTION`'s prior)
         self.specimen = self.runs[0].specimen()
         self.start = Physics(nominal_open_loop(self.vt), self.specimen,
                              {e: {} for e in start_effects})
         self.catalog = list(catalog or default_candidates())
         for e in self.catalog:
             effect(e)
-        self.table_view = dataclasses.replace(self.table_view, evidence=shown_by_runs(
-            self.catalog, self.campaign, self.notes))
+        # the effects' defaults and what the runs show of them (`SELECTION`'s prior)
+        self.table_view = evidence_view(self.vt, self.catalog, self.campaign, self.notes)
         self.progress = progress or (lambda i, n, s: None)
         self.max_rounds = max_rounds
         self.floor = self.campaign.floor

@@ -94,20 +94,6 @@ SELECTION = (f"an effect is added when, on the held-out last 40 % of every run a
              "it no longer passes")
 
 
-def shown_by_runs(catalog, campaign, notes: list[str]) -> dict[str, tuple[dict, str]]:
-    """What the campaign's runs show of each catalog effect's parameters
-    (`Effect.evidence`), each said in `notes`: effect -> (values, where from)."""
-    out = {}
-    for name in catalog:
-        ev = effect(name).evidence(campaign)
-        if ev:
-            out[name] = ev
-            vals = ", ".join(f"{k} {v:.3g}" for k, v in ev[0].items())
-            notes.append(f"{name}: the runs show {vals} ({ev[1]}): its fit starts there and "
-                         "is charged for its distance from these, not from its defaults")
-    return out
-
-
 def implausibility(name: str, values: dict[str, float], table=None) -> list[tuple[str, float]]:
     """Each of effect `name`'s parameters in `values` (its units) as (what, z): z its
     distance from the default on `table` (a `vtable.effects.table.TableView`; None: the
