@@ -73,7 +73,7 @@ def test_each_storey_s_reference_energy_and_damping():
         assert (k_i, m_i) == pytest.approx((k_b, m_b), rel=1e-12)
         assert c_i == pytest.approx(2 * 0.02 * k_b / w1, rel=1e-12)
     assert REFERENCE_DRIFT == 0.01
-    with pytest.raises(VtableError, match="no storey to degrade"):
+    with pytest.raises(VtableError, match="has no storeys to degrade"):
         ReducedModel(Physics(nominal_open_loop(), presets.specimen("none"),
                              {"specimen_degradation": {}}))
 

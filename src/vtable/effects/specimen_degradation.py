@@ -95,7 +95,7 @@ class SpecimenDegradation(Effect):
     def apply(self, m, p):
         spec = m.specimen
         if not storeys(spec):
-            raise VtableError("specimen_degradation: the specimen has no storey to degrade "
+            raise VtableError("specimen_degradation: the specimen has no storeys to degrade "
                               f"({type(spec).__name__})")
         for i, (k, mass, c, h) in enumerate(storeys(spec), start=1):
             if not h > 0:
