@@ -977,32 +977,28 @@ def _cases_32() -> list[Case32]:
     # what the largest random run dissipates (~200 kip-in for the frame at 0.5 in over 90 s),
     # so that the stiffness falls over the run (a loss complete in its first tenth is a
     # changed state: tried with E0 = 30 and 50 kip-in, not found, said in issue 32's note)
-    deg = [  # (specimen, L, E0, spans, rate, noise)
-        (sdof, 0.25, 100.0, (0.2, 0.5), 200.0, 0.02),
-        (sdof, 0.15, 150.0, (0.2, 0.5), 256.0, 0.01),
-        (sdof, 0.35, 300.0, (0.3, 0.6), 200.0, 0.03),
-        (sdof, 0.2, 120.0, (0.1, 0.4), 500.0, 0.02),
-        (sdof, 0.3, 150.0, (0.2, 0.5), 200.0, 0.02),
-        (sdof, 0.2, 80.0, (0.25, 0.5), 256.0, 0.02),
+    pink = cmds((0.2, 0.6), peak=0.8, pink=True, band=(0.5, 25.0))
+    deg = [  # (name, table, specimen, L, E0, commands, rate, noise)
+        ("sdof", E, sdof, 0.25, 100.0, cmds((0.2, 0.5), "synthetic"), 200.0, 0.02),
+        ("sdof", E, sdof, 0.15, 150.0, cmds((0.2, 0.5), "elcentro"), 256.0, 0.01),
+        ("sdof", E, sdof, 0.35, 300.0, cmds((0.3, 0.6), "synthetic"), 200.0, 0.03),
+        ("sdof", E, sdof, 0.2, 120.0, cmds((0.1, 0.4), "elcentro"), 500.0, 0.02),
+        ("sdof", E, sdof, 0.3, 150.0, cmds((0.2, 0.5), "synthetic"), 200.0, 0.02),
+        ("sdof", E, sdof, 0.2, 80.0, cmds((0.25, 0.5), "elcentro"), 256.0, 0.02),
+        ("3storey", E, b3, 0.25, 100.0, cmds((0.2, 0.5)), 200.0, 0.02),
+        ("3storey", E, b3, 0.3, 200.0, cmds((0.2, 0.5)), 256.0, 0.01),
+        ("3storey", E, b3, 0.2, 60.0, cmds((0.2, 0.5)), 200.0, 0.03),
+        ("lnec", Ln, l_sdof, 0.3, 40.0, pink, 256.0, 0.02),
+        ("lnec", Ln, l_sdof, 0.25, 60.0, pink, 200.0, 0.015),
+        ("lnec", Ln, l_sdof, 0.35, 100.0, pink, 256.0, 0.02),
     ]
-    for j, (spec, loss, e0, spans, fs, noise) in enumerate(deg):
-        add(f"degradation_sdof_{j + 1}", "in_catalog",
-            E(effects={"specimen_degradation": {"stiffness_loss": loss, "energy_kip_in": e0}}),
-            spec, ["specimen_degradation"], cmds(spans, "elcentro" if j % 2 else "synthetic"),
-            fs=fs, noise=noise)
-    for j, (loss, e0, fs, noise) in enumerate(((0.25, 100.0, 200.0, 0.02),
-                                               (0.3, 200.0, 256.0, 0.01),
-                                               (0.2, 60.0, 200.0, 0.03))):
-        add(f"degradation_3storey_{j + 1}", "in_catalog",
-            E(effects={"specimen_degradation": {"stiffness_loss": loss, "energy_kip_in": e0}}),
-            b3, ["specimen_degradation"], cmds((0.2, 0.5)), fs=fs, noise=noise)
-    for j, (loss, e0, fs, noise) in enumerate(((0.3, 40.0, 256.0, 0.02),
-                                               (0.25, 60.0, 200.0, 0.015),
-                                               (0.35, 100.0, 256.0, 0.02))):
-        add(f"degradation_lnec_{j + 1}", "in_catalog",
-            Ln(effects={"specimen_degradation": {"stiffness_loss": loss, "energy_kip_in": e0}}),
-            l_sdof, ["specimen_degradation"],
-            cmds((0.2, 0.6), peak=0.8, pink=True, band=(0.5, 25.0)), fs=fs, noise=noise)
+    count: dict[str, int] = {}
+    for name, table, spec, loss, e0, c, fs, noise in deg:
+        count[name] = count.get(name, 0) + 1
+        add(f"degradation_{name}_{count[name]}", "in_catalog",
+            table(effects={"specimen_degradation": {"stiffness_loss": loss,
+                                                    "energy_kip_in": e0}}),
+            spec, ["specimen_degradation"], c, fs=fs, noise=noise)
     # the table accelerometer on a mount (resonance f_m, damping, conditioner low-pass f_c)
     mounts = [  # (table, specimen, f_m, zeta_m, f_c, rate, noise)
         ("eerc", sdof, 40.0, 0.1, 100.0, 200.0, 0.02),

@@ -16,8 +16,11 @@ def shown_by_runs(catalog, campaign, notes: list[str]) -> dict[str, tuple[dict, 
     (`Effect.evidence`), each said in `notes`: effect -> (values, where from)."""
     out = {}
     for name in catalog:
-        ev = effect(name).evidence(campaign)
-        if ev:
+        e = effect(name)
+        ev = e.evidence(campaign)
+        if ev:  # held within the parameters' bounds (a fit never leaves them)
+            ev = ({k: min(max(float(v), e.param(k).lower), e.param(k).upper)
+                   for k, v in ev[0].items()}, ev[1])
             out[name] = ev
             vals = ", ".join(f"{k} {v:.3g}" for k, v in ev[0].items())
             notes.append(f"{name}: the runs show {vals} ({ev[1]}): its fit starts there and "

@@ -207,7 +207,7 @@ class Effect:
         parameters' units, where they come from), or None (the default). A diagnosis
         starts the effect's fit there too and centres its prior on them instead of the
         defaults (`vtable.diagnose.selection.implausibility`): what a run shows is not
-        charged as implausible."""
+        charged as implausible. Values outside a parameter's bounds are held at them."""
         return None
 
     def unseen(self, values: dict[str, float],

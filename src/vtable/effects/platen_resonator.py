@@ -42,8 +42,6 @@ class PlatenResonator(Effect):
         med = statistics.median
         values = {"m_r": 100.0 * med(r.u for r in found), "f_r": med(r.f_s for r in found),
                   "xi_r": med(r.xi_s for r in found)}
-        values = {k: min(max(v, self.param(k).lower), self.param(k).upper)
-                  for k, v in values.items()}
         runs = ", ".join(r.run for r in found)
         return values, f"identified on {runs}'s x_t/x_c (eq 7.9 with the valve lag)"
 

@@ -54,8 +54,6 @@ class SensorMount(Effect):
             return None
         values = {k: statistics.median(f[i] for f in fits)
                   for i, k in enumerate(("f_m", "zeta_m", "f_c"))}
-        values = {k: min(max(v, self.param(k).lower), self.param(k).upper)
-                  for k, v in values.items()}
         return values, "fitted to the runs' ẍ/s²x (the sensor check)"
 
     def apply(self, m, p):
