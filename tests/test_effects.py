@@ -37,7 +37,8 @@ DOSES = {**HIDDEN, "platen_resonator": {"m_r": 20.0, "f_r": 12.0, "xi_r": 0.03},
          "swivel_backlash": {"gap": 0.005}, "valve_overlap": {"overlap": 0.5},
          "storey_yield": {"storey": 1, "yield_drift": 0.1, "post_yield_ratio": 0.1},
          "sensor_mount": {"f_m": 17.0, "zeta_m": 0.09, "f_c": 30.0},
-         "specimen_degradation": {"delta": 0.01, "exponent": 0.7}}
+         "specimen_degradation": {"delta": 0.01, "exponent": 0.7},
+         "sensor_offset": {"offset": 0.01}}
 
 
 @pytest.fixture

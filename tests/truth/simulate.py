@@ -133,6 +133,9 @@ def simulate(table: Table, spec: Specimen, cmd: Command, fs: float = 256.0) -> R
         ch = {k: v[::n_sub] for k, v in ch.items()}
         internal = {k: v[::n_sub] for k, v in internal.items()}
     t = np.arange(n_out) / fs
+    zero = table.effects.get("sensor_offset")
+    if zero:
+        ch["avg_hacc"] = ch["avg_hacc"] + zero["zero_m_s2"] + zero["drift_m_s3"] * t
     out = {"h_span": xc[0:2 * nsteps + 1:2 * n_sub]}
     out.update(ch)
     return Result(t, float(fs), out, internal, table, spec, cmd, dt, built)

@@ -56,6 +56,10 @@ NEW_EFFECTS: dict[str, dict[str, tuple[str, float | None, float, float]]] = {
     # dissipated since the run began (E0 = energy_kip_in)
     "specimen_degradation": {"stiffness_loss": ("1", 0.15, 0.0, 0.9),
                              "energy_kip_in": ("kip-in", 10.0, 1e-6, 1e9)},
+    # the table accelerometer reads a + zero + drift·t: its conditioner's zero (m/s²) and a
+    # slow drift of it since zeroing (m/s² per s); only avg_hacc sees it
+    "sensor_offset": {"zero_m_s2": ("m/s2", 0.1, -10.0, 10.0),
+                      "drift_m_s3": ("m/s3", 0.0, -1.0, 1.0)},
 }
 FORCE_MEASURED = ("load_cell", "delta_p")
 PITCH_FAMILIES = ("none", "hybrid", "two_directional")

@@ -58,6 +58,9 @@ MIN_SHARE = 0.2  # ... remove 20 % of the current model's systematic residual (s
 #: ... be 5 % of what the noise alone costs (f²) and at least the squared resolution of the
 #: reduced model with the candidate in (`resolution.resolution`)
 NOISE_SHARE = 0.05
+#: ... or `SHOWN_SHARE` for an effect the runs show by a check of their own whose fit lies
+#: within one prior width of what they show (`shown`): not a patch
+SHOWN_SHARE = 0.05
 #: an effect parameter's prior width: a factor of 3 from its default on the log scale (a
 #: quarter of its range for a linear one) is one σ ...
 PLAUSIBLE = 3.0
@@ -130,6 +133,20 @@ def prior_cost(g: Gain, model: Physics | None, name: str | None, table=None) -> 
     return z2 * PRIOR_SHARE * g.systematic
 
 
+def shown(model: Physics | None, name: str | None, table) -> bool:
+    """Whether effect `name` is one the runs show by a check of their own
+    (`Effect.evidence`, in `table.evidence`) and `model`'s fit of it lies within one prior
+    width of every value they show."""
+    if model is None or name is None or not model.has(name):
+        return False
+    values, _ = getattr(table, "evidence", {}).get(name, ({}, ""))
+    if not values:
+        return False
+    z = implausibility(name, {k: v for k, v in model.effects[name].items() if k in values},
+                       table)
+    return all(abs(v) <= 1.0 for _, v in z)
+
+
 def failing(g: Gain | None, model: Physics | None = None, name: str | None = None,
             table=None) -> list[str]:
     """The statistical criteria of `SELECTION` a held-out gain does not meet (empty: it
@@ -155,9 +172,10 @@ def failing(g: Gain | None, model: Physics | None = None, name: str | None = Non
     out = []
     if not net.z > Z_NOISE:
         out.append(f"its gain is {net.z_text} (needs {Z_NOISE:g})")
-    if not net.gain >= MIN_SHARE * net.systematic:
+    share = SHOWN_SHARE if shown(model, name, table) else MIN_SHARE
+    if not net.gain >= share * net.systematic:
         out.append(f"it removes {max(net.share, 0):.0%} of the systematic residual (needs "
-                   f"{MIN_SHARE:.0%})")
+                   f"{share:.0%}{' (what the runs show)' if share != MIN_SHARE else ''})")
     if not net.gain >= NOISE_SHARE * g.f2:
         out.append(f"its gain is {max(net.gain, 0) / g.f2:.0%} of what the noise alone costs "
                    f"(needs {NOISE_SHARE:.0%})" if g.f2 > 0 else "it gains nothing")

@@ -15,7 +15,8 @@ from vtable.userfile import run_user_file
 BUILT_IN = ("pitch_flexibility", "force_feedback_filter", "valve_flow_nonlinearity",
             "actuator_friction", "flow_saturation", "valve_dynamics", "oil_column_air",
             "amplitude_dependent_damping", "foundation_compliance", "sensor_filter",
-            "platen_resonator", "storey_yield", "sensor_mount", "specimen_degradation")
+            "platen_resonator", "storey_yield", "sensor_mount", "specimen_degradation",
+            "sensor_offset")
 
 #: what the standard virtual table has beyond the chapter-7 base: its pitch system (Table
 #: 8.1) and the RC filter on the horizontal ΔP feedback (Table B.5), at their defaults
