@@ -48,7 +48,7 @@ def _catalog_module():
 def test_every_effect_and_parameter_is_in_effects_md():
     text = _text("effects.md")
     built_in = [n for n in effects.names() if not effects.is_user(n)]
-    assert built_in == list(effects.BUILT_IN) and len(built_in) == 14
+    assert built_in == list(effects.BUILT_IN) and len(built_in) == 15
     sections = re.split(r"^### ", text, flags=re.M)
     by_name = {s.split("`")[1]: s for s in sections[1:] if s.startswith("`")}
     for name in built_in:

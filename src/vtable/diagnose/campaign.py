@@ -66,6 +66,20 @@ def check_campaign(runs: Sequence[Run]) -> list[Run]:
     return out
 
 
+def _targets(runs: Sequence[Run], whole: bool) -> list[tuple[Run, str, np.ndarray, float]]:
+    """(run, group, training samples (every other one), their norm) of every group of
+    every run (`segments`, `whole` or not)."""
+    out = []
+    for r in runs:
+        tr, _ = segments(r, whole)
+        for g in run_groups(r):
+            y = group_signal(r, g)
+            if y is not None:
+                yt = y[tr][::2]
+                out.append((r, g, yt, float(np.linalg.norm(yt))))
+    return out
+
+
 #: the noise floor of a campaign whose sensors are quieter (noise-free runs): the verdict
 #: judges the final error against at least this. The selection does not use it: it takes
 #: the resolution of each model it compares from the effects in it, measured
@@ -94,19 +108,16 @@ class Campaign:
     #: the diagnosis gives runs that do not hold one plant: `with_states`); empty: one
     state_of: dict = field(default_factory=dict)
 
+    #: the training targets span each run's whole first 60 % (`whole_training`), not only
+    #: its first `TRAIN_MAX_S`
+    whole: bool = False
+
     @classmethod
     def of(cls, runs: Sequence[Run] | Campaign) -> Campaign:
         if isinstance(runs, Campaign):
             return runs
         a = check_campaign(runs)
-        targets = []
-        for r in a:
-            tr, _ = segments(r)
-            for g in run_groups(r):
-                y = group_signal(r, g)
-                if y is not None:
-                    yt = y[tr][::2]
-                    targets.append((r, g, yt, float(np.linalg.norm(yt))))
+        targets = _targets(a, False)
         notes, floor = campaign_notes(a), noise_floor(a)
         sensors = [c for c in map(sensor_check, a) if c is not None and not c.agree]
         notes += [c.text() for c in sensors]
@@ -127,6 +138,16 @@ class Campaign:
     def with_states(self, state_of: dict[str, str]) -> Campaign:
         """This campaign with the runs' states given (run name -> state)."""
         return dataclasses.replace(self, state_of=dict(state_of))
+
+    def whole_training(self) -> Campaign:
+        """This campaign with training targets over each run's whole first 60 % (a model
+        holding an effect that `accumulates`); kept, built once."""
+        if self.whole:
+            return self
+        if "_whole" not in self.__dict__:
+            self._whole = dataclasses.replace(self, targets=_targets(self.runs, True),
+                                              whole=True)
+        return self._whole
 
     @property
     def states(self) -> dict[str, list[str]]:

@@ -32,7 +32,7 @@ from vtable.diagnose.calibration import Calibration, bounding_setting
 from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import compare
 from vtable.diagnose.evidence import evidence_view
-from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
+from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel, training
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
 from vtable.diagnose.projected import Frame
 from vtable.diagnose.result import (
@@ -46,7 +46,7 @@ from vtable.diagnose.result import (
     localise,
 )
 from vtable.diagnose.screen import nonlinearity_evidence
-from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE, failing
+from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE, failing, preferred
 from vtable.diagnose.states import split
 from vtable.diagnose.statistics import Comparison, held_out_gain
 from vtable.diagnose.verdict import State, diagnosis_of
@@ -280,11 +280,17 @@ class Diagnoser:
             # SELECTION: the candidate with the largest held-out gain that passes the
             # statistical criteria and whose fit is sound (no parameter at a bound, none
             # entangled with the base) is added
-            best = next((c for c in ranking if self._admissible(c, widened)), None)
+            passing = [c for c in ranking if self._admissible(c, widened)]
+            best = preferred(passing)
             for c in ranking:
                 c.evidence = evidence(c, err, self.floor, cmp_cur)
                 if c is not best:
                     c.predictions = None  # only the added model's predictions are kept
+            if best is not None and best is not passing[0]:
+                top = passing[0]
+                best.evidence += (f"; added rather than {top.effect}: the runs show it, and "
+                                  f"its gain is {best.gain.gain / top.gain.gain:.0%} of "
+                                  f"{top.effect}'s")
             if best is not None:
                 st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
                 current, err, cost = best.physics, best.error_after, best.cost
@@ -370,7 +376,7 @@ class Diagnoser:
         pass are refined (fitted in full) best first, the costliest first on the cores;
         one whose screened training cost is above `REFINE_FACTOR` times that of an
         admissible refined candidate cannot win the round and is kept as screened."""
-        frame = Frame.of(self._model(), current, self.campaign, cost)
+        frame = Frame.of(self._model(), current, training(current, self.campaign), cost)
         ranking: list[Candidate] = []
         screen = nonlinearity_evidence(self.campaign, st.stages[-1].predictions)
         self.screens.append(screen)
@@ -389,10 +395,19 @@ class Diagnoser:
             return {"start": current.with_effect(e), "multistart": e, "seed": seeds.get(e),
                     "frame": frame, **kw}
 
+        def screened(e: str) -> dict:
+            """A screen, or where the candidate trains on more of the runs than the current
+            model (an effect that `accumulates`: costs on other windows do not compare),
+            the whole fit at once."""
+            if training(current.with_effect(e), self.campaign) is not \
+                    training(current, self.campaign):
+                return job(e, frame=None)
+            return job(e, baseline=cost, screen_only=True)
+
         jobs = [(("without", e), {"start": current.without(e)}) for e in backward]
         if lean is not None:  # the starting model refitted with its leaning bounds widened
             jobs.insert(0, (("widened", ""), {"start": self.start, "calibration": lean[0]}))
-        jobs += [(("screen", e), job(e, baseline=cost, screen_only=True)) for e in todo]
+        jobs += [(("screen", e), screened(e)) for e in todo]
         left: dict[str, tuple] = {}
         passed: dict[str, tuple] = {}
         fitted_now: list[Candidate] = []
@@ -415,6 +430,9 @@ class Diagnoser:
         order = sorted(passed, key=lambda e: passed[e][3])
         best: Candidate | None = None
         for c in fitted_now:  # a candidate refined in its screen's task may have won
+            if c.physics is not None and training(c.physics, self.campaign) is not \
+                    training(current, self.campaign):
+                continue  # its cost is on another window: no refinement bar
             if not c.screened and self._admissible(c, self.widened) and \
                     (best is None or c.score < best.score):
                 best = c

@@ -9,6 +9,8 @@ from __future__ import annotations
 from typing import Any
 
 from vtable.diagnose.noise import NOISE_FACTOR
+from vtable.effects.registry import get as effect
+from vtable.effects.registry import names
 
 #: the headline's length at most (characters)
 HEADLINE_MAX = 200
@@ -121,13 +123,18 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
             f"(--with {name}) to see it fitted in, or declare what it stands for (an "
             "undocumented specimen in [specimen])",
             numbers={k: float(v) for k, v in values.items()}))
+    drifting = [e for e in names() if getattr(effect(e), "accumulates", False)]
+    held = [e for e in d.final_effects if e in drifting]
     for run, (f1, f2, w) in (notches or {}).items():
         out.append(finding(
             "softening", f"x_t/x_c's notch moves {f1:.2f} -> {f2:.2f} Hz within the run: the "
             f"specimen's stiffness changes by {(f2 / f1) ** 2 - 1:+.0%}",
-            "no time-invariant model follows it: fit the run's first part alone, or add an "
-            "effect whose stiffness changes during the run", runs=[run],
-            numbers={"first_hz": f1, "last_hz": f2, "window_s": w}))
+            f"the final model follows it with {', '.join(held)}" if held else
+            "no time-invariant model follows it: add an effect whose stiffness changes during "
+            f"the run ({', '.join(drifting) or 'your own'}: it acts on the declared "
+            "specimen, so where the runs declare none, declare the one whose notch moves, "
+            "e.g. the resonator fitted in its place), or fit the run's first part alone",
+            runs=[run], numbers={"first_hz": f1, "last_hz": f2, "window_s": w}))
     return out
 
 

@@ -71,6 +71,14 @@ class StopRequestedError(Exception):
     """Raised inside a fit when the caller asked it to stop (an interrupt)."""
 
 
+def training(ph: Physics, campaign: Campaign) -> Campaign:
+    """The campaign a model `ph` is fitted on: with training targets over each run's whole
+    first 60 % when one of its effects `accumulates` (`Campaign.whole_training`)."""
+    if any(getattr(effect(e), "accumulates", False) for e in ph.effects):
+        return campaign.whole_training()
+    return campaign
+
+
 class TableModel(Layout):
     """The linear uni-directional servo loop carrying the runs' specimen (report ch. 7)
     plus `effects`, with the base calibrated around the runs' declarations
@@ -161,7 +169,7 @@ class TableModel(Layout):
         for r in campaign.runs:
             if self.stop is not None and self.stop.is_set():
                 raise StopRequestedError
-            n = segments(r)[0].stop if train_only else len(r.time)
+            n = segments(r, campaign.whole)[0].stop if train_only else len(r.time)
             key = (r.name, n)
             if key not in self._commands:  # one array per segment: its interpolation is kept
                 self._commands[key] = (r.time[:n], r.channel("h_span")[:n])
@@ -178,7 +186,7 @@ class TableModel(Layout):
         for r, names in campaign.target_channels:
             if self.stop is not None and self.stop.is_set():
                 raise StopRequestedError
-            n = segments(r)[0].stop
+            n = segments(r, campaign.whole)[0].stop
             key = (r.name, n)
             if key not in self._commands:  # one array per segment: its interpolation is kept
                 self._commands[key] = (r.time[:n], r.channel("h_span")[:n])
@@ -226,7 +234,6 @@ class TableModel(Layout):
         return model_at(self, Campaign.of(runs), values, source)
 
     def _fit(self, campaign: Campaign) -> TableModel:
-        self.campaign_ = campaign
         self.vt = campaign.table
         self.declared = campaign.specimen
         self.state_specimens = campaign.state_specimens
@@ -235,6 +242,8 @@ class TableModel(Layout):
         for e in self.effects:
             if not start.has(e):
                 start = start.with_effect(e)
+        campaign = training(start, campaign)
+        self.campaign_ = campaign
         choices = [(name, p) for name in start.effects for p in effect(name).params
                    if p.discrete]
         if not choices:

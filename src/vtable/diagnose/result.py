@@ -21,7 +21,7 @@ from vtable.diagnose.limits import Limits, limits
 from vtable.diagnose.model import SCREEN, TableModel
 from vtable.diagnose.noise import UNEXPLAINED_RULE
 from vtable.diagnose.prose import localisation_text, unexplained
-from vtable.diagnose.selection import SELECTION, failing, prior_cost
+from vtable.diagnose.selection import SELECTION, failing
 from vtable.diagnose.statistics import Comparison, Gain
 from vtable.effects.registry import get as effect
 from vtable.jsonable import jsonable
@@ -84,13 +84,8 @@ class Candidate:
 
     @property
     def score(self) -> float:
-        """The ranking's key: the held-out mean squared NRMS error (`Gain.e2_candidate`)
-        plus what its fitted parameters' distance from their defaults (or from what the
-        runs show) costs (`selection.prior_cost`): the gain as `SELECTION` judges it."""
-        if self.gain is None:
-            return float("inf")
-        return self.gain.e2_candidate + prior_cost(self.gain, self.physics, self.effect,
-                                                   self.table)
+        """The ranking's key: the held-out mean squared NRMS error (`Gain.e2_candidate`)."""
+        return self.gain.e2_candidate if self.gain is not None else float("inf")
 
     def failing(self) -> list[str]:
         """The statistical criteria of `SELECTION` this candidate's gain does not meet."""

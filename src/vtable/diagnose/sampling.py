@@ -72,10 +72,11 @@ def analysis_run(run: Run) -> Run:
 
 
 
-def segments(run: Run) -> tuple[slice, slice]:
-    """Training (the first 60 %, at most `TRAIN_MAX_S`) and held-out (the last 40 %)
-    samples of a run."""
+def segments(run: Run, whole: bool = False) -> tuple[slice, slice]:
+    """Training (the first 60 %, at most `TRAIN_MAX_S` unless `whole`) and held-out (the
+    last 40 %) samples of a run."""
     n = len(run.time)
     cut = round(n * (1 - HELD_OUT))
-    return slice(0, min(cut, round(TRAIN_MAX_S * run.fs) + 1)), slice(cut, n)
+    stop = cut if whole else min(cut, round(TRAIN_MAX_S * run.fs) + 1)
+    return slice(0, stop), slice(cut, n)
 

@@ -22,7 +22,10 @@ candidate is added only if its gain e²_current - e²_candidate, so charged,
    gives (a likelihood-ratio test against the noise floor; white noise at the analysis rate);
 2. removes at least `MIN_SHARE` (20 %) of the current model's systematic residual: the
    current model is itself calibrated, so this is what the effect explains that recalibrating
-   the base cannot, and a small patch of a model-form difference is not a missing effect;
+   the base cannot, and a small patch of a model-form difference is not a missing effect
+   (`SHOWN_SHARE`, 5 %, for an effect the runs show by a check of their own,
+   `Effect.evidence`, fitted within one prior width of what they show: that check, not
+   the share, tells it from a patch);
 3. is at least `NOISE_SHARE` (5 %) of what the noise alone costs (f²): refitting the base and
    an effect to other noise moves a held-out error by less;
 4. is at least r², the squared resolution of the reduced model with the candidate in
@@ -47,6 +50,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from typing import Any
 
 from vtable.diagnose.resolution import resolution
 from vtable.diagnose.statistics import Gain
@@ -61,6 +65,9 @@ NOISE_SHARE = 0.05
 #: ... or `SHOWN_SHARE` for an effect the runs show by a check of their own whose fit lies
 #: within one prior width of what they show (`shown`): not a patch
 SHOWN_SHARE = 0.05
+#: ... and is added instead of a better candidate the runs do not show when its gain is at
+#: least this fraction of that candidate's (`preferred`)
+SHOWN_TIE = 0.9
 #: an effect parameter's prior width: a factor of 3 from its default on the log scale (a
 #: quarter of its range for a linear one) is one σ ...
 PLAUSIBLE = 3.0
@@ -79,7 +86,9 @@ SELECTION = (f"an effect is added when, on the held-out last 40 % of every run a
              f"errors of what the held-out noise alone produces between the two predictions "
              f"(a likelihood-ratio test against the noise floor), (2) removes at least "
              f"{MIN_SHARE:.0%} of the current model's systematic residual (error^2 - "
-             f"floor^2), (3) is at least {NOISE_SHARE:.0%} of what the noise alone costs "
+             f"floor^2; {SHOWN_SHARE:.0%} for an effect the runs show by a check of their "
+             f"own and whose fit lies within one prior width of what they show), (3) is at "
+             f"least {NOISE_SHARE:.0%} of what the noise alone costs "
              "(floor^2): refitting the base and an effect to other noise moves a held-out "
              "error by less, and (4) is at least the squared resolution of the reduced model "
              "with the candidate in (the root-sum-square of the base's and each present "
@@ -92,7 +101,8 @@ SELECTION = (f"an effect is added when, on the held-out last 40 % of every run a
              "must also pass (1)-(4) "
              "over the starting model refitted with those bounds widened: an effect is not "
              "added where a wrong declaration explains as much. The best such candidate "
-             "(largest gain) is added. After each addition every effect added earlier is "
+             f"(largest gain) is added, or one the runs show with at least {SHOWN_TIE:.0%} of "
+             "its gain. After each addition every effect added earlier is "
              "tested the same way against the model without it (refitted) and removed when "
              "it no longer passes")
 
@@ -145,6 +155,23 @@ def shown(model: Physics | None, name: str | None, table) -> bool:
     z = implausibility(name, {k: v for k, v in model.effects[name].items() if k in values},
                        table)
     return all(abs(v) <= 1.0 for _, v in z)
+
+
+def preferred(passing: list) -> Any:
+    """Of the candidates that pass, best first (`Candidate`s), the one to add: the best,
+    unless it is not one the runs show (`shown`) and one that is gains at least
+    `SHOWN_TIE` of its gain: an effect an independent check shows is preferred to one
+    whose gain it nearly matches. None when none passes."""
+    if not passing:
+        return None
+    best = passing[0]
+    if shown(best.physics, best.effect, best.table) or best.gain is None:
+        return best
+    for c in passing[1:]:
+        if c.gain is not None and shown(c.physics, c.effect, c.table) and \
+                c.gain.gain >= SHOWN_TIE * best.gain.gain:
+            return c
+    return best
 
 
 def failing(g: Gain | None, model: Physics | None = None, name: str | None = None,

@@ -182,6 +182,10 @@ class Effect:
     section: str = ""
     signature: str = ""
     params: tuple[Param, ...] = ()
+    #: what the effect models builds up over a run (a specimen that degrades): a fit of a
+    #: model holding it trains on the whole first 60 % of every run, not only its first
+    #: `vtable.diagnose.sampling.TRAIN_MAX_S`, since the change grows with the run's length
+    accumulates: bool = False
 
     def apply(self, m: Assembly, p: dict[str, float]) -> None:
         raise NotImplementedError(f"{type(self).__name__} must define apply(m, p)")

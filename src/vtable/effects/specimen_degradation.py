@@ -83,6 +83,7 @@ class SpecimenDegradation(Effect):
               Param("exponent", "1", 1.0, 0.2, 2.0,
                     source="Baber & Noori 1985 (1: linear in the energy)",
                     doc="n: below 1 the loss slows as the damage accumulates"))
+    accumulates = True  # the loss grows with the run: fitted on its whole first 60 %
 
     def unsupported(self, campaign):
         """Not tried where no run's x_t/x_c notch moves within the run

@@ -1,0 +1,77 @@
+"""Issue 32's acceptance on LNEC's measured run (../shared/data/real): diagnosed alone, as
+shipped, with the catalog, the final held-out error is at or below the black-box reference
+(the H1 of each table channel over the command on the diagnosis's training window, played
+as a centred FIR: recomputed here in a few lines that share no code with vtable), and what
+the runs show is in the model with fitted values: the accelerometer's mount and zero, and
+the undeclared specimen (a resonator near the 3.2 Hz notch); the softening is a finding.
+
+Measured (2026-11-28): 41.0 % -> 31.7 % (+sensor_mount) -> 25.9 % (+platen_resonator, m_r
+58 %, f_r 3.19 Hz) -> 22.6 % (+sensor_offset, -0.0079 g), reference 23.04 %; 15 s."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+import real_data
+import scipy.signal as sg
+
+from vtable.diagnose.engine import Diagnoser
+from vtable.runs import read_run
+
+pytestmark = real_data.NEEDED
+
+
+def _reference(run) -> float:
+    """The black box, independently: the mean over the two table channels of the held-out
+    NRMS of an H1 -> centred-FIR predictor trained on min(60 %, 30 s), best of three
+    frames."""
+    x = run.channels["h_span"]
+    n, fs = len(x), run.fs
+    cut = round(0.6 * n)
+    tr, ho = slice(0, min(cut, round(30 * fs) + 1)), slice(cut, n)
+    errs = []
+    for ch in ("avg_hdisp", "avg_hacc"):
+        y, best = run.channels[ch], np.inf
+        for nf in (256, 512, 1024):
+            _, sxy = sg.csd(x[tr], y[tr], nperseg=nf)
+            _, sxx = sg.welch(x[tr], nperseg=nf)
+            h = np.roll(np.fft.irfft(sxy / np.where(sxx > 1e-6 * sxx.max(), sxx, np.inf), nf),
+                        nf // 2)
+            yh = np.convolve(x, h)[nf // 2:nf // 2 + n]
+            best = min(best, np.linalg.norm(yh[ho] - y[ho]) / np.linalg.norm(y[ho]))
+        errs.append(best)
+    return float(np.mean(errs))
+
+
+@pytest.fixture(scope="module")
+def diagnosis(tmp_path_factory):
+    run = read_run(real_data.copy_run(tmp_path_factory.mktemp("lnec_diag")))
+    return run, Diagnoser([run]).diagnose()
+
+
+def test_the_catalog_reaches_the_black_box(diagnosis):
+    run, d = diagnosis
+    ref = _reference(run)
+    assert ref == pytest.approx(0.2304, abs=0.002)
+    assert d.limits.reference == pytest.approx(ref, rel=1e-3)
+    assert d.final_error <= ref, (d.final_error, ref, d.headline)
+    # each added effect lowered the error, the first from 41 %
+    errors = [d.start_error] + [r.error for r in d.rounds if r.added]
+    assert errors[0] > 0.38 and all(b < a for a, b in itertools.pairwise(errors))
+
+
+def test_what_the_run_shows_is_in_the_model_with_fitted_values(diagnosis):
+    run, d = diagnosis
+    assert {"sensor_mount", "platen_resonator", "sensor_offset"} <= set(d.final_effects)
+    res = d.final.effects["platen_resonator"]
+    assert 3.0 < res["f_r"] < 3.4 and 20.0 < res["m_r"] < 150.0, res  # the 3.2 Hz specimen
+    mean_g = np.mean(run.channels["avg_hacc"][: round(0.6 * len(run.time))]) / 9.80665
+    assert d.final.effects["sensor_offset"]["offset"] == pytest.approx(mean_g, rel=0.05)
+    kinds = {f["kind"] for f in d.findings}
+    assert {"effect_added", "softening", "sensor"} <= kinds
+    soft = next(f for f in d.findings if f["kind"] == "softening")
+    assert soft["numbers"]["last_hz"] < soft["numbers"]["first_hz"] - 0.1
+    assert "specimen_degradation" in soft["action"]
+    assert len(d.headline) <= 200 and d.headline.startswith("added ")
