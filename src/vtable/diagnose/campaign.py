@@ -22,6 +22,7 @@ from vtable.diagnose.compare import (
 )
 from vtable.diagnose.sensors import sensor_check
 from vtable.diagnose.stationarity import stationarity_check
+from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
 from vtable.params.lab import run_table
 from vtable.params.virtual import virtual_table_for
@@ -138,6 +139,13 @@ class Campaign:
     def with_states(self, state_of: dict[str, str]) -> Campaign:
         """This campaign with the runs' states given (run name -> state)."""
         return dataclasses.replace(self, state_of=dict(state_of))
+
+    def training_for(self, ph) -> Campaign:
+        """The campaign a model `ph` (`Physics`) is fitted on: `whole_training` when one of
+        its effects `accumulates`, else this one."""
+        if any(effect(e).accumulates for e in ph.effects):
+            return self.whole_training()
+        return self
 
     def whole_training(self) -> Campaign:
         """This campaign with training targets over each run's whole first 60 % (a model

@@ -32,9 +32,10 @@ from vtable.diagnose.calibration import Calibration, bounding_setting
 from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import compare
 from vtable.diagnose.evidence import evidence_view
-from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel, training
+from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
 from vtable.diagnose.projected import Frame
+from vtable.diagnose.prose import nothing_added
 from vtable.diagnose.result import (
     ERROR_DEFINITION,
     Candidate,
@@ -46,7 +47,7 @@ from vtable.diagnose.result import (
     localise,
 )
 from vtable.diagnose.screen import nonlinearity_evidence
-from vtable.diagnose.selection import MIN_SHARE, NOISE_SHARE, SELECTION, Z_NOISE, failing, preferred
+from vtable.diagnose.selection import LATE, failing, preferred, preferred_note
 from vtable.diagnose.states import split
 from vtable.diagnose.statistics import Comparison, held_out_gain
 from vtable.diagnose.verdict import State, diagnosis_of
@@ -62,9 +63,9 @@ from vtable.runs.model import Run
 #: fit would have to fall by as much to win the round
 REFINE_FACTOR = 3.0
 
-__all__ = ["BASE_PARAMS", "ERROR_DEFINITION", "MIN_SHARE", "NOISE_SHARE", "SELECTION",
-           "WORKERS", "Z_NOISE", "Candidate", "Diagnoser", "Diagnosis", "DiagnosisInterrupted",
-           "Round", "Stage", "check_campaign", "diagnose", "failing", "localise"]
+__all__ = ["BASE_PARAMS", "ERROR_DEFINITION", "WORKERS", "Candidate", "Diagnoser", "Diagnosis",
+           "DiagnosisInterrupted", "Round", "Stage", "check_campaign", "diagnose", "failing",
+           "localise"]
 
 
 class Diagnoser:
@@ -226,7 +227,7 @@ class Diagnoser:
         return st.cmp
 
     def _run(self, st: State, progress: Callable[[int, int, str], None]) -> Diagnosis:
-        steps = 1 + self.max_rounds * len(self.catalog)
+        steps = 2 + self.max_rounds * len(self.catalog)
         done = 0
         progress(done, steps, "fitting the starting model")
         fitted = self.fit(self.start)
@@ -245,21 +246,29 @@ class Diagnoser:
         seeds = {e: dict(v) for e, (v, _) in self.table_view.evidence.items()}
         spent: dict[str, float] = {}  # each candidate's last fit's CPU seconds
         backward: list[str] = []  # effects added before the last one: tested without each
-        k = 0
-        while k < self.max_rounds:
+        k, late = 0, {e for e in self.catalog if effect(e).accumulates}
+        drift = not set(self.catalog) - late  # the round of what accumulates over a run
+        while True:
+            if k >= self.max_rounds + drift:  # the rounds ran out: then what accumulates
+                if drift or not late - set(current.effects):
+                    break
+                drift = True
             k += 1
             todo, skipped = [], {}
             for e in self.catalog:
                 if current.has(e):
                     continue
                 why = self._inapplicable(current.with_effect(e)) or \
-                    effect(e).unsupported(self.campaign)
+                    effect(e).unsupported(self.campaign) or LATE[drift] * ((e in late) != drift)
                 if why:
                     skipped[e] = why
                 else:
                     todo.append(e)
             if not todo and not backward:
-                reason = "every catalog effect is in the model"
+                if not drift and late - set(current.effects):
+                    drift = True
+                    continue
+                reason = reason or "every catalog effect is in the model"
                 break
             cmp_cur = self._detail(st)
             ranking, left, done = self._candidates(st, current, cost, todo, backward, seeds,
@@ -287,10 +296,7 @@ class Diagnoser:
                 if c is not best:
                     c.predictions = None  # only the added model's predictions are kept
             if best is not None and best is not passing[0]:
-                top = passing[0]
-                best.evidence += (f"; added rather than {top.effect}: the runs show it, and "
-                                  f"its gain is {best.gain.gain / top.gain.gain:.0%} of "
-                                  f"{top.effect}'s")
+                best.evidence += preferred_note(best, passing[0])
             if best is not None:
                 st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
                 current, err, cost = best.physics, best.error_after, best.cost
@@ -300,29 +306,16 @@ class Diagnoser:
                 progress(done, steps, f"round {k} done: added {best.effect}")
                 backward = [e for e in current.effects
                             if e != best.effect and e not in self.start.effects]
+                if drift:  # what accumulates is tried once, last
+                    break
             else:
                 st.rounds.append(Round(ranking, None, err, err, skipped))
-                top = ranking[0]
-                what = (f"the best candidate ({top.effect}) would change the held-out error "
-                        f"{err:.2%} -> {top.error_after:.2%}")
-                if top.stand_in and not top.failing() and not top.blocking:
-                    reason = (f"{what}, but the starting model with its bounds widened "
-                              f"(--calibrate {widened[0].text()}: {', '.join(widened[1])} "
-                              f"move) explains as much: {'; '.join(top.stand_in)} over it; "
-                              "it would stand in for a wrong declaration")
-                elif top.failing():
-                    reason = f"{what}, not added: " + "; ".join(top.failing())
-                else:
-                    reason = (f"{what}, but it is not added on that evidence: "
-                              + "; ".join(top.blocking))
-                passing = [c for c in ranking if not c.failing()]
-                if passing and top.failing():
-                    reason += ("; the candidates whose gain would count are not sound fits: "
-                               + "; ".join(f"{c.effect}: {'; '.join(c.blocking)}"
-                                           for c in passing))
-                reason += " (the base recalibrated with every candidate)"
+                why = nothing_added(ranking, err, widened)
                 progress(done, steps, f"round {k} done: nothing added")
-                break
+                if not late or drift:  # the search ends (its first reason kept)
+                    reason = reason or why
+                    break
+                drift, reason = True, why  # now what accumulates over a run
         if backward:  # the rounds ran out right after an addition
             left = dict((name, fitted) for (_, name), fitted in self.fits.dispatch(
                 [(("without", e), {"start": current.without(e)}) for e in backward]))
@@ -376,7 +369,7 @@ class Diagnoser:
         pass are refined (fitted in full) best first, the costliest first on the cores;
         one whose screened training cost is above `REFINE_FACTOR` times that of an
         admissible refined candidate cannot win the round and is kept as screened."""
-        frame = Frame.of(self._model(), current, training(current, self.campaign), cost)
+        frame = Frame.of(self._model(), current, self.campaign.training_for(current), cost)
         ranking: list[Candidate] = []
         screen = nonlinearity_evidence(self.campaign, st.stages[-1].predictions)
         self.screens.append(screen)
@@ -395,14 +388,12 @@ class Diagnoser:
             return {"start": current.with_effect(e), "multistart": e, "seed": seeds.get(e),
                     "frame": frame, **kw}
 
-        def screened(e: str) -> dict:
-            """A screen, or where the candidate trains on more of the runs than the current
-            model (an effect that `accumulates`: costs on other windows do not compare),
-            the whole fit at once."""
-            if training(current.with_effect(e), self.campaign) is not \
-                    training(current, self.campaign):
-                return job(e, frame=None)
-            return job(e, baseline=cost, screen_only=True)
+        def apart(ph: Physics) -> bool:  # trained on another window (what accumulates)
+            return self.campaign.training_for(ph) is not self.campaign.training_for(current)
+
+        def screened(e: str) -> dict:  # apart, fitted in full: costs would not compare
+            return job(e, frame=None) if apart(current.with_effect(e)) else \
+                job(e, baseline=cost, screen_only=True)
 
         jobs = [(("without", e), {"start": current.without(e)}) for e in backward]
         if lean is not None:  # the starting model refitted with its leaning bounds widened
@@ -430,10 +421,7 @@ class Diagnoser:
         order = sorted(passed, key=lambda e: passed[e][3])
         best: Candidate | None = None
         for c in fitted_now:  # a candidate refined in its screen's task may have won
-            if c.physics is not None and training(c.physics, self.campaign) is not \
-                    training(current, self.campaign):
-                continue  # its cost is on another window: no refinement bar
-            if not c.screened and self._admissible(c, self.widened) and \
+            if not c.screened and not apart(c.physics) and self._admissible(c, self.widened) and \
                     (best is None or c.score < best.score):
                 best = c
         while order:

@@ -71,14 +71,6 @@ class StopRequestedError(Exception):
     """Raised inside a fit when the caller asked it to stop (an interrupt)."""
 
 
-def training(ph: Physics, campaign: Campaign) -> Campaign:
-    """The campaign a model `ph` is fitted on: with training targets over each run's whole
-    first 60 % when one of its effects `accumulates` (`Campaign.whole_training`)."""
-    if any(getattr(effect(e), "accumulates", False) for e in ph.effects):
-        return campaign.whole_training()
-    return campaign
-
-
 class TableModel(Layout):
     """The linear uni-directional servo loop carrying the runs' specimen (report ch. 7)
     plus `effects`, with the base calibrated around the runs' declarations
@@ -242,7 +234,7 @@ class TableModel(Layout):
         for e in self.effects:
             if not start.has(e):
                 start = start.with_effect(e)
-        campaign = training(start, campaign)
+        campaign = campaign.training_for(start)
         self.campaign_ = campaign
         choices = [(name, p) for name in start.effects for p in effect(name).params
                    if p.discrete]

@@ -86,3 +86,26 @@ def localisation_text(cmp: Comparison) -> str:
     return "; ".join(parts)
 
 
+
+
+def nothing_added(ranking: list, err: float, widened: tuple | None) -> str:
+    """Why a round added nothing: its best candidate (`ranking[0]`, a `Candidate`), the
+    criteria it fails or the flags that keep it out, or the wrong declaration (`widened`:
+    the calibration with the leaning bounds widened and what moved) it would stand in for."""
+    top = ranking[0]
+    what = (f"the best candidate ({top.effect}) would change the held-out error "
+            f"{err:.2%} -> {top.error_after:.2%}")
+    if top.stand_in and not top.failing() and not top.blocking:
+        reason = (f"{what}, but the starting model with its bounds widened (--calibrate "
+                  f"{widened[0].text()}: {', '.join(widened[1])} move) explains as much: "
+                  f"{'; '.join(top.stand_in)} over it; it would stand in for a wrong "
+                  "declaration")
+    elif top.failing():
+        reason = f"{what}, not added: " + "; ".join(top.failing())
+    else:
+        reason = f"{what}, but it is not added on that evidence: " + "; ".join(top.blocking)
+    passing = [c for c in ranking if not c.failing()]
+    if passing and top.failing():
+        reason += ("; the candidates whose gain would count are not sound fits: "
+                   + "; ".join(f"{c.effect}: {'; '.join(c.blocking)}" for c in passing))
+    return reason + " (the base recalibrated with every candidate)"

@@ -174,6 +174,18 @@ def preferred(passing: list) -> Any:
     return best
 
 
+def preferred_note(best: Any, top: Any) -> str:
+    """What the evidence of a candidate `preferred` to `top` says of it."""
+    return (f"; added rather than {top.effect}: the runs show it, and its gain is "
+            f"{best.gain.gain / top.gain.gain:.0%} of {top.effect}'s")
+
+
+#: why an effect waits (time-invariant rounds first) or has had its turn (the last round
+#: tries the effects that accumulate over a run, on the model the others made)
+LATE = {False: "tried once the time-invariant effects are in (it accumulates over a run)",
+        True: "this round tries what accumulates over a run (the others were tried before)"}
+
+
 def failing(g: Gain | None, model: Physics | None = None, name: str | None = None,
             table=None) -> list[str]:
     """The statistical criteria of `SELECTION` a held-out gain does not meet (empty: it

@@ -120,6 +120,9 @@ class Assembly(Protocol):
     vt: Any  # the table's parameters (`VirtualTable`)
     table: Any  # what an effect reads of the run's table (`vtable.effects.table.TableView`)
     specimen: Any
+    #: the structures effects have stood on the platen (`add_structure`): (coordinate,
+    #: mass kg, stiffness N/m, damping N·s/m) each, for effects acting on the structure
+    structures: list
 
     def add_stage(self, stage: Any, **params: float) -> None:
         """A stage of the horizontal actuators' hydraulic element
@@ -132,6 +135,11 @@ class Assembly(Protocol):
 
     def add_spring(self, a: str, b: str | None, stiffness: float, damping: float) -> None:
         """A spring and dashpot (N/m, N s/m) between coordinates a and b (None: ground)."""
+
+    def add_structure(self, name: str, mass: float, stiffness: float, damping: float) -> None:
+        """A structure nobody declared standing on the platen: a mass `name` (kg) on a
+        spring and dashpot (N/m, N s/m) to "x", listed in `structures` so that an effect
+        acting on the specimen's structure (a degradation) finds it."""
 
     def set_actuator(self, moving: str | None = None, reaction: str | None = None) -> None:
         """What the horizontal actuators push (`moving`) and react on (`reaction`)."""

@@ -48,8 +48,7 @@ class PlatenResonator(Effect):
     def apply(self, m, p):
         mass = p["m_r"] * m.table.platen_mass  # p["m_r"] is in SI: a fraction
         w = 2 * math.pi * p["f_r"]
-        m.add_dof("resonator", mass)
-        m.add_spring("resonator", "x", mass * w * w, 2 * p["xi_r"] * w * mass)
+        m.add_structure("resonator", mass, mass * w * w, 2 * p["xi_r"] * w * mass)
 
 
 EFFECT = PlatenResonator()

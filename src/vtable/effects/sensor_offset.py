@@ -28,14 +28,13 @@ NEGLIGIBLE = 0.02
 
 
 def _means(campaign) -> list[tuple[float, float]]:
-    """(mean, RMS) of every run's table acceleration over its training part (SI)."""
-    from vtable.diagnose.sampling import segments
-
+    """(mean, RMS) of every run's table acceleration over the whole run (SI)."""
     out = []
     for run in campaign.runs:
         if "avg_hacc" not in run.channels:
             continue
-        a = np.asarray(run.channels["avg_hacc"])[segments(run)[0]]
+        a = np.asarray(run.channels["avg_hacc"])
+        a = a[np.isfinite(a)]
         if a.size:
             out.append((float(np.mean(a)), float(np.sqrt(np.mean(a**2)))))
     return out
@@ -62,8 +61,7 @@ class SensorOffset(Effect):
                 "no run has one): the runs show no offset")
 
     def evidence(self, campaign):
-        """The median over the runs of the table acceleration's mean on its training
-        part."""
+        """The median over the runs of the table acceleration's mean."""
         means = [m for m, _ in _means(campaign)]
         if not means:
             return None

@@ -22,7 +22,10 @@ its end. The storey force it adds to the elastic −k_i d is +k_i w/(1 + w) d wi
 w = δ εⁿ, the state ε (dimensionless), ε̇ = c_i ḋ²/E_ref,i. Every run starts from the
 specimen as the model holds it (a run of another state declares it: [specimen] state).
 
-A bare table or a rigid block has no storey. Where no run's x_t/x_c notch (the specimen's
+A bare table or a rigid block has no storey: where an effect stood a structure on the
+platen in an undeclared specimen's place (`Assembly.add_structure`: platen_resonator), its
+spring degrades the same way, its unit of energy that at 10 mm of deformation
+(`UNDECLARED_HEIGHT`). Where no run's x_t/x_c notch (the specimen's
 fixed-base frequency) moves within the run (`vtable.diagnose.stationarity`), the runs show
 no change to fit, and the effect is not tried.
 """
@@ -41,6 +44,10 @@ from vtable.params.specimen import SDOFSpecimen, ShearBuilding
 
 #: the drift ratio whose elastic energy is the unit of dissipated energy
 REFERENCE_DRIFT = 0.01
+#: the height (m) a structure without one stands for (`Assembly.structures`: a resonator an
+#: effect stood on the platen in an undeclared specimen's place): its unit of energy is its
+#: elastic energy at 10 mm of deformation
+UNDECLARED_HEIGHT = 1.0
 
 
 def degrading_storey(d: float, v: float, z, p, dz) -> float:
@@ -95,18 +102,22 @@ class SpecimenDegradation(Effect):
 
     def apply(self, m, p):
         spec = m.specimen
-        if not storeys(spec):
+        springs = [(storey_coordinate(spec, i), None, k, mass, c, h)
+                   for i, (k, mass, c, h) in enumerate(storeys(spec), start=1)]
+        # else the structure an effect stood on the platen in the specimen's place
+        springs = springs or [(name, "x", k, mass, c, UNDECLARED_HEIGHT)
+                              for name, mass, k, c in m.structures]
+        if not springs:
             raise VtableError("specimen_degradation: the specimen has no storeys to degrade "
-                              f"({type(spec).__name__})")
-        for i, (k, mass, c, h) in enumerate(storeys(spec), start=1):
+                              f"({type(spec).__name__}) and no structure stands on the platen")
+        for i, (a, b, k, mass, c, h) in enumerate(springs, start=1):
             if not h > 0:
                 raise VtableError(f"specimen_degradation: storey {i} has no height (its "
                                   "unit of energy is its elastic energy at a 1 % drift ratio)")
             e_ref = 0.5 * k * (REFERENCE_DRIFT * h) ** 2
-            m.add_force(degrading_storey, storey_coordinate(spec, i), None,
+            m.add_force(degrading_storey, a, b,
                         {"k": k, "r": c / e_ref, "delta": p["delta"], "n": p["exponent"]},
-                        states=1, mass=mass,
-                        stiffness=k)
+                        states=1, mass=mass, stiffness=k)
 
 
 EFFECT = SpecimenDegradation()

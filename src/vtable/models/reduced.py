@@ -73,6 +73,7 @@ class ReducedAssembly:
         self.h_floors = [float(pos[b.name][2]) for b in slides]  # h_K, from the bottom
         self.extra: dict[str, float] = {}  # added DOFs: name -> mass
         self.springs: list[tuple[str, str | None, float, float]] = []
+        self.structures: list[tuple[str, float, float, float]] = []
         self.loops: list[tuple[str, float, float, float, float]] = []
         self.quadratic: list[tuple[str, float]] = []
         self.elements: list[ForceElement] = []
@@ -119,6 +120,11 @@ class ReducedAssembly:
 
     def add_spring(self, a: str, b: str | None, stiffness: float, damping: float) -> None:
         self.springs.append((a, b, stiffness, damping))
+
+    def add_structure(self, name: str, mass: float, stiffness: float, damping: float) -> None:
+        self.add_dof(name, mass)
+        self.add_spring(name, "x", stiffness, damping)
+        self.structures.append((name, float(mass), float(stiffness), float(damping)))
 
     def set_actuator(self, moving: str | None = None, reaction: str | None = None) -> None:
         """What the equivalent actuator pushes (and reacts on): its extension is

@@ -55,6 +55,7 @@ class VirtualAssembly:
         self.stages: list[tuple[Stage, dict[str, float]]] = []
         self.table = TableView.of(self.vt, piston_area=base.area)
         self.controllers: list = []
+        self.structures: list[tuple[str, float, float, float]] = []
         #: (fn(x, fs), the channels it applies to or None: all)
         self.filters: list[tuple[Callable, frozenset | None]] = []
         self.n_actuators = len(self.vt.group("horizontal"))
@@ -92,6 +93,11 @@ class VirtualAssembly:
 
     def add_spring(self, a: str, b: str | None, stiffness: float, damping: float) -> None:
         edit.add_spring(self.ts, a, b, stiffness, damping)
+
+    def add_structure(self, name: str, mass: float, stiffness: float, damping: float) -> None:
+        self.add_dof(name, mass)
+        self.add_spring(name, "x", stiffness, damping)
+        self.structures.append((name, float(mass), float(stiffness), float(damping)))
 
     def set_actuator(self, moving: str | None = None, reaction: str | None = None) -> None:
         edit.set_actuator(self.ts, moving, reaction)
