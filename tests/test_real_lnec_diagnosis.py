@@ -2,11 +2,12 @@
 shipped, with the catalog, the final held-out error is at or below the black-box reference
 (the H1 of each table channel over the command on the diagnosis's training window, played
 as a centred FIR: recomputed here in a few lines that share no code with vtable), and what
-the runs show is in the model with fitted values: the accelerometer's mount and zero, and
-the undeclared specimen (a resonator near the 3.2 Hz notch); the softening is a finding.
+the runs show is in the model with fitted values: the accelerometer's mount and zero, the
+undeclared specimen (a resonator near the 3.2 Hz notch) and its softening during the run.
 
 Measured (2026-11-28): 41.0 % -> 31.7 % (+sensor_mount) -> 25.9 % (+platen_resonator, m_r
-58 %, f_r 3.19 Hz) -> 22.6 % (+sensor_offset, -0.0079 g), reference 23.04 %; 15 s."""
+58 %, f_r 3.19 Hz) -> 22.6 % (+sensor_offset, -0.0079 g) -> 18.0 % (+specimen_degradation,
+δ 0.025, n 1.21), reference 23.04 %; 45 s."""
 
 from __future__ import annotations
 
@@ -56,7 +57,7 @@ def test_the_catalog_reaches_the_black_box(diagnosis):
     ref = _reference(run)
     assert ref == pytest.approx(0.2304, abs=0.002)
     assert d.limits.reference == pytest.approx(ref, rel=1e-3)
-    assert d.final_error <= ref, (d.final_error, ref, d.headline)
+    assert d.final_error <= 0.85 * ref, (d.final_error, ref, d.headline)  # 18.0 % vs 23.0
     # each added effect lowered the error, the first from 41 %
     errors = [d.start_error] + [r.error for r in d.rounds if r.added]
     assert errors[0] > 0.38 and all(b < a for a, b in itertools.pairwise(errors))
@@ -64,7 +65,8 @@ def test_the_catalog_reaches_the_black_box(diagnosis):
 
 def test_what_the_run_shows_is_in_the_model_with_fitted_values(diagnosis):
     run, d = diagnosis
-    assert {"sensor_mount", "platen_resonator", "sensor_offset"} <= set(d.final_effects)
+    assert set(d.final_effects) == {"sensor_mount", "platen_resonator", "sensor_offset",
+                                    "specimen_degradation"}, d.headline
     res = d.final.effects["platen_resonator"]
     assert 3.0 < res["f_r"] < 3.4 and 20.0 < res["m_r"] < 150.0, res  # the 3.2 Hz specimen
     mean_g = np.mean(run.channels["avg_hacc"][: round(0.6 * len(run.time))]) / 9.80665
@@ -73,5 +75,8 @@ def test_what_the_run_shows_is_in_the_model_with_fitted_values(diagnosis):
     assert {"effect_added", "softening", "sensor"} <= kinds
     soft = next(f for f in d.findings if f["kind"] == "softening")
     assert soft["numbers"]["last_hz"] < soft["numbers"]["first_hz"] - 0.1
-    assert "specimen_degradation" in soft["action"]
+    assert "follows it with specimen_degradation" in soft["action"]
+    # the softening is tried last, on the model the time-invariant effects made
+    assert d.rounds[-1].added == "specimen_degradation"
+    assert 1e-3 < d.final.effects["specimen_degradation"]["delta"] < 0.3
     assert len(d.headline) <= 200 and d.headline.startswith("added ")

@@ -26,9 +26,12 @@ def stiffness_matrix(k: np.ndarray) -> np.ndarray:
 
 
 def fixed_base_modes(M: np.ndarray, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Circular frequencies (ascending) and mass-normalised mode shapes (columns)."""
+    """Circular frequencies (ascending) and mass-normalised mode shapes (columns); NaN for
+    a mode of negative stiffness (a fit trying storeys that cannot stand: callers refuse
+    non-finite frequencies)."""
     w2, phi = scipy.linalg.eigh(K, M)
-    return np.sqrt(w2), phi
+    with np.errstate(invalid="ignore"):
+        return np.sqrt(w2), phi
 
 
 #: the relative frequency error below which a building's storeys reproduce its modes (a
