@@ -148,11 +148,12 @@ def test_a_linear_campaign_keeps_the_nonlinear_candidates_out():
     first = d.rounds[0]
     nonlinear = {"valve_flow_nonlinearity", "actuator_friction", "flow_saturation",
                  "oil_column_air", "amplitude_dependent_damping", "storey_yield"}
-    # every catalog effect ranked, but the mount the runs' table channels show none of and
-    # the degradation no moving notch shows
-    assert {c.effect for c in first.ranking} == set(BUILT_IN) - {"sensor_mount",
-                                                                 "specimen_degradation"}
+    # every catalog effect ranked, but the mount the runs' table channels show none of, the
+    # zero offset no mean acceleration shows and the degradation no moving notch shows
+    assert {c.effect for c in first.ranking} == set(BUILT_IN) - {
+        "sensor_mount", "sensor_offset", "specimen_degradation"}
     assert "the runs show no mount" in first.skipped["sensor_mount"]
+    assert "the runs show no offset" in first.skipped["sensor_offset"]
     assert "no change of the specimen" in first.skipped["specimen_degradation"]
     for c in first.ranking:
         if c.effect in nonlinear:
