@@ -13,7 +13,7 @@ import sys
 
 from vtable import verbs
 from vtable.cli_args import parser
-from vtable.errors import UnstableError, VtableError, interrupted
+from vtable.errors import UnstableError, VtableError, interrupted, sigint_seen
 from vtable.fileio import write_text
 from vtable.results import Result
 
@@ -26,6 +26,8 @@ class _Progress:
         self.last = ""
 
     def __call__(self, i: int, n: int, label: str) -> None:
+        if sigint_seen():  # an interrupt something swallowed: stop here
+            raise KeyboardInterrupt
         width = 28
         done = int(width * i / max(n, 1))
         line = f"[{'#' * done}{'-' * (width - done)}] {i}/{n} {label}"
@@ -164,7 +166,10 @@ def main(argv: list[str] | None = None) -> int:
     configuration, 130 interrupted (Ctrl-C), 141 output pipe closed (quietly)."""
     try:
         a = parser().parse_args(argv)
-        _emit(a, _COMMANDS[a.command](a))
+        result = _COMMANDS[a.command](a)
+        if sigint_seen():  # swallowed on the way (an import's callback): still interrupted
+            raise KeyboardInterrupt
+        _emit(a, result)
         return 0
     except UnstableError as e:
         print(f"vtable: {e}", file=sys.stderr)

@@ -41,3 +41,20 @@ def interrupted(e: BaseException | None) -> bool:
         seen.add(id(e))
         e = e.__cause__ or e.__context__
     return False
+
+
+#: whether Ctrl-C reached this process (`on_sigint`): an interrupt Python swallows (one
+#: raised inside an import's lock callback is printed "Exception ignored" and dropped) is
+#: still seen, by the progress bar and at the command's end
+_SIGINT = [False]
+
+
+def on_sigint(signum, frame) -> None:
+    """The CLI's SIGINT handler: Python's own (raise KeyboardInterrupt), remembered."""
+    _SIGINT[0] = True
+    raise KeyboardInterrupt
+
+
+def sigint_seen() -> bool:
+    """Whether `on_sigint` has run in this process."""
+    return _SIGINT[0]

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from vtable.errors import VtableError
 from vtable.ident import channels
 from vtable.ident.frames import MIN_AVERAGES, frame_for_averages
@@ -30,6 +32,36 @@ class Resonance:
     u: float
 
 
+#: the bands (Hz) in which the table acceleration is compared with s² times the table
+#: displacement, from the bottom, and how far their ratio may stray from 1 there
+BANDS = ((0.0, 2.0), (2.0, 5.0), (5.0, 10.0), (10.0, 20.0), (20.0, 30.0), (30.0, 50.0))
+AGREE = 1.25
+
+
+def _agreeing(run: Run, tf, n: int) -> float:
+    """The top (Hz) of the bands, from the bottom, where the run's table acceleration is s²
+    times its table displacement within a factor `AGREE` (median |ẍ/s²x| per band): there
+    the displacement reads the platen that a resonator on it moves. Above, the two sensors
+    part (a displacement-only notch, an accelerometer's mount) and a resonance fitted to
+    x_t/x_c could be the sensor's rather than the platen's. Infinite without the channel."""
+    if not run.has("avg_hacc") or run.missing.get("avg_hacc"):
+        return np.inf
+    acc = transfer_function(run.channel("h_span"), run.channel("avg_hacc"), run.fs, n)
+    w2 = (2 * np.pi * tf.f) ** 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.abs(acc.H / (-w2 * tf.H))
+    top = 0.0
+    for a, b in BANDS:
+        sel = (tf.f > max(a, 0.2)) & (tf.f <= b) & np.isfinite(ratio)
+        if not sel.any():
+            break
+        r = float(np.median(ratio[sel]))
+        if not 1 / AGREE <= r <= AGREE:
+            break
+        top = b
+    return top if top > 0 else np.inf
+
+
 def undeclared_resonance(run: Run) -> Resonance | None:
     """The resonance identify's structure check finds on `run`'s x_t/x_c, where the run
     declares no specimen with a mode (none, or a rigid block) and the resonator structure
@@ -44,7 +76,8 @@ def undeclared_resonance(run: Run) -> Resonance | None:
         if n is None:
             return None
         tf = transfer_function(x_c, x_t, run.fs, n)
-        ls = compare_structures(LoopData.from_tf(tf, servo_band(run, table)),
+        lo, hi = servo_band(run, table)
+        ls = compare_structures(LoopData.from_tf(tf, (lo, min(hi, _agreeing(run, tf, n)))),
                                 prior_of(table))
     except VtableError:
         return None
