@@ -161,3 +161,18 @@ def effect_diagnosis(effects: tuple[str, ...]):
     truth, runs = effect_campaign(effects)
     d = Diagnoser(runs)
     return truth, d, d.diagnose()
+
+
+def truth_runs(folder: str, table, spec, decl, cmds, noise: float = 0.01, seed: int = 0,
+               fs: float = 200.0) -> list:
+    """The runs the independent truth simulator (tests/truth) makes of `spec` on `table`,
+    one per (name, command) of `cmds`, written with the declaration `decl` and `noise`
+    (seeds from `seed`) into `folder` and read back as a user's files."""
+    import truth
+
+    from vtable.runs import read_run
+
+    paths = [truth.write_run(f"{folder}/{name}", truth.simulate(table, spec, cmd, fs=fs), decl,
+                             noise=noise, seed=seed + k)[0]
+             for k, (name, cmd) in enumerate(cmds)]
+    return [read_run(p) for p in paths]

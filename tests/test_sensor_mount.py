@@ -10,13 +10,13 @@ import functools
 import numpy as np
 import pytest
 import truth
+from conftest import truth_runs
 
 from vtable.diagnose.engine import Diagnoser
 from vtable.diagnose.sensors import mount_ratio
 from vtable.models.physics import Physics, nominal_open_loop
 from vtable.models.reduced import ReducedModel
 from vtable.params import presets
-from vtable.runs import read_run
 from vtable.signals import make_command
 from vtable.sim import simulate
 
@@ -55,11 +55,7 @@ def _mount_campaign(tmp: str):
     cmds = [("random_0", truth.random_command(12.0, (0, 25), peak_in=0.1, seed=1)),
             ("random_1", truth.random_command(12.0, (0, 25), peak_in=0.3, seed=2)),
             ("earthquake", truth.earthquake_command("elcentro", peak_in=2.0))]
-    paths = []
-    for k, (name, cmd) in enumerate(cmds):
-        res = truth.simulate(table, spec, cmd, fs=200.0)
-        paths.append(truth.write_run(f"{tmp}/{name}", res, decl, noise=0.01, seed=30 + k)[0])
-    runs = [read_run(p) for p in paths]
+    runs = truth_runs(tmp, table, spec, decl, cmds, noise=0.01, seed=30)
     return Diagnoser(runs).diagnose()
 
 

@@ -259,7 +259,8 @@ class Diagnoser:
                 if current.has(e):
                     continue
                 why = self._inapplicable(current.with_effect(e)) or \
-                    effect(e).unsupported(self.campaign) or LATE[drift] * ((e in late) != drift)
+                    effect(e).unsupported(self.campaign) or \
+                    (LATE[drift] if (e in late) != drift else None)  # not this round's kind
                 if why:
                     skipped[e] = why
                 else:
