@@ -203,3 +203,27 @@ def test_every_catalog_effect_applies_on_a_table_with_its_own_valve_lag():
     tau = 0.002
     drop = phase_10hz({}) - phase_10hz({"valve_dynamics": {"tau": tau}})
     assert 0.5 * math.atan(2 * math.pi * 10 * tau) < drop < 2 * math.atan(2 * math.pi * 10 * tau)
+
+
+def test_two_effects_adding_one_part_are_refused_in_one_line():
+    """A user's effect that adds a reaction mass of the name foundation_compliance uses is
+    refused by both models with a message (the reduced model once inverted a singular
+    mass matrix: a traceback in the middle of a diagnosis)."""
+    from vtable.effects import Effect, Param, register
+    from vtable.params import presets
+    from vtable.sim.run import setup
+
+    class SecondFoundation(Effect):
+        name = "second_foundation_test"
+        physics, section, signature = "a second reaction mass", "test", "none"
+        params = (Param("f_f", "Hz", 12.0, 1.0, 60.0),)
+
+        def apply(self, m, p):
+            m.add_reaction_mass("foundation", 1e4, 1e4 * (75.0 * p["f_f"])**2, 1e3)
+
+    register(SecondFoundation())  # for this test alone (conftest.catalog_as_shipped)
+    ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
+                 {"foundation_compliance": {}, "second_foundation_test": {}})
+    for build in (ReducedModel, setup):
+        with pytest.raises(VtableError, match=r"'foundation'.*two effects add the same part"):
+            build(ph)

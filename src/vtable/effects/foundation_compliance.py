@@ -9,6 +9,10 @@ import math
 
 from vtable.effects.base import Effect, Param
 
+#: why ξ_f's prior is wide (`Param.spread`): a reaction's damping depends on what it is
+_XI_F = ("varies over decades from table to table: about 0.01 for a steel reaction frame "
+         "bolted to a strong floor, 0.1-0.3 for a concrete block radiating into soil")
+
 
 class FoundationCompliance(Effect):
     name = "foundation_compliance"
@@ -18,7 +22,8 @@ class FoundationCompliance(Effect):
     signature = ("absolute accelerations differ from the actuator displacements' at low "
                  "frequency; a foundation resonance")
     params = (Param("f_f", "Hz", 10.0, 1.0, 60.0, log=True, source="assumed"),
-              Param("xi_f", "1", 0.1, 0.005, 0.9, log=True, source="assumed"))
+              Param("xi_f", "1", 0.1, 0.005, 0.9, log=True, source="assumed",
+                    spread=10.0, doc=_XI_F))
 
     def apply(self, m, p):
         mass = m.table.foundation_mass

@@ -53,6 +53,7 @@ def add_reaction_mass(ts: TableSpec, name: str, mass: float, stiffness: float,
                       damping: float) -> None:
     """The horizontal actuators' bases on a body of `mass` sliding in x on a spring and
     dashpot to the ground (a compliant reaction mass and foundation)."""
+    _new_body(ts, name)
     body = ts.spec.worldbody.add_body(name=name)
     body.explicitinertial = True
     body.mass, body.inertia = mass, [mass, mass, mass]
@@ -101,10 +102,18 @@ def add_storey_actuators(ts: TableSpec, prefix: str = "S") -> list[str]:
 def add_slide_body(ts: TableSpec, name: str, mass: float) -> None:
     """A body of `mass` sliding in x on a joint named `name` (a new coordinate), tied to
     nothing until a spring, a force or the actuators are."""
+    _new_body(ts, name)
     body = ts.spec.worldbody.add_body(name=name)
     body.explicitinertial = True
     body.mass, body.inertia = mass, [mass, mass, mass]
     body.add_joint(name=name, type=_J.mjJNT_SLIDE, axis=[1, 0, 0])
+
+
+def _new_body(ts: TableSpec, name: str) -> None:
+    """Refuse a second body of one name (two effects adding the same part)."""
+    if ts.spec.body(name) is not None:
+        raise VtableError(f"the virtual table already has a body named {name!r}: two effects "
+                          "add the same part")
 
 
 def _joint(ts: TableSpec, name: str):

@@ -115,6 +115,9 @@ class ReducedAssembly:
         self.loops.append(("pitch", a, b_q, b_v, f))
 
     def add_dof(self, name: str, mass: float) -> None:
+        if name in self.extra or name in self.active:
+            raise VtableError(f"the reduced model already has a coordinate {name!r}: two "
+                              "effects add the same part")
         self.extra[name] = float(mass)
         self.active.append(name)
 
