@@ -17,6 +17,8 @@ def shown_by_runs(catalog, campaign, notes: list[str]) -> dict[str, tuple[dict, 
     out = {}
     for name in catalog:
         e = effect(name)
+        if e.unsupported(campaign):  # not tried: the runs show none of it
+            continue
         ev = e.evidence(campaign)
         if ev:  # held within the parameters' bounds (a fit never leaves them)
             ev = ({k: min(max(float(v), e.param(k).lower), e.param(k).upper)

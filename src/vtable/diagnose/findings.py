@@ -97,7 +97,10 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
             if b.get("calibrate") else "the bound is at its widest: correct the declaration",
             numbers={"declared": b["declared"], "fitted": b["fitted"], "bound": b["bound"],
                      "change": moved}))
-    for c in sensors:
+    # a final model within the noise reproduces every channel: what the checks on the runs
+    # pointed at (two sensors that disagree, an effect's evidence) it explains without
+    explained = d.unexplained is None and d.final_error is not None
+    for c in () if explained else sensors:
         out.append(finding("sensor", c.text(), "check the acceleration channel's sensor, "
                            "its mount and its calibration against the displacement",
                            runs=[c.run]))
@@ -113,7 +116,7 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
                      "at_hz": p.at_hz, "relative": p.relative}))
     if getattr(d, "states", None):
         out.append(_states_finding(d.states, d.states_declared))
-    for name, (values, where) in (shown or {}).items():
+    for name, (values, where) in ({} if explained else shown or {}).items():
         if name in d.final_effects:
             continue
         vals = ", ".join(f"{k} {v:.3g}" for k, v in values.items())
