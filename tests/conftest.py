@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 import shutil
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -51,6 +52,28 @@ def catalog_as_shipped():
     _restore_catalog()
     yield
     _restore_catalog()
+
+
+#: the repository's root, and the documentation's pages in the site's order (mkdocs.yml's
+#: nav), the README first: what the tests of the docs read
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def doc_pages() -> list[Path]:
+    """README.md, then every page of the site in mkdocs.yml's nav order."""
+    import re
+
+    nav = re.findall(r":\s*([\w/-]+\.md)\s*$", (ROOT / "mkdocs.yml").read_text(), re.M)
+    return [ROOT / "README.md", *(ROOT / "docs" / p for p in nav)]
+
+
+def doc_blocks(lang: str, pages: list[Path] | None = None) -> list[tuple[Path, str]]:
+    """The fenced ```lang blocks of `pages` (default `doc_pages()`), in order: (page,
+    text)."""
+    import re
+
+    return [(p, b) for p in (pages or doc_pages())
+            for b in re.findall(rf"```{lang}\n(.*?)```", p.read_text(), re.S)]
 
 
 PERIOD = 20.48  # s: 4096 samples at the 200 Hz output rate

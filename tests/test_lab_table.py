@@ -158,14 +158,14 @@ def test_diagnose_finds_the_withheld_valve_lag_first():
 
 
 def test_readme_table_description_is_the_lnec_preset():
-    """The README's "Your own table" example, read as a run's [table], is the lnec-st1d
+    """The lab-table tutorial's "Your own table" example, read as a run's [table], is the lnec-st1d
     preset's table (same loop, valve lag, limits) and its [command] names a drive file."""
     import pathlib
     import re
     import tomllib
 
-    text = (pathlib.Path(__file__).parents[1] / "README.md").read_text()
-    sec = text.split("## Your own table", 1)[1]
+    text = (pathlib.Path(__file__).parents[1] / "docs/tutorials/lab-table.md").read_text()
+    sec = text.split("# Your own table", 1)[1]
     block = re.search(r"```toml\n(.*?)```", sec, re.S).group(1)
     d = tomllib.loads(block)
     described = lab_table(table_from_dict(d["table"], "README [table]"))

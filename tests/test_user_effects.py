@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import campaign_commands
+from conftest import campaign_commands, doc_blocks
 
 from vtable.cli import main
 from vtable.effects import BUILT_IN, Effect, Param, get, load_file, names
@@ -30,8 +30,8 @@ OVERLAP_PCT = 0.5  # the hidden spool overlap: 0.5 % of the stroke
 
 def test_the_readme_shows_the_example_file_whole_and_short():
     text = EXAMPLE.read_text()
-    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
-    assert text in blocks, "the README must show examples/swivel_backlash.py verbatim"
+    blocks = [b for _, b in doc_blocks("python")]
+    assert text in blocks, "the own-effect tutorial must show examples/swivel_backlash.py"
     assert len(text.splitlines()) <= 40
 
 
@@ -314,8 +314,8 @@ def rigid_law(d, v, z, p, dz):
 
 def test_the_readme_shows_the_valve_example_whole_and_short():
     text = VALVE.read_text()
-    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
-    assert text in blocks, "the README must show examples/valve_overlap.py verbatim"
+    blocks = [b for _, b in doc_blocks("python")]
+    assert text in blocks, "the own-effect tutorial must show examples/valve_overlap.py"
     assert len(text.splitlines()) <= 40
 
 
