@@ -16,7 +16,8 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-import scipy.linalg
+
+from vtable.analytic.hold import first_order_hold
 
 DOFS = ("x", "z", "roll", "pitch", "twist")
 
@@ -84,16 +85,8 @@ class LinearController:
         na = ns // 2
         nc = self.Bc.shape[1]
         B = np.hstack([self.Bs, self.Bc])
-        m = B.shape[1]
-        # state [z, w, δ]: ż = A z + B w, ẇ = δ, δ̇ = 0
-        N = np.zeros((n + 2 * m, n + 2 * m))
-        N[:n, :n] = self.A
-        N[:n, n:n + m] = B
-        N[n:n + m, n + m:] = np.eye(m)
-        E = scipy.linalg.expm(N * dt)
-        Az = E[:n, :n]
-        gam = E[:n, n:n + m]  # z(dt) per w(0)
-        lam = E[:n, n + m:] / dt  # z(dt) per (w(dt) - w(0))
+        # z(dt) per w(0) (gam) and per w(dt) - w(0) (lam), w linear over the step
+        Az, gam, lam = first_order_hold(self.A, B, dt)
         X, V, Cc = slice(0, na), slice(na, ns), slice(ns, ns + nc)
         zeros, zeros_like = np.zeros, np.zeros_like
         Zp, Zs = zeros((n, ns)), zeros((n, ns))

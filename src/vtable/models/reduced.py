@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vtable.analytic.hold import first_order_hold
 from vtable.analytic.structure import storey_channels, storey_masses
 from vtable.analytic.virtual_table import mechanics
 from vtable.controllers.force_law import law_params, named
@@ -36,7 +37,6 @@ from vtable.models.modal import ModalOutputs
 from vtable.models.reduced_kernel import (
     ELEMENT_KERNELS,
     KERNELS,
-    hold_matrices,
     linear_system,
     simulate_linear,
     simulate_reduced_python,
@@ -304,7 +304,7 @@ class ReducedModel(ModalOutputs):
 
     def _hold(self, h: float):
         if h not in self._holds:
-            self._holds[h] = hold_matrices(self._linear[0], self._linear[1], h)
+            self._holds[h] = first_order_hold(self._linear[0], self._linear[1], h)
         return self._holds[h]
 
     def _element(self, elements: list[ForceElement]) -> None:

@@ -23,7 +23,6 @@ from __future__ import annotations
 import types
 
 import numpy as np
-import scipy.linalg
 
 from vtable._numba import njit
 from vtable.hydraulics.element import NS, actuator_rates, dof_drive, fed_back
@@ -268,20 +267,6 @@ def linear_system(module, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, 
     fu = _rates(y, 1.0, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, fe, dy,
                 ws)
     return A, dy.copy(), fy, fu
-
-
-def hold_matrices(A: np.ndarray, B: np.ndarray, h: float):
-    """(Φ, Γ₀, Γ₁): y_{k+1} = Φ y_k + Γ₀ u_k + Γ₁ (u_{k+1} - u_k) for u linear over the
-    step h (the exponential of [[A, B, 0], [0, 0, 1/h], [0, 0, 0]] h)."""
-    n = A.shape[0]
-    M = np.zeros((n + 2, n + 2))
-    M[:n, :n], M[:n, n], M[n, n + 1] = A * h, B * h, 1.0
-    # pressures (Pa) beside displacements (m): balance first, or the exponential's norm
-    # (and its squarings) follows the units
-    Mb, (scale, _) = scipy.linalg.matrix_balance(M, permute=False, separate=True)
-    E = scipy.linalg.expm(Mb) * scale[:, None] / scale[None, :]
-    return (np.ascontiguousarray(E[:n, :n]), np.ascontiguousarray(E[:n, n]),
-            np.ascontiguousarray(E[:n, n + 1]))
 
 
 @njit(cache=True, nogil=True)

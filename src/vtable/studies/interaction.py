@@ -14,11 +14,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
 from vtable._numba import njit
 from vtable.analytic.base import LinearModel
 from vtable.analytic.closed_forms import effective_height_first_mode, modal_mass
+from vtable.analytic.hold import first_order_hold
 from vtable.analytic.mechanical import MechanicalModel
 from vtable.analytic.pitch import HybridModel, _structure_rows
 from vtable.analytic.sdof import TableSDOF
@@ -144,21 +144,21 @@ def coupled_mode(model: LinearModel) -> tuple[float, float]:
 # ---- spectra through a model ------------------------------------------------------------
 def _augmented(model: LinearModel, output: str, dt: float):
     """Φ, G0, G1 and c for the model driven by ẍ_c linear over each step (the
-    Nigam-Jennings assumption), with x_c and ẋ_c appended to the state from rest."""
+    Nigam-Jennings assumption), with x_c and ẋ_c appended to the state from rest:
+    y_{k+1} = Φ y_k + G0 a_k + G1 a_{k+1} (`first_order_hold`)."""
     n = model.A.shape[0]
     i = model.outputs.index(output)
     m = n + 2
-    M = np.zeros((m + 2, m + 2))
-    M[:n, :n] = model.A
-    M[:n, n] = model.B[:, 0]
-    M[n, n + 1] = 1.0
-    M[n + 1, m] = 1.0  # input ẍ_c
-    M[m, m + 1] = 1.0  # its slope over the step
-    E = scipy.linalg.expm(M * dt)
-    G1 = E[:m, m + 1] / dt
+    A = np.zeros((m, m))
+    A[:n, :n] = model.A
+    A[:n, n] = model.B[:, 0]
+    A[n, n + 1] = 1.0
+    b = np.zeros(m)
+    b[n + 1] = 1.0  # input ẍ_c
+    phi, gam, lam = first_order_hold(A, b, dt)
     c = np.zeros(m)
     c[:n], c[n] = model.C[i], model.D[i, 0]
-    return E[:m, :m], E[:m, m] - G1, G1, c
+    return phi, gam - lam, lam, c
 
 
 @njit(cache=True)

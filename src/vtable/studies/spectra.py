@@ -6,9 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
 from vtable._numba import njit
+from vtable.analytic.hold import first_order_hold
 from vtable.errors import VtableError
 from vtable.runs.model import FORMAT_UNITS
 
@@ -54,17 +54,14 @@ def nigam_jennings(periods: np.ndarray, damping: float, dt: float):
 
 
 def recurrence(periods: np.ndarray, damping: float, dt: float):
-    """The same recurrence derived independently: one batched matrix exponential of the
-    oscillator augmented with the input and its slope (used to check the closed form)."""
+    """The same recurrence derived independently: each oscillator stepped exactly with its
+    input linear over the step (`first_order_hold`; used to check the closed form)."""
     w = 2 * np.pi / np.asarray(periods, dtype=float)
-    M = np.zeros((len(w), 4, 4))
-    M[:, 0, 1] = 1.0
-    M[:, 1, 0], M[:, 1, 1] = -w * w, -2 * damping * w
-    M[:, 1, 2] = -1.0  # input a
-    M[:, 2, 3] = 1.0  # a varies with slope δ
-    E = scipy.linalg.expm(M * dt)
-    lam = E[:, :2, 3] / dt  # per (a_{k+1} - a_k)
-    return E[:, :2, :2].copy(), E[:, :2, 2] - lam, lam.copy()
+    b = np.array([0.0, -1.0])  # input a
+    holds = [first_order_hold(np.array([[0.0, 1.0], [-wi * wi, -2 * damping * wi]]), b, dt)
+             for wi in w]
+    Phi, gam, lam = (np.array(x) for x in zip(*holds, strict=True))
+    return Phi, gam - lam, lam
 
 
 @njit(cache=True)
