@@ -38,14 +38,18 @@ class TableSDOF(LinearModel):
 
 
 def tf_7_9(p: TableSDOFParams) -> tuple[np.ndarray, np.ndarray]:
-    """Numerator and denominator of H_tc = x_t/x_c, eq 7.9 (highest power first).
+    """Numerator and denominator of H_tc = x_t/x_c, eq 7.9 (highest power first)."""
+    ol, st = p.open_loop, p.structure
+    return coefficients_7_9(ol.omega_o, ol.xi_o, ol.k_o, st.omega_s, st.xi_s, st.u)
+
+
+def coefficients_7_9(wo, xo, ko, ws, xs, u) -> tuple[np.ndarray, np.ndarray]:
+    """Eq 7.9's numerator k_o (s² + 2ξ_sω_s s + ω_s²) and denominator a5 s⁵ + ... + a0
+    (highest power first) from ω_o, ξ_o, k_o, ω_s, ξ_s and u = m_s/m_t.
 
     The printed a2 has ξ_s where ξ_o belongs; derived from eqs 7.3, 7.6 and 7.8:
     a2 = 2(1+u) ω_s² ξ_o/ω_o + 2 ξ_s ω_s + k_o.
     """
-    ol, st = p.open_loop, p.structure
-    wo, xo, ko = ol.omega_o, ol.xi_o, ol.k_o
-    ws, xs, u = st.omega_s, st.xi_s, st.u
     r = ws / wo
     a0 = ko * ws**2
     a1 = ws**2 + 2 * ws * xs * ko

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import scipy.optimize
 
+from vtable.analytic.sdof import coefficients_7_9
 from vtable.errors import VtableError
 from vtable.ident.validity import Flag, fit_flags
 
@@ -220,14 +221,8 @@ def h_table_sdof(f_hz, f_o, xi_o, k_o, f_s, xi_s, u, tau: float = 0.0) -> np.nda
     `h_open_loop_lag`) divides it by (1 + τs): H = k_o N/((1 + τs)(P - k_o N) + k_o N);
     τ = 0 is eq 7.9."""
     s = 1j * TWO_PI * np.asarray(f_hz, dtype=float)
-    wo, ws = TWO_PI * f_o, TWO_PI * f_s
-    r = ws / wo
-    a = [1 / wo**2, 2 * ((1 + u) * r * xi_s + xi_o) / wo,
-         r * r * (1 + u) + 4 * r * xi_o * xi_s * (1 + u) + 1,
-         2 * (1 + u) * ws**2 * xi_o / wo + 2 * xi_s * ws + k_o,
-         ws**2 + 2 * ws * xi_s * k_o, k_o * ws**2]
-    num = k_o * (s * s + 2 * xi_s * ws * s + ws**2)
-    den = np.polyval(a, s)
+    b, a = coefficients_7_9(TWO_PI * f_o, xi_o, k_o, TWO_PI * f_s, xi_s, u)
+    num, den = np.polyval(b, s), np.polyval(a, s)
     if tau:
         den = (1 + tau * s) * (den - num) + num
     return num / den
