@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import scipy.optimize
 
+from vtable.analytic.closed_forms import transmissibility
 from vtable.analytic.sdof import coefficients_7_9
 from vtable.errors import VtableError
 from vtable.ident.validity import Flag, fit_flags
@@ -141,10 +142,9 @@ def _least_squares(fun: Callable, x0, lb, ub, names, target, method: str,
 
 # ---- the bare-table servo loop (eq 6.15) -----------------------------------------------
 def h_open_loop(f_hz, f_o: float, xi_o: float, k_o: float) -> np.ndarray:
-    """H = k_o/(s(s²/ω_o² + 2ξ_o s/ω_o + 1) + k_o), eq 6.15b."""
-    s = 1j * TWO_PI * np.asarray(f_hz, dtype=float)
-    w = TWO_PI * f_o
-    return k_o / (s * (s * s / w**2 + 2 * xi_o * s / w + 1) + k_o)
+    """H = k_o/(s(s²/ω_o² + 2ξ_o s/ω_o + 1) + k_o), eq 6.15b (`h_resonator_lag` with
+    neither lag nor resonator)."""
+    return h_resonator_lag(f_hz, f_o, xi_o, k_o, 0.0, 1.0, 0.0, 0.0)
 
 
 def h_open_loop_lag(f_hz, f_o: float, xi_o: float, k_o: float, tau: float) -> np.ndarray:
@@ -153,24 +153,21 @@ def h_open_loop_lag(f_hz, f_o: float, xi_o: float, k_o: float, tau: float) -> np
     G = k_o/(s(1 + τs)(s²/ω_o² + 2ξ_o s/ω_o + 1)) and H = G/(1 + G)
     = k_o/(s(1 + τs)(s²/ω_o² + 2ξ_o s/ω_o + 1) + k_o). τ = 0 is eq 6.15b; the DC gain
     is 1 (a valve-integrator loop is type 1)."""
-    s = 1j * TWO_PI * np.asarray(f_hz, dtype=float)
-    w = TWO_PI * f_o
-    return k_o / (s * (1 + tau * s) * (s * s / w**2 + 2 * xi_o * s / w + 1) + k_o)
+    return h_resonator_lag(f_hz, f_o, xi_o, k_o, tau, 1.0, 0.0, 0.0)
 
 
 def h_resonator_lag(f_hz, f_o: float, xi_o: float, k_o: float, tau: float, f_s: float,
                     xi_s: float, u: float) -> np.ndarray:
     """Eq 7.9 with the valve lag of `h_open_loop_lag`: the loop of eq 6.15 carrying a
     resonator of mass ratio u = m_s/m_t (ω_s, ξ_s) on the platen. The platen's inertia
-    and the oil column's damping see the dynamic mass 1 + u T_s, T_s = (2ξ_s ω_s s +
-    ω_s²)/(s² + 2ξ_s ω_s s + ω_s²), so
+    and the oil column's damping see the dynamic mass 1 + u T_s, T_s the resonator's
+    transmissibility (eq 7.8, `closed_forms.transmissibility`), so
     H = k_o/(s(1 + τs)[(1 + u T_s)(s²/ω_o² + 2ξ_o s/ω_o) + 1] + k_o);
     τ = 0 is eq 7.9 exactly (its coefficients a0-a5, with the a2 typo corrected), u = 0
     is `h_open_loop_lag`."""
     s = 1j * TWO_PI * np.asarray(f_hz, dtype=float)
-    w, ws = TWO_PI * f_o, TWO_PI * f_s
-    t_s = (2 * xi_s * ws * s + ws**2) / (s * s + 2 * xi_s * ws * s + ws**2)
-    d = (1 + u * t_s) * (s * s / w**2 + 2 * xi_o * s / w) + 1
+    w = TWO_PI * f_o
+    d = (1 + u * transmissibility(f_hz, f_s, xi_s)) * (s * s / w**2 + 2 * xi_o * s / w) + 1
     return k_o / (s * (1 + tau * s) * d + k_o)
 
 
