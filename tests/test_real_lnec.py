@@ -1,6 +1,9 @@
 """Issue 18's real-data acceptance on LNEC's measured pink-noise run (../shared/data/real):
 what `identify` can quote of the loop, and why the time-domain diagnosis cannot end near
-the noise floor. Skipped when the data are not beside the repository.
+the noise floor. Each fact read from the data alone (numpy and scipy, a few lines) is the
+independent reference for what vtable reads of it: its sensor check, its notch check, its
+noise floor and its black box (issue 34: a test of the data alone cannot fail on vtable).
+Skipped when the data are not beside the repository.
 
 Measured on this run (H1, 2048-point frames unless said; numbers in the asserts):
 
@@ -38,6 +41,10 @@ import pytest
 import real_data
 import scipy.signal as sg
 
+from vtable.diagnose import noise_floor
+from vtable.diagnose.limits import black_box
+from vtable.diagnose.sensors import sensor_check
+from vtable.diagnose.stationarity import stationarity_check
 from vtable.ident.report import identify_run
 from vtable.runs import read_run
 
@@ -129,6 +136,18 @@ def test_the_two_table_channels_disagree_beyond_any_rigid_platen(run_dir):
     band = (fc > 5) & (fc < 12)
     # systematic: the channels are coherent where they differ (median 0.977, least 0.87)
     assert np.median(coh[band]) > 0.95 and coh[band].min() > 0.8
+    # vtable's sensor check reads the same: |ẍ/s²x|, here |H1 of a over x|/ω² on 1024-point
+    # frames, the median over each band's coherent lines (1.21 and 1.67)
+    check = sensor_check(read_run(run_dir / "lnec_pink_2.toml"))
+    assert check is not None and not check.agree, check
+    ratio = {b: m for b, m, _, _ in check.bands}
+    fh, sxa = sg.csd(x, a, fs=fs, nperseg=1024)
+    _, sxx = sg.welch(x, fs=fs, nperseg=1024)
+    _, cxa = sg.coherence(x, a, fs=fs, nperseg=1024)
+    for lo, hi in ((5, 10), (10, 20)):
+        b = (fh >= lo) & (fh < hi) & (cxa > 0.5)
+        mine = float(np.median(abs(sxa[b] / sxx[b]) / (2 * np.pi * fh[b]) ** 2))
+        assert ratio[f"{lo}-{hi} Hz"] == pytest.approx(mine, rel=0.06), (ratio, lo, mine)
 
 
 def test_the_specimen_softens_during_the_run(run_dir):
@@ -146,15 +165,36 @@ def test_the_specimen_softens_during_the_run(run_dir):
     first, last = notch(0), notch(len(xc) - w)
     assert 3.15 < first < 3.3, first  # 3.22 Hz
     assert last < first - 0.15, (first, last)  # 2.93 Hz: at least 1.5 lines lower
+    # vtable's check (the first and last thirds, 55 s each) sees the notch move down too
+    check = stationarity_check(read_run(run_dir / "lnec_pink_2.toml"))
+    assert check is not None and check.notch is not None, check
+    f1, f2, window = check.notch
+    third = len(xc) // 3
+    assert window == pytest.approx(third / fs)
+    assert f1 == pytest.approx(notch_over(xc[:third], xt[:third], fs), abs=0.1), f1
+    assert f2 == pytest.approx(notch_over(xc[-third:], xt[-third:], fs), abs=0.1), f2
+    assert f2 < f1 - 0.1, (f1, f2)  # 3.21 -> 3.05 Hz
+
+
+def notch_over(xc: np.ndarray, xt: np.ndarray, fs: float) -> float:
+    """The least |H1| of x_t over x_c at 2.3-4.5 Hz (2048-point frames)."""
+    f, gxy = sg.csd(xc, xt, fs=fs, nperseg=2048)
+    _, gxx = sg.welch(xc, fs=fs, nperseg=2048)
+    m = (f > 2.3) & (f < 4.5)
+    return float(f[m][np.argmin(abs(gxy / gxx)[m])])
 
 
 def test_no_time_invariant_model_of_the_drive_reaches_three_noise_floors(run_dir):
     """What any linear time-invariant model driven by h_span must leave: the incoherent
     part (1 - γ²) of each channel's power (H1 on 4096-point frames, the best such model
-    there is). `vtable diagnose` puts the run's noise floor at 1.78 % (3x: 5.3 %)."""
+    there is). vtable's noise floor of the run (`noise_floor`, 1.78 %: what `vtable
+    diagnose` prints) is well below it: a floor that swallowed the incoherent part would
+    call the run explained."""
     d = _channels(run_dir)
     fs = 1 / (d["time"][1] - d["time"][0])
-    floor3 = 3 * 0.0178
+    floor = noise_floor([read_run(run_dir / "lnec_pink_2.toml")])
+    assert floor == pytest.approx(0.0178, abs=0.002), floor
+    floor3 = 3 * floor
     for ch, least, band, share in (("avg_hdisp", 0.065, (2, 5), 0.6),  # 8.0 %, 79 %
                                    ("avg_hacc", 0.14, (5, 20), 0.7)):  # 16.8 %, 82 %
         y = d[ch]
@@ -196,6 +236,15 @@ def test_the_table_changes_between_the_diagnosis_training_and_held_out_segments(
             p = _h1_prediction(x[fit], y[fit], x[held:], fs)
             err[ch, name] = np.linalg.norm(y[held:] - p) / np.linalg.norm(y[held:])
     assert err["avg_hdisp", "first"] > 0.12 and err["avg_hacc", "first"] > 0.3, err
+    # vtable's black box (limits.black_box, on the same 2048-point frames) on the same
+    # segments agrees with this one
+    run = read_run(run_dir / "lnec_pink_2.toml")
+    xs = run.channel("h_span")
+    for ch in ("avg_hdisp", "avg_hacc"):
+        for name, fit in (("first", slice(0, n30)), ("adjacent", slice(held - n30, held))):
+            box = black_box(xs, run.channel(ch), fit, slice(held, len(xs)), frames=(2048,))
+            assert box is not None
+            assert box[0] == pytest.approx(err[ch, name], rel=0.1), (ch, name, box[0], err)
     assert err["avg_hdisp", "adjacent"] < 0.5 * err["avg_hdisp", "first"], err
     assert err["avg_hacc", "adjacent"] < 0.8 * err["avg_hacc", "first"], err
     assert (err["avg_hdisp", "first"] + err["avg_hacc", "first"]) / 2 > 3 * 3 * 0.0178
