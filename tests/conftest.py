@@ -199,3 +199,43 @@ def truth_runs(folder: str, table, spec, decl, cmds, noise: float = 0.01, seed: 
                              noise=noise, seed=seed + k)[0]
              for k, (name, cmd) in enumerate(cmds)]
     return [read_run(p) for p in paths]
+
+
+# ---- running the CLI: in this process with a time limit, or as a user does ----------------
+HANG_S = 30  # s: a command taking longer than this on the fuzz tests' tiny inputs hangs
+
+
+class HangError(Exception):
+    """A command ran past `HANG_S`."""
+
+
+def _alarm(signum, frame):
+    raise HangError()
+
+
+def run_cli(argv: list[str]) -> tuple[int, str, str]:
+    """(exit code, stdout, stderr) of `vtable ARGV` run in this process, `HANG_S` at most."""
+    import contextlib
+    import io
+    import signal
+
+    from vtable.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    old = signal.signal(signal.SIGALRM, _alarm)
+    signal.alarm(HANG_S)
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            code = main(argv)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+    return code, out.getvalue(), err.getvalue()
+
+
+def vtable_exe() -> list[str]:
+    """The command that runs vtable in a process of its own, as a user's shell does."""
+    import sys
+
+    exe = shutil.which("vtable")
+    return [exe] if exe else [sys.executable, "-m", "vtable.cli"]

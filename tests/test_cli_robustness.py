@@ -5,13 +5,12 @@ fix it names."""
 from __future__ import annotations
 
 import json
-import shutil
 import signal
 import subprocess
-import sys
 import time
 
 import pytest
+from conftest import vtable_exe
 
 from vtable.cli import main
 
@@ -22,15 +21,10 @@ def run(capsys, *argv):
     return code, out, err
 
 
-def _exe() -> list[str]:
-    exe = shutil.which("vtable")
-    return [exe] if exe else [sys.executable, "-m", "vtable.cli"]
-
-
 def test_closed_pipe_ends_quietly():
     """`vtable presets | head -1` used to end in a BrokenPipeError traceback."""
     # more output than a pipe buffer holds, so the writer meets the closed pipe
-    p = subprocess.Popen([*_exe(), "tf", "eerc-sdof", "--n", "20000"], stdout=subprocess.PIPE,
+    p = subprocess.Popen([*vtable_exe(), "tf", "eerc-sdof", "--n", "20000"], stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE)
     p.stdout.read(5)
     p.stdout.close()
@@ -42,7 +36,7 @@ def test_closed_pipe_ends_quietly():
 def test_ctrl_c_is_one_line_and_exit_130(tmp_path):
     # Ctrl-C's default disposition in the child: a shell that starts the tests in the
     # background leaves SIGINT ignored, and Python keeps an ignored SIGINT ignored
-    p = subprocess.Popen([*_exe(), "simulate", "--duration", "1500", "--peak", "0.01"],
+    p = subprocess.Popen([*vtable_exe(), "simulate", "--duration", "1500", "--peak", "0.01"],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     time.sleep(2.0)

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from test_truth_controllers import closed_loop, lnec_constants
+from truth.closed_loop import closed_loop, lnec_constants
 
 from vtable.models.physics import Physics
 from vtable.models.reduced import ReducedModel

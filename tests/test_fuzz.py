@@ -11,22 +11,17 @@ independent truth simulator (tests/truth), not from vtable.
 
 from __future__ import annotations
 
-import contextlib
 import functools
-import io
 import re
-import signal
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import truth
+from conftest import run_cli
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from vtable.cli import main
-
 DURATION = 3.6  # s: at 150 Hz still above the 512-sample analysis frame
-HANG_S = 30  # a command taking longer than this on these tiny inputs is a hang
 
 
 # ---- base inputs ----------------------------------------------------------------------------
@@ -365,28 +360,6 @@ def make_case(bases, fs, valid_muts, invalid_mut, r) -> Case:
             csv, toml, _, _, why = m(csv, toml, r)
             whys.append(why)
     return Case(_encode(csv), _encode(toml), valid, names, "; ".join(whys), needs_spec)
-
-
-# ---- running a verb with a time limit ---------------------------------------------------------
-class HangError(Exception):
-    pass
-
-
-def _alarm(signum, frame):
-    raise HangError()
-
-
-def run_cli(argv: list[str]) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    old = signal.signal(signal.SIGALRM, _alarm)
-    signal.alarm(HANG_S)
-    try:
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-            code = main(argv)
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, old)
-    return code, out.getvalue(), err.getvalue()
 
 
 RUN_VERBS = {

@@ -13,7 +13,7 @@ from pathlib import Path
 import h5py
 import pytest
 import truth
-from test_fuzz import run_cli
+from conftest import run_cli
 
 from vtable.runs import read_run
 from vtable.runs.hdf5 import read_hdf5, write_hdf5
@@ -143,11 +143,11 @@ def test_ctrl_c_into_diagnose_is_one_line_and_exit_130(long_campaign):
     import subprocess
     import time
 
-    from test_cli_robustness import _exe
+    from conftest import vtable_exe
 
     landed = 0
     for after in CTRL_C_AT:
-        p = subprocess.Popen([*_exe(), "diagnose", *long_campaign], stdout=subprocess.PIPE,
+        p = subprocess.Popen([*vtable_exe(), "diagnose", *long_campaign], stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True, start_new_session=True,
                              preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         time.sleep(after)

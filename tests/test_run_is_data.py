@@ -14,7 +14,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from test_fuzz import run_cli
+from conftest import run_cli
 
 from vtable.runs import read_run
 from vtable.runs.hdf5 import read_hdf5, write_hdf5

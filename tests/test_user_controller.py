@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_truth_controllers import closed_loop, lnec_constants
+from truth.closed_loop import closed_loop, lnec_constants
 
 from vtable.analytic.controlled import declared_loop
 from vtable.cli import main
