@@ -9,6 +9,7 @@ import signal
 import subprocess
 import time
 
+import numpy as np
 import pytest
 from conftest import vtable_exe
 
@@ -68,14 +69,25 @@ def test_tf_png_of_a_model_is_written(capsys, tmp_path):
 
 def test_earthquake_duration_is_honoured_and_the_scaling_said(capsys):
     """`simulate --command earthquake --duration 3` ignored the duration and rescaled to
-    4 in without a word."""
+    4 in without a word; then it scaled the cut to --peak itself (issue 33: half the
+    shaking). The first 3 s are played as the whole record at --peak plays them, and the
+    notes say so with the part's own peak."""
+    from vtable.signals import make_command
+
     code, out, err = run(capsys, "simulate", "--command", "earthquake", "--duration", "3",
                          "--peak", "0.5", "--json")
     assert code == 0, err
     d = json.loads(out)
     assert d["duration_s"] == pytest.approx(3.0, abs=0.01)
-    assert d["peaks"]["h_span"]["peak"] == pytest.approx(0.5, rel=1e-3)
-    assert any("first 3 s" in n for n in d["notes"])
+    whole = make_command("earthquake", record="elcentro", peak_in=0.5)
+    part = make_command("earthquake", record="elcentro", peak_in=0.5, duration=3.0)
+    n = len(part.t)  # the same acceleration over those seconds (not twice or half of it)
+    a_whole, a_part = (np.gradient(np.gradient(c.x[:n], c.t[:n]), c.t[:n])
+                       for c in (whole, part))
+    assert np.abs(a_part).max() == pytest.approx(np.abs(a_whole).max(), rel=0.02)
+    own = np.abs(part.x).max() / 0.0254  # in: its own zero end conditions over 3 s: 1.07
+    assert d["peaks"]["h_span"]["peak"] == pytest.approx(own, rel=1e-3)
+    assert any("first 3 s" in n and f"this part's own {own:.3g} in" in n for n in d["notes"])
     assert any("scaled to ±0.5 in peak" in n for n in d["notes"])
     code, _, err = run(capsys, "simulate", "--command", "earthquake", "--duration", "300")
     assert code == 2 and "longer than the processed record" in err

@@ -90,7 +90,9 @@ def test_the_reduced_model_and_the_virtual_table_agree_on_a_run_that_yields(kind
     h = spec.hysteresis
     k = h.storeys[0]
     drift = run.channels[f"floor{k}_drift"]
-    assert np.max(np.abs(drift)) > 2.5 * h.yield_drift[0]  # it yields: ductility > 2.5
+    # it yields: ductility 2.50 (the first 10 s scaled as the whole record is, 1.03 g; it was
+    # 2.6 when the cut alone was scaled to 2 in, 1.08 g)
+    assert np.max(np.abs(drift)) > 2.4 * h.yield_drift[0]
     for ch in (f"floor{k}_drift", f"floor{k}_shear", "avg_hdisp", "avg_hacc", "acc_n_ne"):
         assert nrms(pred[ch], run.channels[ch]) < 0.02, (ch, nrms(pred[ch], run.channels[ch]))
     assert run.units[f"floor{k}_drift"] == "in" and run.units[f"floor{k}_shear"] == "kip"

@@ -201,3 +201,27 @@ def test_implausible_record_unit_is_warned_with_the_likely_unit(tmp_path):
     vals = " ".join(f"{v:.6f}" for v in acc_gal[:400])
     at2.write_text(f"PEER\nEL CENTRO\nUNITS OF G\nNPTS= 400, DT= .0100 SEC\n{vals}\n")
     assert "is the record in cm/s² (gal)?" in read_at2(at2).notes[0]
+
+
+def test_a_cut_earthquake_shakes_as_the_whole_record_does():
+    """`--duration` on an earthquake takes the processed record's first seconds scaled as
+    the whole record is (issue 33: the cut used to be scaled to --peak itself, and the same
+    --peak gave half the shaking): El Centro at 2 in, its first 5 and 15 s, against the
+    whole command over the same seconds."""
+    from vtable.signals import make_command
+
+    full = make_command("earthquake", record="elcentro", peak_in=2.0)
+
+    def acc(c):
+        return np.gradient(np.gradient(c.x, c.t), c.t)
+
+    for seconds in (5.0, 15.0):
+        cut = make_command("earthquake", record="elcentro", peak_in=2.0, duration=seconds)
+        n = len(cut.t)
+        a_full, a_cut = acc(full)[:n], acc(cut)
+        # the same shaking: 1.03 g peak in both, 0.5-0.9 % NRMS apart (the cut's own zero end
+        # conditions change only its lowest frequencies)
+        assert np.abs(a_cut).max() == pytest.approx(np.abs(a_full).max(), rel=0.01)
+        assert np.linalg.norm(a_cut - a_full) / np.linalg.norm(a_full) < 0.02
+        assert cut.table["peak_in"] == pytest.approx(2.0)  # the whole record's peak
+        assert "scaled as the whole record is" in cut.notes[-1], cut.notes

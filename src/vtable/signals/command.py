@@ -84,13 +84,18 @@ def _earthquake(record: str | None, duration: float | None, peak_in: float | Non
                               f"{rec.name} ({full:.2f} s after the time scale "
                               f"{time_scale:.4g})")
         window = (0.0, min(duration * time_scale, rec.duration))
-        notes.append(f"first {duration:g} s of the processed record (record time 0-"
-                     f"{window[1]:.2f} s)")
-    cmd = process_record(rec, length_scale=length_scale, peak_displacement=peak, window=window)
+    cmd = process_record(rec, length_scale=length_scale, peak_displacement=peak, window=window,
+                         scale_as_whole=True)
     notes.append(f"§9.2 processing: length scale {length_scale:g}, time scale "
                  f"{time_scale:.4g}, integrated with zero end conditions, scaled to "
                  f"±{units.from_si(peak, 'in'):g} in peak"
                  + ("" if peak_in is not None else " (the default; --peak sets it)"))
+    if window is not None:
+        own = units.from_si(float(np.max(np.abs(cmd.displacement))), "in")
+        notes.append(f"first {duration:g} s of the processed record (record time 0-"
+                     f"{window[1]:.2f} s), scaled as the whole record is: the whole "
+                     f"record's peak is the ±{units.from_si(peak, 'in'):g} in, this "
+                     f"part's own {own:.3g} in")
     t_new = np.arange(0.0, cmd.time[-1] + 1e-12, COMMAND_DT)
     x = np.interp(t_new, cmd.time, cmd.displacement)
     table = {"kind": "earthquake", "record": rec.name, "length_scale": length_scale,

@@ -86,10 +86,15 @@ def process_record(rec: Record, *, length_scale: float = 3.2801,
                    time_scale: float | None = None, peak_displacement: float = 4 * 0.0254,
                    window: tuple[float, float] | None = None,
                    corners: tuple[float, float, float, float] | None = None,
-                   scheme: str = "central") -> TableCommand:
+                   scheme: str = "central", scale_as_whole: bool = False) -> TableCommand:
     """§9.2: take the `window` (s, prototype time), scale, band-pass (optional), integrate
     with zero end conditions, scale to `peak_displacement` (max |x_c|; 4 in by default),
-    and differentiate back to the command acceleration."""
+    and differentiate back to the command acceleration. With `scale_as_whole` a window is
+    scaled by the factor that brings the whole record's displacement to
+    `peak_displacement`: the part then shakes as it does within the whole record (its own
+    peak is at most that)."""
+    if not peak_displacement > 0:
+        raise VtableError("peak displacement must be > 0")
     acc = rec.acc
     if window is not None:
         t0, t1 = window
@@ -97,10 +102,14 @@ def process_record(rec: Record, *, length_scale: float = 3.2801,
         if not (0 <= i0 < i1 <= len(acc)):
             raise VtableError(f"window {window} s is outside the record (0-{rec.duration:g} s)")
         acc = acc[i0:i1]
-    scaled = scale_record(Record(rec.name, rec.dt, acc), length_scale, time_scale)
-    a = scaled.acc if corners is None else bandpass_trapezoid(scaled.acc, scaled.dt, corners)
-    d = integrate_to_displacement(a, scaled.dt)
-    if not peak_displacement > 0:
-        raise VtableError("peak displacement must be > 0")
-    d *= peak_displacement / np.max(np.abs(d))
+
+    def displacement(a: np.ndarray) -> tuple[Record, np.ndarray]:
+        scaled = scale_record(Record(rec.name, rec.dt, a), length_scale, time_scale)
+        b = scaled.acc if corners is None else bandpass_trapezoid(scaled.acc, scaled.dt,
+                                                                   corners)
+        return scaled, integrate_to_displacement(b, scaled.dt)
+
+    scaled, d = displacement(acc)
+    whole = displacement(rec.acc)[1] if window is not None and scale_as_whole else d
+    d *= peak_displacement / np.max(np.abs(whole))
     return TableCommand(scaled.name, scaled.dt, d, differentiate(d, scaled.dt, scheme))
