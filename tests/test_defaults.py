@@ -36,7 +36,7 @@ def test_default_command_is_within_the_tables_limits():
 
 
 def test_an_explicit_peak_beyond_a_limit_is_refused(capsys):
-    code = main(["simulate", "--table", "lnec-st1d", "--specimen", "none", "--peak", "0.25",
+    code = main(["simulate", "--table", "lnec-st1d", "--specimen", "none", "--peak", "0.25in",
                  "--duration", "1"])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "velocity limit" in err
@@ -63,3 +63,71 @@ def test_a_metric_runs_amplitudes_are_in_mm_not_mil():
                    display="metric")
     text = localisation_text(c)
     assert "2.0% at 0.762 mm rms, 8.0% at 1.52 mm rms" in text and "mil" not in text
+
+
+def test_amplitudes_take_a_unit_and_a_metric_run_stores_metric_keys(tmp_path, capsys):
+    """`--peak 2mm` (or 0.002m, 0.0787in) on LNEC's metric table is a 2 mm peak command,
+    and its run file says `peak_mm = 2.0`; a bare number is in the table's unit (mm there,
+    in on the report's table); a unit that is not a length is one line naming --peak
+    (issue 33: the flag was inches whatever the table, the file `peak_in`)."""
+    import tomllib
+
+    from vtable.runs import read_run
+
+    peaks = {}
+    for k, text in enumerate(("2mm", "0.002m", "0.0787402in", "2")):
+        stem = tmp_path / f"r{k}"
+        code = main(["simulate", "--table", "lnec-st1d", "--specimen", "none", "--peak", text,
+                     "--duration", "2", "--out", str(stem)])
+        out, err = capsys.readouterr()
+        assert code == 0, err
+        command = tomllib.loads(stem.with_suffix(".toml").read_text())["command"]
+        assert command["peak_mm"] == pytest.approx(2.0, rel=1e-6) and "peak_in" not in command
+        peaks[text] = np.max(np.abs(read_run(stem.with_suffix(".toml")).channel("h_span")))
+        assert "--peak sets it" not in out  # given, not chosen
+    # one command (m), a 2 mm peak seen through the run's 200 Hz samples (1.96 mm)
+    assert all(p == pytest.approx(peaks["2mm"], rel=1e-5) for p in peaks.values()), peaks
+    assert peaks["2mm"] == pytest.approx(0.002, rel=0.03)
+    code = main(["simulate", "--specimen", "none", "--peak", "0.1", "--duration", "2",
+                 "--out", str(tmp_path / "eerc")])
+    assert code == 0
+    command = tomllib.loads((tmp_path / "eerc.toml").read_text())["command"]
+    assert command["peak_in"] == pytest.approx(0.1) and "peak_mm" not in command
+    capsys.readouterr()
+    for bad, msg in (("3furlongs", "'furlongs'"), ("2g", "not a length unit"),
+                     ("two", "is not a length")):
+        code = main(["simulate", "--peak", bad])
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1 and "--peak" in err and msg in err, err
+
+
+def test_a_run_file_gives_its_peak_in_one_unit(tmp_path):
+    from vtable.errors import VtableError
+    from vtable.runs.format import command_from_dict
+
+    assert command_from_dict({"peak_mm": 2.0}, "r.toml [command]").peak == pytest.approx(0.002)
+    assert command_from_dict({"peak_in": 1.0}, "r.toml [command]").peak == pytest.approx(0.0254)
+    with pytest.raises(VtableError, match="peak_in and peak_mm both give"):
+        command_from_dict({"peak_in": 1.0, "peak_mm": 25.4}, "r.toml [command]")
+
+
+def test_the_drives_target_peak_takes_a_unit(monkeypatch):
+    """`vtable drive --target-peak 50mm` reaches the verb as 50 mm in --target-unit's
+    terms (1.9685 in), a bare number in --target-unit."""
+    from vtable import cli, verbs
+
+    seen = {}
+
+    def drive(*args, **kw):
+        seen["peak"] = args[13]
+        raise SystemExit(0)
+
+    monkeypatch.setattr(verbs, "drive", drive)
+    for argv, want in ((["--target-peak", "50mm"], 50 / 25.4),
+                       (["--target-peak", "2"], 2.0),
+                       (["--target-peak", "50mm", "--target-unit", "mm"], 50.0)):
+        a = cli.parser().parse_args(["drive", "r.toml", "--target", "elcentro", "--out", "d",
+                                     *argv])
+        with pytest.raises(SystemExit):
+            cli.cmd_drive(a)
+        assert seen["peak"] == pytest.approx(want), argv

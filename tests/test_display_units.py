@@ -159,7 +159,7 @@ def test_identify_shows_a_metric_runs_springs_in_kn_per_mm(tmp_path, capsys):
 
 
 def test_a_metric_tables_refusal_is_in_its_units(capsys):
-    code = main(["simulate", "--table", "lnec-st1d", "--specimen", "none", "--peak", "0.25",
+    code = main(["simulate", "--table", "lnec-st1d", "--specimen", "none", "--peak", "0.25in",
                  "--duration", "1"])
     err = capsys.readouterr().err
     m = re.search(r"velocity reaches ([\d.]+) mm/s \(first beyond ±([\d.]+) mm/s", err)

@@ -11,7 +11,7 @@ import json
 import os
 import sys
 
-from vtable import verbs
+from vtable import units, verbs
 from vtable.cli_args import parser
 from vtable.errors import UnstableError, VtableError, interrupted, sigint_seen
 from vtable.fileio import write_text
@@ -73,7 +73,10 @@ def cmd_drive(a: argparse.Namespace) -> Result:
     verbs.load_effects(a.effects_from)
     return verbs.drive(a.runs, a.target, a.out, a.target_unit, a.objective,
                        verbs.effect_names(a.with_), a.from_, a.calibrate, a.regularisation,
-                       a.cap, a.update, a.fmt, a.png, a.target_peak, band=a.band,
+                       a.cap, a.update, a.fmt, a.png,
+                       None if a.target_peak is None else  # in --target-unit
+                       units.from_si(a.target_peak.si(a.target_unit), a.target_unit),
+                       band=a.band,
                        report=a.report)
 
 

@@ -6,8 +6,9 @@ from __future__ import annotations
 import argparse
 import math
 import re
+from dataclasses import dataclass
 
-from vtable import __version__
+from vtable import __version__, units
 from vtable.errors import VtableError
 
 _NUMBER = re.compile(r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?", re.ASCII)
@@ -22,6 +23,32 @@ def _number(text: str) -> float:
     if not math.isfinite(v):
         raise argparse.ArgumentTypeError(f"{text!r} is too large")
     return v
+
+
+@dataclass(frozen=True)
+class Length:
+    """A length a user typed: its value and unit ('2mm', '0.1 in'), or a bare number whose
+    unit is the table's (`unit` None: inches on the report's tables, mm on a metric one)."""
+
+    value: float
+    unit: str | None = None
+
+    def si(self, default_unit: str) -> float:
+        return units.to_si(self.value, self.unit or default_unit)
+
+
+def _length(text: str) -> Length:
+    """A plain number with an optional length unit (m, mm, cm, in, ft)."""
+    m = re.fullmatch(r"\s*(" + _NUMBER.pattern + r")\s*([A-Za-z]*)\s*", text, re.ASCII)
+    if not m:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a length (a number and a unit: "
+                                          "2mm, 0.1in, 0.005m)")
+    value, unit = _number(m.group(1)), m.group(m.lastindex) or None
+    if unit is not None and units.DIMENSIONS.get(unit) != units.DIMENSIONS["in"]:
+        lengths = ", ".join(u for u in units.units_of(units.DIMENSIONS["in"]))
+        raise argparse.ArgumentTypeError(f"{text!r}: {unit!r} is not a length unit "
+                                          f"(expected one of {lengths})")
+    return Length(value, unit)
 
 
 def _integer(text: str) -> int:
@@ -88,8 +115,10 @@ def parser() -> argparse.ArgumentParser:
                      help="s [11; an earthquake: the whole processed record]")
     sim.add_argument("--band", type=_number, nargs=2, default=None,
                      help="Hz [0 25, cut to the table's band]")
-    sim.add_argument("--peak", type=_number, default=None,
-                     help="peak command, in [the command's default, scaled to 50 %% of the "
+    sim.add_argument("--peak", type=_length, default=None,
+                     help="peak command displacement with its unit (2mm, 0.1in, 0.005m); a "
+                          "bare number is in the table's unit (in on eerc, mm on a metric "
+                          "table) [the command's default, scaled to 50 %% of the "
                           "table's stroke and 80 %% of its velocity and acceleration]")
     sim.add_argument("--freq", type=_number, default=2.0, help="sine frequency, Hz [2]")
     sim.add_argument("--seed", type=_integer, default=0)
@@ -179,9 +208,10 @@ def parser() -> argparse.ArgumentParser:
                          "--record takes it (processed the same way)")
     dr.add_argument("--target-unit", default="in", help="the target CSV's displacement unit "
                                                         "[in]")
-    dr.add_argument("--target-peak", type=_number, default=None,
-                    help="scale the target to this peak displacement, in --target-unit "
-                         "[a record: 4 in; a CSV: as written]")
+    dr.add_argument("--target-peak", type=_length, default=None,
+                    help="scale the target to this peak displacement, with its unit (2in, "
+                         "50mm); a bare number in --target-unit [a record: 4 in; a CSV: as "
+                         "written]")
     dr.add_argument("--objective", default="effective", choices=["effective", "table"],
                     help="effective: x_t + θh at the specimen (§4.2.2); table: x_t "
                          "[effective]")

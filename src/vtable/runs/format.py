@@ -103,7 +103,8 @@ def check_control(d: Any, where: str) -> list[str]:
 COMMAND_KINDS = ("random", "sine", "pulse", "earthquake")
 #: [command] keys of the format, and those vtable writes for its own commands
 COMMAND_KEYS = ("kind", "band_hz", "span", "drive_file", "drive_unit", "drive_scale",
-                "drive_offset_s", "peak_in", "seed", "frequency_hz", "record", "length_scale",
+                "drive_offset_s", "peak_in", "peak_mm", "peak_m", "seed", "frequency_hz",
+                "record", "length_scale",
                 "time_scale")
 
 
@@ -119,7 +120,7 @@ class CommandDescription:
     drive_unit: str | None = None               # a length unit
     drive_scale: float | None = None            # > 0
     drive_offset: float | str | None = None     # s the drive leads, or "auto"
-    peak: float | None = None                   # m (peak_in)
+    peak: float | None = None                   # m (peak_in, peak_mm or peak_m)
     seed: int | None = None
     frequency: float | None = None              # Hz (sine)
     record: str | None = None
@@ -199,6 +200,11 @@ def command_from_dict(d: Any, where: str, folder: Path | None = None) -> Command
     if name is not None and unit is None:
         notes.append(f"{where}: drive_file without drive_unit: the drive is taken in inches "
                      "(the format's displacement unit)")
+    peaks = [k for k in ("peak_in", "peak_mm", "peak_m") if k in d]
+    if len(peaks) > 1:
+        raise VtableError(f"{where}: {' and '.join(peaks)} both give the command's peak; "
+                          "keep one")
+    peak = _positive(d, peaks[0], where, peaks[0].split("_")[1]) if peaks else None
     seed = None
     if "seed" in d:
         seed = d["seed"]
@@ -207,7 +213,7 @@ def command_from_dict(d: Any, where: str, folder: Path | None = None) -> Command
     return CommandDescription(
         kind=kind, band=band, span=_positive(d, "span", where), drive_file=drive,
         drive_unit=unit, drive_scale=_positive(d, "drive_scale", where), drive_offset=offset,
-        peak=_positive(d, "peak_in", where, "in"), seed=seed,
+        peak=peak, seed=seed,
         frequency=_positive(d, "frequency_hz", where, "Hz"), record=_text(d, "record", where),
         length_scale=_positive(d, "length_scale", where),
         time_scale=_positive(d, "time_scale", where), notes=tuple(notes))

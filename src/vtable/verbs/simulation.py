@@ -138,7 +138,33 @@ def fit_peak(lab, kind: str, make, fam: str) -> tuple[Any, str]:
     share = STROKE_SHARE if limit == "stroke" else LIMIT_SHARE
     shown = display.quantity(units.to_si(peak_in, "in"), "in", fam)
     return cmd, (f"peak {shown}: {share:.0%} of {lab.name}'s {limit} limit "
-                 f"(--peak sets it, in inches)")
+                 f"(--peak sets it: 2mm, 0.1in; a bare number in {length_unit(fam)})")
+
+
+def length_unit(fam: str) -> str:
+    """The unit a bare amplitude is read in on a table of display family `fam`."""
+    return display.unit_for("in", fam)
+
+
+def peak_in_inches(peak, fam: str) -> float | None:
+    """A peak a user gave (a `cli_args.Length`, or a number in the table's unit
+    `length_unit`) in inches, the command generator's unit."""
+    if peak is None:
+        return None
+    si = peak.si(length_unit(fam)) if hasattr(peak, "si") else \
+        units.to_si(float(peak), length_unit(fam))
+    return float(units.from_si(si, "in"))
+
+
+def in_table_units(table: dict, fam: str) -> dict:
+    """A command's [command] table with its peak keyed in the run's own unit (peak_mm on
+    a metric table: docs/run-format.md)."""
+    unit = length_unit(fam)
+    if "peak_in" not in table or unit == "in":
+        return table
+    out = {k: v for k, v in table.items() if k != "peak_in"}
+    out[f"peak_{unit}"] = float(units.from_si(units.to_si(table["peak_in"], "in"), unit))
+    return out
 
 
 def without_states(run):
@@ -163,8 +189,10 @@ def simulate(specimen: str | None = None, kind: str = "random", *,
     What the user leaves out fits the table: `specimen` None is the SDOF frame, or the
     bare table when the table's payload cannot carry it (`default_specimen`); `band` None
     is 0-25 Hz cut to the table's band; `peak` None is the kind's default peak scaled to
-    the table's stroke, velocity and acceleration (`fit_peak`). Each choice is one line of
-    the report. A value given explicitly is never changed: beyond a limit it is refused.
+    the table's stroke, velocity and acceleration (`fit_peak`); a `peak` given is a
+    `cli_args.Length` or a number in the table's unit (in on the report's tables, mm on a
+    metric one). Each choice is one line of the report. A value given explicitly is never
+    changed: beyond a limit it is refused.
     `noise`: white Gaussian sensor noise, that fraction of each measured channel's RMS
     (`vtable.runs.with_noise`; the command channels clean, seeded by `seed`), added to
     the run written and said in its title — a campaign that looks like a lab's. The run
@@ -194,7 +222,8 @@ def simulate(specimen: str | None = None, kind: str = "random", *,
         cmd, why = fit_peak(lab, kind, make, fam)
         chosen.append(why)
     else:
-        cmd = make(peak)
+        cmd = make(peak_in_inches(peak, fam))
+    cmd = dataclasses.replace(cmd, table=in_table_units(cmd.table, fam))
     exp = run_experiment(spec, cmd, vt=vt, valve=valve, effects=eff)
     exp.run.units = display.file_units(exp.run.units, fam)  # a metric table's: mm, g, kN
     if noise > 0:
