@@ -91,7 +91,7 @@ class DriveResult:
             spec = m.get("specimen_peak_ratio")
             out.append(f"  {p.name:28}{_pct(m.get('nrms')):>8}{_pct(m.get('peak_error')):>10}"
                        f"{_pct(sp.get('worst_ratio_error')):>10}"
-                       f"{sp.get('at_hz', float('nan')):>7.2f}"
+                       f"{_hz(sp.get('at_hz')):>7}"
                        f"{'—' if spec is None else f'{spec:.3f}':>10}"
                        f"{m['drive_peak_in']:>8.3f} in"
                        + "".join(f"{_use(m.get('limit_use', {}).get(k)):>{w}}"
@@ -113,11 +113,20 @@ class DriveResult:
         amp = self.drive.metrics.get("amplification")
         if not amp:
             return ""
+        cap = self.settings["cap"]
+        near = ""
+        if "near_fixed_base" in amp:
+            held = (f", held to the cap {cap:g} (it was {amp['near_fixed_base_uncapped']:.1f}; "
+                    "within 10 %)"
+                    if amp["capped"] and amp["held"] else
+                    f", above the cap {cap:g}: it could not be held to it" if amp["capped"]
+                    else f", within the cap {cap:g}")
+            near = (f"; near the specimen's fixed-base frequency (±{amp['window']:.0%}, "
+                    f"where the cap applies) {amp['near_fixed_base']:.1f} at "
+                    f"{amp['near_fixed_base_hz']:.2f} Hz{held}")
         return (f"the drive's amplification of the target: largest {amp['largest']:.1f} at "
-                f"{amp['at_hz']:.1f} Hz" + (
-                    f"; near the specimen's fixed-base frequency {amp['near_fixed_base']:.1f} "
-                    f"at {amp['near_fixed_base_hz']:.2f} Hz" if "near_fixed_base" in amp
-                    else ""))
+                f"{amp['at_hz']:.1f} Hz (the cap applies near the specimen's fixed-base "
+                f"frequencies only){near}")
 
     def psa(self, x: np.ndarray, f: np.ndarray) -> np.ndarray:
         """The 5 %-damped pseudo-acceleration spectrum (m/s²) of displacement x at f (Hz)."""
@@ -142,6 +151,11 @@ class DriveResult:
 
 def _use(v: float | None) -> str:
     return "—" if v is None else f"{100 * v:.0f}%"
+
+
+def _hz(v) -> str:
+    """A frequency for the table's "at Hz" column: '—' where a row has none."""
+    return "—" if v is None or not np.isfinite(v) else f"{v:.2f}"
 
 
 def _pct(v: float | None) -> str:

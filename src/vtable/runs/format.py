@@ -104,7 +104,7 @@ COMMAND_KINDS = ("random", "sine", "pulse", "earthquake")
 #: [command] keys of the format, and those vtable writes for its own commands
 COMMAND_KEYS = ("kind", "band_hz", "span", "drive_file", "drive_unit", "drive_scale",
                 "drive_offset_s", "peak_in", "peak_mm", "peak_m", "seed", "frequency_hz",
-                "record", "length_scale",
+                "record", "length_scale", "lead_s",
                 "time_scale")
 
 
@@ -126,6 +126,7 @@ class CommandDescription:
     record: str | None = None
     length_scale: float | None = None
     time_scale: float | None = None
+    lead: float | None = None                   # s of rest before the target (a drive)
     notes: tuple[str, ...] = field(default=(), compare=False)
 
     def check_rate(self, fs: float, where: str) -> None:
@@ -216,4 +217,15 @@ def command_from_dict(d: Any, where: str, folder: Path | None = None) -> Command
         peak=peak, seed=seed,
         frequency=_positive(d, "frequency_hz", where, "Hz"), record=_text(d, "record", where),
         length_scale=_positive(d, "length_scale", where),
-        time_scale=_positive(d, "time_scale", where), notes=tuple(notes))
+        time_scale=_positive(d, "time_scale", where), lead=_lead(d, where),
+        notes=tuple(notes))
+
+
+def _lead(d: dict[str, Any], where: str) -> float | None:
+    """[command] lead_s: the seconds of rest a drive plays before its target, >= 0."""
+    if "lead_s" not in d:
+        return None
+    x = check_number(d["lead_s"], f"{where}.lead_s", "s")
+    if not x >= 0:
+        raise VtableError(f"{where}.lead_s: must be >= 0 s, got {d['lead_s']!r}")
+    return x

@@ -14,7 +14,7 @@ from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.model import TableModel
 from vtable.drive import DRIVE_FS, DriveResult, compensate, read_target
 from vtable.drive.compensate import BAND_HZ, CAP, REGULARISATION
-from vtable.drive.target import Target
+from vtable.drive.target import REST_S, Target
 from vtable.errors import VtableError
 from vtable.fileio import write_text
 from vtable.ident.drive import align
@@ -171,6 +171,9 @@ def _write(res: DriveResult, template: Run, out: str, fmt: str) -> None:
                                                              "specimen")}
     meta["title"] = (f"vtable drive for {res.target.name} ({res.objective} motion): the "
                      "drive as h_span, the calibrated model's predicted channels")
+    # the target starts after REST_S of rest (room for the drive to lead it): a lab aligning
+    # target and measurement must know it (docs/drive.md)
+    meta["command"] = {"lead_s": REST_S}
     file_units = {k: template.units.get(k, FORMAT_UNITS.get(k, "1")) for k in ch}
     run = Run(Path(out).name, t, ch, file_units, meta)
     res.files += list(write_run(run, out))
