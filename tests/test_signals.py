@@ -219,9 +219,10 @@ def test_a_cut_earthquake_shakes_as_the_whole_record_does():
         cut = make_command("earthquake", record="elcentro", peak_in=2.0, duration=seconds)
         n = len(cut.t)
         a_full, a_cut = acc(full)[:n], acc(cut)
-        # the same shaking: 1.03 g peak in both, 0.5-0.9 % NRMS apart (the cut's own zero end
-        # conditions change only its lowest frequencies)
+        # the same shaking: 1.03 g peak in both, 2.0-2.1 % NRMS apart, all of it in the last
+        # 2 s (1.7 s of the 5) that bring the cut to rest, at most 0.014 g there
+        # (tests/test_simulate_edges.py holds the cut to the whole before them)
         assert np.abs(a_cut).max() == pytest.approx(np.abs(a_full).max(), rel=0.01)
-        assert np.linalg.norm(a_cut - a_full) / np.linalg.norm(a_full) < 0.02
+        assert np.linalg.norm(a_cut - a_full) / np.linalg.norm(a_full) < 0.03
         assert cut.table["peak_in"] == pytest.approx(2.0)  # the whole record's peak
         assert "scaled as the whole record is" in cut.notes[-1], cut.notes

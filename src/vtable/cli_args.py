@@ -34,20 +34,28 @@ class Length:
     unit: str | None = None
 
     def si(self, default_unit: str) -> float:
+        """The length in metres, a bare number read in `default_unit`."""
         return units.to_si(self.value, self.unit or default_unit)
 
 
 def _length(text: str) -> Length:
-    """A plain number with an optional length unit (m, mm, cm, in, ft)."""
-    m = re.fullmatch(r"\s*(" + _NUMBER.pattern + r")\s*([A-Za-z]*)\s*", text, re.ASCII)
+    """A positive plain number with an optional length unit of `vtable.units` (m, mm, cm,
+    in, ft): '2mm', '0.1 in', '2'. A unit of another dimension ('0.3g', '2m/s2') or an
+    unknown one is refused naming the length units."""
+    m = re.fullmatch(r"\s*(" + _NUMBER.pattern + r")\s*(?P<unit>[A-Za-z%]\S*)?\s*", text,
+                     re.ASCII)
     if not m:
         raise argparse.ArgumentTypeError(f"{text!r} is not a length (a number and a unit: "
                                           "2mm, 0.1in, 0.005m)")
-    value, unit = _number(m.group(1)), m.group(m.lastindex) or None
-    if unit is not None and units.DIMENSIONS.get(unit) != units.DIMENSIONS["in"]:
-        lengths = ", ".join(u for u in units.units_of(units.DIMENSIONS["in"]))
-        raise argparse.ArgumentTypeError(f"{text!r}: {unit!r} is not a length unit "
+    value, unit = _number(m.group(1)), m.group("unit")
+    lengths = ", ".join(units.units_of("length"))
+    if unit is not None and units.DIMENSIONS.get(unit) != "length":
+        what = units.noun(units.DIMENSIONS.get(unit, "unknown"))
+        what = ("an " if what[0] in "aeiu" else "a ") + what
+        raise argparse.ArgumentTypeError(f"{text!r}: {unit!r} is {what} unit, not a length unit "
                                           f"(expected one of {lengths})")
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: a peak displacement must be > 0")
     return Length(value, unit)
 
 

@@ -86,13 +86,11 @@ def process_record(rec: Record, *, length_scale: float = 3.2801,
                    time_scale: float | None = None, peak_displacement: float = 4 * 0.0254,
                    window: tuple[float, float] | None = None,
                    corners: tuple[float, float, float, float] | None = None,
-                   scheme: str = "central", scale_as_whole: bool = False) -> TableCommand:
+                   scheme: str = "central") -> TableCommand:
     """§9.2: take the `window` (s, prototype time), scale, band-pass (optional), integrate
     with zero end conditions, scale to `peak_displacement` (max |x_c|; 4 in by default),
-    and differentiate back to the command acceleration. With `scale_as_whole` a window is
-    scaled by the factor that brings the whole record's displacement to
-    `peak_displacement`: the part then shakes as it does within the whole record (its own
-    peak is at most that)."""
+    and differentiate back to the command acceleration. A window is processed on its own
+    (its own end conditions and peak); `first_seconds` instead cuts the processed whole."""
     if not peak_displacement > 0:
         raise VtableError("peak displacement must be > 0")
     acc = rec.acc
@@ -102,14 +100,44 @@ def process_record(rec: Record, *, length_scale: float = 3.2801,
         if not (0 <= i0 < i1 <= len(acc)):
             raise VtableError(f"window {window} s is outside the record (0-{rec.duration:g} s)")
         acc = acc[i0:i1]
-
-    def displacement(a: np.ndarray) -> tuple[Record, np.ndarray]:
-        scaled = scale_record(Record(rec.name, rec.dt, a), length_scale, time_scale)
-        b = scaled.acc if corners is None else bandpass_trapezoid(scaled.acc, scaled.dt,
-                                                                   corners)
-        return scaled, integrate_to_displacement(b, scaled.dt)
-
-    scaled, d = displacement(acc)
-    whole = displacement(rec.acc)[1] if window is not None and scale_as_whole else d
-    d *= peak_displacement / np.max(np.abs(whole))
+    scaled = scale_record(Record(rec.name, rec.dt, acc), length_scale, time_scale)
+    a = scaled.acc if corners is None else bandpass_trapezoid(scaled.acc, scaled.dt, corners)
+    d = integrate_to_displacement(a, scaled.dt)
+    d *= peak_displacement / np.max(np.abs(d))
     return TableCommand(scaled.name, scaled.dt, d, differentiate(d, scaled.dt, scheme))
+
+
+#: the longest stretch (s, table time) over which `first_seconds` brings a cut to rest
+REST_SECONDS = 2.0
+
+
+def to_rest(x: np.ndarray, dt: float, seconds: float) -> np.ndarray:
+    """`x` brought to rest (zero displacement and velocity) at its last sample by
+    subtracting, over its last `seconds`, c = x_T p(s) + v_T·τ q(s) (s from 0 to 1 over
+    those τ seconds; p = 4s³ - 3s⁴, q = s⁴ - s³): c, c' and c'' are zero where it starts
+    (the acceleration stays continuous) and c = x_T, c' = v_T at the end; before it `x` is
+    untouched. The added acceleration is x_T p''/τ² + v_T q''/τ, at most 12|x_T|/τ² +
+    6|v_T|/τ."""
+    n = len(x)
+    m = min(n - 1, max(1, round(seconds / dt)))
+    tau = m * dt
+    s = np.linspace(0.0, 1.0, m + 1)
+    v_end = np.gradient(x, dt, edge_order=2)[-1]
+    c = x[-1] * (4 * s**3 - 3 * s**4) + v_end * tau * (s**4 - s**3)
+    out = np.array(x, dtype=float)
+    out[n - m - 1:] -= c
+    return out
+
+
+def first_seconds(cmd: TableCommand, seconds: float, scheme: str = "central") -> TableCommand:
+    """The first `seconds` of a processed command as the whole plays them: the same
+    displacement, scaled as the whole was, brought to rest over its last `REST_SECONDS`
+    (a third of a shorter part) by `to_rest`. Processing the part on its own instead
+    (`process_record(window=...)`) gives it its own end conditions, whose cubic baseline
+    over the part can double its displacement, and its own scaling."""
+    n = min(len(cmd.displacement), round(seconds / cmd.dt) + 1)
+    if n < 4:
+        raise VtableError(f"{seconds:g} s is too short a part of {cmd.name} (step "
+                          f"{cmd.dt:.4g} s)")
+    d = to_rest(cmd.displacement[:n], cmd.dt, min(REST_SECONDS, (n - 1) * cmd.dt / 3))
+    return TableCommand(cmd.name, cmd.dt, d, differentiate(d, cmd.dt, scheme))

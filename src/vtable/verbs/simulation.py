@@ -136,9 +136,18 @@ def fit_peak(lab, kind: str, make, fam: str) -> tuple[Any, str]:
     peak_in *= scale
     cmd = make(peak_in)
     share = STROKE_SHARE if limit == "stroke" else LIMIT_SHARE
-    shown = display.quantity(units.to_si(peak_in, "in"), "in", fam)
-    return cmd, (f"peak {shown}: {share:.0%} of {lab.name}'s {limit} limit "
-                 f"(--peak sets it: 2mm, 0.1in; a bare number in {length_unit(fam)})")
+    given = units.to_si(peak_in, "in")
+    shown = display.quantity(given, "in", fam)
+    own = command_peaks(cmd)[0]
+    part = ("" if abs(own - given) <= 0.005 * given else  # a cut earthquake: its own peak
+             f", this part's own {display.quantity(own, 'in', fam)}")
+    return cmd, (f"peak {shown}{part}: {share:.0%} of {lab.name}'s {limit} limit "
+                 f"(--peak sets it: 2mm, 0.1in; a bare number is in "
+                 f"{_UNIT_WORDS.get(length_unit(fam), length_unit(fam))})")
+
+
+#: how a bare amplitude's unit is said
+_UNIT_WORDS = {"in": "inches"}
 
 
 def length_unit(fam: str) -> str:
@@ -154,17 +163,6 @@ def peak_in_inches(peak, fam: str) -> float | None:
     si = peak.si(length_unit(fam)) if hasattr(peak, "si") else \
         units.to_si(float(peak), length_unit(fam))
     return float(units.from_si(si, "in"))
-
-
-def in_table_units(table: dict, fam: str) -> dict:
-    """A command's [command] table with its peak keyed in the run's own unit (peak_mm on
-    a metric table: docs/run-format.md)."""
-    unit = length_unit(fam)
-    if "peak_in" not in table or unit == "in":
-        return table
-    out = {k: v for k, v in table.items() if k != "peak_in"}
-    out[f"peak_{unit}"] = float(units.from_si(units.to_si(table["peak_in"], "in"), unit))
-    return out
 
 
 def without_states(run):
@@ -216,14 +214,13 @@ def simulate(specimen: str | None = None, kind: str = "random", *,
 
     def make(peak_in):
         return make_command(kind, duration=duration, band=tuple(band), peak_in=peak_in,
-                            frequency=freq, seed=seed, record=record)
+                            frequency=freq, seed=seed, record=record, unit=length_unit(fam))
 
     if peak is None and kind in DEFAULT_PEAK_IN:
         cmd, why = fit_peak(lab, kind, make, fam)
         chosen.append(why)
     else:
         cmd = make(peak_in_inches(peak, fam))
-    cmd = dataclasses.replace(cmd, table=in_table_units(cmd.table, fam))
     exp = run_experiment(spec, cmd, vt=vt, valve=valve, effects=eff)
     exp.run.units = display.file_units(exp.run.units, fam)  # a metric table's: mm, g, kN
     if noise > 0:
