@@ -234,5 +234,9 @@ def test_the_diagnosis_reports_axes_follow_the_runs_units(tmp_path, capsys):
         n = bode_frames(len(run.time), run.fs, lowest_declared_mode(run))
         tm = transfer_function(run.channel("h_span"), run.channel(y), run.fs, n)
         sel = (tm.f >= 2 * tm.resolution_hz) & (tm.f <= min(30.0, 0.4 * run.fs))
-        np.testing.assert_allclose(line.get_ydata(), 20 * np.log10(scale * np.abs(tm.H[sel])),
-                                   rtol=1e-12)
+        # drawn where coherence and the command's power support it (viz.figures.supported),
+        # and there exactly the H1 in the run's units
+        drawn = np.isfinite(line.get_ydata())
+        assert drawn.mean() > 0.5, drawn.mean()
+        np.testing.assert_allclose(line.get_ydata()[drawn],
+                                   20 * np.log10(scale * np.abs(tm.H[sel]))[drawn], rtol=1e-12)

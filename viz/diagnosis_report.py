@@ -1,13 +1,17 @@
 """The HTML report of a diagnosis: verdict, what remains unexplained, the notes, the base
 calibration, ranking tables with evidence and fit flags, the error waterfall, Bode plots
-of every run (dB on a log frequency axis with the measured ±1σ band, unwrapped phase,
-coherence beneath, the start and final models overlaid), held-out time histories with
-the final model's fit % per channel group and the residual, and, for runs with storey
-channels, each storey's shear against its drift (matplotlib, embedded PNGs).
+of every run (dB on a log frequency axis with the measured ±1σ band where the coherence
+supports it, unwrapped phase, coherence beneath, the start and final models overlaid),
+held-out time histories with the final model's fit % per channel group and the residual,
+and, for runs with storey channels, each storey's shear against its drift (matplotlib,
+embedded PNGs at the page's width). The measured trace is drawn thin and black on top of
+the models' wide, translucent lines, so both show where they agree.
 Every axis names its unit; transfer functions are shown in the run format's units per inch
 of command. It renders the stages
 the diagnosis kept (models, predictions, comparisons) and simulates nothing; `d` is a
-`vtable.diagnose.result.Diagnosis`, which draws itself through this module (`plot`)."""
+`vtable.diagnose.result.Diagnosis`, which draws itself through this module (`plot`). A
+comparison (`vtable compare --report`, `Diagnosis.compared`) is drawn the same way with
+its one model, and its headings and captions say so."""
 
 from __future__ import annotations
 
@@ -19,32 +23,73 @@ from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
+import scipy.signal
 
 from vtable import display
 from vtable.diagnose.groups import GROUP_UNITS, group_prediction, group_signal, short
+from vtable.diagnose.prose import linear_model
 from vtable.diagnose.sampling import segments
 from vtable.errors import VtableError
 from vtable.fileio import write_text
 from vtable.ident.frames import SHORTEST, frame_for_averages, frame_for_mode
 from vtable.ident.structure import lowest_declared_mode
 from vtable.ident.tf import transfer_function
-from vtable.viz.figures import bode_figure, magnitude_band  # noqa: F401 (re-exported)
+from vtable.viz.figures import (  # noqa: F401 (magnitude_band: re-exported)
+    COHERENCE_MIN,
+    COMMAND_POWER_MIN,
+    LABEL_FONTSIZE,
+    LEGEND_FONTSIZE,
+    MEASURED_LW,
+    MEASURED_Z,
+    MODEL_ALPHA,
+    MODEL_LW,
+    MODEL_Z,
+    WIDTH_IN,
+    bode_figure,
+    magnitude_band,
+    style_axes,
+)
 
 plt.switch_backend("Agg")  # figures are embedded as PNG: no window, whatever the default
 
 PRETTY = {"rad/s2": "rad/s²"}
+#: the figures' resolution: `WIDTH_IN` x DPI = 1200 px, shown at the page's width
+DPI = 120
+#: the page: up to 1200 px of text and figures, each figure as wide as the page (scaled
+#: down with a narrower window)
+STYLE = ("body{font-family:sans-serif;max-width:75em;margin:auto;padding:0 1em}"
+         "td,th{padding:2px 8px;border-bottom:1px solid #ddd}"
+         "img{display:block;width:100%;max-width:100%;height:auto;margin:0.5em 0}")
 
 
 def _png(fig) -> str:
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
+    fig.savefig(buf, format="png", dpi=DPI)
     plt.close(fig)
     return base64.b64encode(buf.getvalue()).decode()
 
 
+def _img(fig) -> str:
+    """`fig` as an <img> of the page's width (`STYLE`), its PNG embedded."""
+    return f"<img src='data:image/png;base64,{_png(fig)}'>"
+
+
 def waterfall(d: Any):
+    """The held-out error of the fitted start, after each added effect and of the final
+    model as bars, the noise floor dashed; a comparison's one model as one bar."""
     hist = d.history()
-    fig, ax = plt.subplots(figsize=(6.5, 3.2))
+    if getattr(d, "compared", False):
+        fig, ax = plt.subplots(figsize=(WIDTH_IN, 2.2))
+        ax.barh(0, 100 * hist[-1][1], color=MODEL_COLORS["model"], height=0.5)
+        ax.axvline(100 * d.noise_floor, color="tab:red", ls="--", label="noise floor")
+        ax.set_yticks([0], ["model"])
+        ax.set_ylim(-0.6, 0.6)
+        ax.set_xlabel("held-out error of the compared model (NRMS, %)")
+        ax.legend(fontsize=LEGEND_FONTSIZE, loc="lower right")
+        style_axes(ax)
+        fig.tight_layout()
+        return fig
+    fig, ax = plt.subplots(figsize=(WIDTH_IN, 4.2))
     labels = [h[0] for h in hist]
     vals = [100 * h[1] for h in hist]
     prev = vals[0]
@@ -57,8 +102,9 @@ def waterfall(d: Any):
     ax.set_xticks(range(len(vals) + 1), [*labels, "final"], rotation=20, ha="right")
     ax.set_ylabel("held-out error (NRMS, %)")
     ax.set_xlabel("model: fitted start, each added effect, final")
-    ax.set_title("error waterfall")
-    ax.legend()
+    ax.set_title("error waterfall", fontsize=LABEL_FONTSIZE)
+    ax.legend(fontsize=LEGEND_FONTSIZE)
+    style_axes(ax)
     fig.tight_layout()
     return fig
 
@@ -97,7 +143,9 @@ def bode_frames(n: int, fs: float, mode: tuple[float, float] | None = None) -> i
 def tf_overlay(d: Any, group: str, run=None):
     """A Bode plot of `group` over the command h_span for `run` (default: the longest):
     magnitude in dB on a log frequency axis with the measured ±1σ band, unwrapped phase,
-    coherence beneath; the start and final models overlaid, the measured trace on top."""
+    coherence beneath; the start and final models overlaid, the measured trace on top,
+    drawn where its coherence is at least `COHERENCE_MIN` and the command's power within
+    `COMMAND_POWER_MIN` of its peak (`vtable.viz.figures.supported`)."""
     run = run if run is not None else max(d.runs, key=lambda r: len(r.time))
     x = run.channel("h_span")
     y = group_signal(run, group)
@@ -108,6 +156,7 @@ def tf_overlay(d: Any, group: str, run=None):
                  for u in (GROUP_UNITS[group], "in"))  # the run's own units
     scale = display.from_si(1.0, unit) / display.from_si(1.0, per)  # SI ratio -> unit/per
     tm = transfer_function(x, y, run.fs, n)
+    _, gxx = scipy.signal.welch(x, fs=run.fs, nperseg=n, noverlap=round(0.5 * n))  # as tm's
     sel = (tm.f >= 2 * tm.resolution_hz) & (tm.f <= min(30.0, 0.4 * run.fs))
     models = []
     for label, stage in model_stages(d):
@@ -120,7 +169,8 @@ def tf_overlay(d: Any, group: str, run=None):
         magnitude_label=f"magnitude (dB re 1 {PRETTY.get(unit, unit)}/{per})",
         title=f"{group} / command h_span, {short(run.name)}",
         xlabel=f"frequency (Hz); {tm.averages} averages of {n}-point frames, "
-               f"Δf {tm.resolution_hz:.3g} Hz")
+               f"Δf {tm.resolution_hz:.3g} Hz", min_coherence=COHERENCE_MIN,
+        command_psd=gxx[sel])
 
 
 def fit_percent(y: np.ndarray, yhat: np.ndarray) -> float:
@@ -145,31 +195,34 @@ def time_histories(d: Any, run, groups=("table displacement", "table acceleratio
     if not rows:
         return None
     t = run.time[held] - run.time[0]
-    fig, ax = plt.subplots(2 * len(rows), 1, sharex=True, figsize=(7, 2.0 * len(rows) + 1.6),
+    fig, ax = plt.subplots(2 * len(rows), 1, sharex=True,
+                           figsize=(WIDTH_IN, 3.0 * len(rows) + 1.2),
                            gridspec_kw={"height_ratios": [2, 1] * len(rows)})
     for k, (g, y, yhat) in enumerate(rows):
         unit = display.unit_for(GROUP_UNITS[g], display.run_family(run), run.units.values())
         shown = PRETTY.get(unit, unit)
         ym, yh = display.from_si(y, unit), display.from_si(yhat, unit)
         a, r = ax[2 * k], ax[2 * k + 1]
-        a.plot(t, ym, "k-", lw=1.0, label="measured")
-        a.plot(t, yh, color=MODEL_COLORS[final], lw=0.9,
-               label=f"{final}: fit {fit_percent(y, yhat):.1f} %")
-        a.set_ylabel(f"{g}\n({shown})", fontsize=8)
-        a.legend(fontsize=7, loc="upper right")
+        a.plot(t, ym, "k-", lw=MEASURED_LW * 0.8, label="measured", zorder=MEASURED_Z)
+        a.plot(t, yh, color=MODEL_COLORS[final], lw=MODEL_LW, alpha=MODEL_ALPHA,
+               label=f"{final}: fit {fit_percent(y, yhat):.1f} %", zorder=MODEL_Z)
+        a.set_ylabel(f"{g}\n({shown})")
+        a.legend(fontsize=LEGEND_FONTSIZE, loc="upper right")
         r.plot(t, yh - ym, color="tab:red", lw=0.8)
-        r.set_ylabel(f"residual\n({shown})", fontsize=8)
+        r.set_ylabel(f"residual\n({shown})")
         for x in (a, r):
             x.grid(alpha=0.3)
     ax[-1].set_xlabel(f"time from the run's start (s); held-out segment of {short(run.name)}")
+    style_axes(*ax)
     fig.tight_layout()
     return fig
 
 
 def hysteresis_loops(d: Any, run):
     """Each storey's shear against its drift over the whole of `run` (the run's
-    floorK_drift and floorK_shear), measured and the final model's: a yielding storey's
-    loops, an elastic one's line. None when the run has no storey channels."""
+    floorK_drift and floorK_shear), measured (on top) and the final model's, up to three
+    storeys a row: a yielding storey's loops, an elastic one's line. None when the run has
+    no storey channels."""
     storeys = [k for k in range(1, 51) if run.has(f"floor{k}_drift")
                and run.has(f"floor{k}_shear")]
     if not storeys or not d.stages:
@@ -179,20 +232,25 @@ def hysteresis_loops(d: Any, run):
     fam = display.run_family(run)
     du = display.unit_for("in", fam, run.units.values())
     fu = display.unit_for("kip", fam, run.units.values())
-    fig, ax = plt.subplots(1, len(storeys), figsize=(3.4 * len(storeys) + 0.6, 3.4),
-                           squeeze=False)
-    for a, k in zip(ax[0], storeys, strict=True):
+    cols = min(3, len(storeys))
+    rows = -(-len(storeys) // cols)
+    fig, ax = plt.subplots(rows, cols, figsize=(WIDTH_IN, 3.8 * rows + 0.6), squeeze=False)
+    for a in ax.flat[len(storeys):]:
+        a.set_visible(False)
+    for a, k in zip(ax.flat, storeys, strict=False):
         u, v = run.channels[f"floor{k}_drift"], run.channels[f"floor{k}_shear"]
-        a.plot(display.from_si(u, du), display.from_si(v, fu), "k-", lw=0.6, label="measured")
+        a.plot(display.from_si(u, du), display.from_si(v, fu), "k-", lw=0.6, label="measured",
+               zorder=MEASURED_Z)
         if f"floor{k}_drift" in pred and f"floor{k}_shear" in pred:
             a.plot(display.from_si(pred[f"floor{k}_drift"], du),
                    display.from_si(pred[f"floor{k}_shear"], fu), color=MODEL_COLORS[final],
-                   lw=0.8, label=final)
+                   lw=MODEL_LW * 0.6, alpha=MODEL_ALPHA, label=final, zorder=MODEL_Z)
         a.set_xlabel(f"storey {k} drift ({du})")
         a.set_ylabel(f"storey {k} shear ({fu})")
         a.grid(alpha=0.3)
-        a.legend(fontsize=7)
-    fig.suptitle(f"{short(run.name)}: storey shear against drift", fontsize=9)
+        a.legend(fontsize=LEGEND_FONTSIZE)
+        style_axes(a)
+    fig.suptitle(f"{short(run.name)}: storey shear against drift", fontsize=LABEL_FONTSIZE)
     fig.tight_layout()
     return fig
 
@@ -201,16 +259,48 @@ def _plus(effects) -> str:
     return (" + " + ", ".join(effects)) if effects else ""
 
 
+def wording(d: Any) -> dict[str, str]:
+    """The report's words for what it draws: a diagnosis's start and final models (one,
+    when nothing was added), or a comparison's (`compared`) one model, and what the linear
+    model holds (`vtable.diagnose.prose.linear_model`: the specimen, or the bare platen)."""
+    compared = bool(getattr(d, "compared", False))
+    held = f"linear {linear_model(d.runs)}{_plus(d.start_effects)}"
+    if compared:
+        return {"models": "the model", "tf": "measured and the model", "final": "the model",
+                "error": "the error", "model": f"Model: {held}, fitted on the training "
+                                               "segments with the base calibrated."}
+    two = len(d.stages) > 1
+    return {"models": "the start and final models" if two else "the model",
+            "tf": "measured, start and final models" if two else "measured and the model",
+            "final": "final model", "error": "the final error",
+            "model": f"Starting model: {held}."}
+
+
+def bode_caption(models: str) -> str:
+    """What the Bode plots show and leave out (`vtable.viz.figures.supported`)."""
+    return (f"<p>Each figure: H1 of a channel group over the command h_span (magnitude in dB "
+            f"with its ±1σ band, unwrapped phase, coherence γ² beneath), {models} drawn wide "
+            f"beneath the measured estimate (black, on top). The measured estimate is left "
+            f"out where its coherence is below {COHERENCE_MIN:g} (more than half of the "
+            "output's power there is not linearly related to the command: noise, "
+            "nonlinearity or leakage) or where the command's power is below "
+            f"{COMMAND_POWER_MIN:.1%} of its peak (outside the command's band, where H1 "
+            "divides noise by almost nothing; the models are left out there too).</p>")
+
+
 def write_report(d: Any, path: str | Path) -> Path:
     """Write the HTML report of `d` to `path`."""
     e = html.escape
+    w = wording(d)
+    compared = bool(getattr(d, "compared", False))
     start = "—" if d.start_error is None else f"{d.start_error:.2%}"
     final = "—" if d.final_error is None else f"{d.final_error:.2%}"
+    errors = (f"Held-out error {final}" if compared else
+              f"Held-out error {start} → {final}") + f"; noise floor {d.noise_floor:.2%}."
     u = d.unexplained
     title = html.escape(d.title)
     parts = [f"<html><head><meta charset='utf-8'><title>{title}</title>"
-             "<style>body{font-family:sans-serif;max-width:60em;margin:auto}"
-             "td,th{padding:2px 8px;border-bottom:1px solid #ddd}</style></head><body>",
+             f"<style>{STYLE}</style></head><body>",
              f"<h1>{title}</h1>",
              *([f"<p style='font-size:1.2em'><b>{e(d.headline)}</b></p>"] if d.headline else []),
              *(["<ul>" + "".join(f"<li>{e(f['what'])}"
@@ -219,13 +309,12 @@ def write_report(d: Any, path: str | Path) -> Path:
                 + "</ul>"] if d.findings else []),
              f"<details><summary>Verdict (the statistics)</summary><p>{e(d.verdict)}</p>"
              "</details>",
-             "<p><b>Unexplained:</b> " + (e("none: the final error is consistent with the "
+             "<p><b>Unexplained:</b> " + (e(f"none: {w['error']} is consistent with the "
                                              "noise floor") if u is None else
-                                           e(f"the final error is {u['ratio_to_floor']:.1f} x "
+                                           e(f"{w['error']} is {u['ratio_to_floor']:.1f} x "
                                              f"the noise floor; {u['where']}")) + "</p>",
-             f"<p>Runs: {e(', '.join(r.name for r in d.runs))}. Starting model: "
-             f"linear servo loop + specimen{_plus(d.start_effects)}."
-             f" Held-out error {start} → {final}; noise floor {d.noise_floor:.2%}.</p>"]
+             f"<p>Runs: {e(', '.join(r.name for r in d.runs))}. {e(w['model'])} "
+             f"{errors}</p>"]
     if d.notes:
         parts.append("<h2>Notes</h2><ul>" + "".join(f"<li>{e(n)}</li>" for n in d.notes)
                      + "</ul>")
@@ -238,8 +327,8 @@ def write_report(d: Any, path: str | Path) -> Path:
                          f"{v['bounds'][1]:g}</td><td>{e(v.get('unit', ''))}</td></tr>")
         parts.append("</table>")
     if d.history():
-        parts += ["<h2 id='waterfall'>Error waterfall</h2>",
-                  f"<img src='data:image/png;base64,{_png(waterfall(d))}'>"]
+        parts += ["<h2 id='waterfall'>" + ("Held-out error" if compared else "Error waterfall")
+                  + "</h2>", _img(waterfall(d))]
     for i, r in enumerate(d.rounds, 1):
         parts.append(f"<h2>Round {i}: {'added ' + e(r.added) if r.added else 'nothing added'}"
                      "</h2><table><tr><th>rank</th><th>effect</th><th>held-out error</th>"
@@ -249,30 +338,31 @@ def write_report(d: Any, path: str | Path) -> Path:
                          f"<td>{e(c.evidence)}</td><td>{e('; '.join(c.flags))}</td></tr>")
         parts.append("</table>")
     if d.stages and d.comparison_start is not None and d.comparison_final is not None:
-        parts.append("<h2 id='tf'>Transfer functions: measured, start and final models</h2>")
+        parts += [f"<h2 id='tf'>Transfer functions: {w['tf']}</h2>",
+                  bode_caption(w["models"])]
         for run in d.runs:
             for g in ("table displacement", "pitch", "structure acceleration"):
                 fig = tf_overlay(d, g, run)
                 if fig is not None:
-                    parts.append(f"<img src='data:image/png;base64,{_png(fig)}'>")
-        parts.append("<h2 id='time'>Time histories: measured and final model (held out)</h2>")
+                    parts.append(_img(fig))
+        parts.append(f"<h2 id='time'>Time histories: measured and {w['final']} (held out)</h2>")
         for run in d.runs:
             fig = time_histories(d, run)
             if fig is not None:
-                parts.append(f"<img src='data:image/png;base64,{_png(fig)}'>")
+                parts.append(_img(fig))
         loops = [fig for fig in (hysteresis_loops(d, run) for run in d.runs) if fig is not None]
         if loops:
             parts.append("<h2 id='loops'>Hysteresis loops: storey shear against drift "
-                         "(measured and final model)</h2>")
-            parts += [f"<img src='data:image/png;base64,{_png(fig)}'>" for fig in loops]
+                         f"(measured and {w['final']})</h2>")
+            parts += [_img(fig) for fig in loops]
         parts.append("<h2>Error per channel group (held out, NRMS)</h2><table><tr><th>run</th>"
-                     "<th>group</th><th>start</th><th>final</th></tr>")
+                     "<th>group</th>" + ("<th>model</th>" if compared else
+                                         "<th>start</th><th>final</th>") + "</tr>")
         for run, errs in d.comparison_start.per_run.items():
             for g, v in errs.items():
                 f = d.comparison_final.per_run[run].get(g, float("nan"))
-                parts.append(f"<tr><td>{e(short(run))}</td><td>{e(g)}</td>"
-                             f"<td>{v:.2%}</td><td>{f:.2%}</td></tr>")
+                cells = f"<td>{f:.2%}</td>" if compared else f"<td>{v:.2%}</td><td>{f:.2%}</td>"
+                parts.append(f"<tr><td>{e(short(run))}</td><td>{e(g)}</td>{cells}</tr>")
         parts.append("</table>")
     parts.append("</body></html>")
     return write_text(path, "\n".join(parts))
-

@@ -4,11 +4,15 @@ added effect (bulk, columnar), in the run format's units, and the error history.
 Layout (blueprint): one tab per run, and in it two tabs of 2-column grids with one
 TimeSeriesView per channel group, named with its unit ("table displacement (in)",
 "structure acceleration (g)", ...): "measured & models" shows the measured signal (black,
-wider) and the model of every stage (a colour each, Okabe-Ito), its y range leaving room
-above the data for the legend in the top right corner, so the legend covers no data;
-"residuals" shows each stage's model − measured (the stage's hue, lighter). Beside them,
-the error history and a text with the verdict, what remains unexplained and the notes.
-Entities: runs/<run>/<group>/measured, .../model/<k_stage>, .../residual/<k_stage>
+wider) and the model of every stage (a colour each, Okabe-Ito); "residuals" shows each
+stage's model − measured (the stage's hue, lighter). The series have short names
+("measured", "0: start", "1: pitch_flexibility"; the unit is in the view's name), and a
+legend only where it tells something the view does not (`legend`): a diagnosis's models
+list theirs in the top right corner, the y range leaving room above the data for it, so
+it covers no data; a comparison's one model (black measured, blue model: the tab's name
+says so) and the residuals (each in its model's hue, lighter) have none. Beside them, the
+error history and a text with the verdict, the colours, what remains unexplained and the
+notes. Entities: runs/<run>/<group>/measured, .../model/<k_stage>, .../residual/<k_stage>
 (0_start, 1_<effect>, ...).
 
 Timelines: the channels are on "time" (s from the run's start, at the analysis rate), the
@@ -41,6 +45,8 @@ from vtable.viz.recording import rrd_file
 
 #: legends in the top right corner: the first seconds, where a run starts, stay visible
 LEGEND = rrb.PlotLegend(corner=rrb.Corner2D.RightTop, visible=True)
+#: no legend: a view whose series the view's (or tab's) name already tells apart
+NO_LEGEND = rrb.PlotLegend(corner=rrb.Corner2D.RightTop, visible=False)
 #: how a unit is written in view and series names
 PRETTY = {"rad/s2": "rad/s²", "in/s2": "in/s²", "m/s2": "m/s²"}
 #: the measured trace in black; each model stage in its own colour (Okabe-Ito, readable by
@@ -48,6 +54,7 @@ PRETTY = {"rad/s2": "rad/s²", "in/s2": "in/s²", "m/s2": "m/s²"}
 MEASURED = [20, 20, 20]
 STAGE_COLORS = ([0, 114, 178], [230, 159, 0], [0, 158, 115], [204, 121, 167],
                 [213, 94, 0], [86, 180, 233], [240, 228, 66])
+_COLOR_NAMES = ("blue", "orange", "green", "reddish purple", "vermilion", "sky blue", "yellow")
 
 
 def stage_color(k: int, residual: bool = False) -> list[int]:
@@ -74,6 +81,19 @@ def group_key(group: str) -> str:
     return group.replace(" ", "_")
 
 
+def series_name(k: int, stage: str) -> str:
+    """A stage's series name, short so that a legend stays narrow: "model" (a
+    comparison's one model), else "0: start", "1: pitch_flexibility", ..."""
+    key = stage_key(k, stage)
+    return key if key == "model" else key.replace("_", ": ", 1)
+
+
+def legend(n_series: int) -> rrb.PlotLegend:
+    """`LEGEND` for a view of more than two series, else `NO_LEGEND` (measured and one
+    model, black and blue, or one residual: the names of the view and its tab say which)."""
+    return LEGEND if n_series > 2 else NO_LEGEND
+
+
 def _series(rec: rr.RecordingStream, path: str, times, values: np.ndarray, label: str,
             color: list[int], width: float = 1.0) -> None:
     rr.send_columns(path, indexes=times, columns=rr.Scalars.columns(scalars=values),
@@ -92,7 +112,11 @@ def _text(d) -> str:
                                         "floor)" if u is None else
                                         f"{u['ratio_to_floor']:.1f} x the noise floor; "
                                         f"{u['where']}"))
-    lines += ["", "Measured = each run at the analysis rate (see the notes).", ""]
+    lines += ["", "Measured = each run at the analysis rate (see the notes).", "",
+              "**Colours:** measured in black (wider); " + "; ".join(
+                  f"{series_name(k, s.label)} in {_COLOR_NAMES[k % len(_COLOR_NAMES)]}"
+                  for k, s in enumerate(d.stages)) + "; each residual in its model's "
+              "colour, lighter.", ""]
     if d.notes:
         lines += ["**Notes:**", *[f"- {n}" for n in d.notes]]
     return "\n".join(lines)
@@ -146,33 +170,37 @@ def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis")
                 shown = PRETTY.get(unit, unit)
                 base = f"runs/{name}/{group_key(g)}"
                 ym = units.from_si(y, unit)
-                _series(rec, f"{base}/measured", times, ym, f"measured ({shown})", MEASURED, 2.0)
+                _series(rec, f"{base}/measured", times, ym, "measured", MEASURED, 2.0)
                 lo, hi = float(np.min(ym)), float(np.max(ym))
+                n_models = 0
                 for k, (stage, pred) in enumerate(preds):
                     yhat = group_prediction(pred[run.name], run, g)
                     if yhat is None:
                         continue
-                    key = stage_key(k, stage)
-                    label = "" if stage == "model" else " " + key.replace("_", " ", 1)
+                    key, label = stage_key(k, stage), series_name(k, stage)
                     yh = units.from_si(yhat, unit)
                     lo, hi = min(lo, float(np.min(yh))), max(hi, float(np.max(yh)))
-                    _series(rec, f"{base}/model/{key}", times, yh,
-                            f"model{label} ({shown})", stage_color(k))
-                    _series(rec, f"{base}/residual/{key}", times, yh - ym,
-                            f"residual{label} ({shown})", stage_color(k, residual=True))
+                    _series(rec, f"{base}/model/{key}", times, yh, label, stage_color(k))
+                    _series(rec, f"{base}/residual/{key}", times, yh - ym, label,
+                            stage_color(k, residual=True))
+                    n_models += 1
                 span = (hi - lo) or 1.0
-                n_entries = 1 + len(preds)
+                shown_legend = legend(1 + n_models)
+                room = ({"axis_y": rrb.ScalarAxis(range=headroom(lo, span, 1 + n_models))}
+                        if shown_legend is LEGEND else {})
                 signals.append(rrb.TimeSeriesView(
                     name=f"{g} ({shown})", origin=base,
-                    contents=["$origin/measured", "$origin/model/**"], plot_legend=LEGEND,
-                    axis_y=rrb.ScalarAxis(range=headroom(lo, span, n_entries))))
+                    contents=["$origin/measured", "$origin/model/**"],
+                    plot_legend=shown_legend, **room))
                 residuals.append(rrb.TimeSeriesView(
                     name=f"{g}: model − measured ({shown})", origin=f"{base}/residual",
-                    plot_legend=LEGEND))
+                    plot_legend=NO_LEGEND))
             loops = _loops(rec, run, d.stages[-1].predictions.get(run.name, {}) if d.stages
                            else {}, f"runs/{name}/loops", stage_color(len(preds) - 1))
             if signals:
-                tabs.append(rrb.Tabs(rrb.Grid(*signals, grid_columns=2, name="measured & models"),
+                tabs.append(rrb.Tabs(rrb.Grid(*signals, grid_columns=2, name=(
+                    "measured (black) & model (blue)" if len(preds) == 1 else
+                    "measured & models")),
                                      rrb.Grid(*residuals, grid_columns=2, name="residuals"),
                                      *([rrb.Grid(*loops, grid_columns=2, name="storey loops")]
                                        if loops else []),
@@ -210,8 +238,8 @@ def log_diagnosis(d, path: str | Path, application_id: str = "vtable-diagnosis")
 
 def read_blueprint_views(path: str | Path) -> list[dict[str, Any]]:
     """The views of an .rrd's blueprint: class ("TimeSeries", "BarChart", ...), name,
-    origin ("/runs/run0/pitch") and the timelines of its visible time ranges (for tests and
-    checks)."""
+    origin ("/runs/run0/pitch"), the timelines of its visible time ranges and its legend
+    ({"visible": bool, "corner": "RightTop", ...}, when set) (for tests and checks)."""
 
     reader = RrdReader(str(path))
     views: dict[str, dict[str, Any]] = {}
@@ -234,4 +262,8 @@ def read_blueprint_views(path: str | Path) -> list[dict[str, Any]]:
                     v["origin"] = "/" + str(one).lstrip("/")
                 elif col == "VisibleTimeRanges:ranges":
                     v["time_ranges"] = [r["timeline"] for r in val]
+                elif col == "PlotLegend:visible":
+                    v.setdefault("legend", {})["visible"] = bool(one)
+                elif col == "PlotLegend:corner":
+                    v.setdefault("legend", {})["corner"] = rrb.Corner2D(one).name
     return list(views.values())

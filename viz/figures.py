@@ -21,56 +21,138 @@ def magnitude_band(H: np.ndarray, coherence: np.ndarray, averages: int) -> np.nd
     return np.sqrt(1 - g**2) / (g * np.sqrt(2 * averages))
 
 
+#: the measured H1 is drawn only where its coherence is at least this (`supported`): below
+#: it, more than half of the output's power at that line is not linearly related to the
+#: command (noise, nonlinearity, leakage), so the ratio shows that, not the transfer function
+COHERENCE_MIN = 0.5
+#: ... and where the command's power spectral density is at least this fraction of its peak
+#: (within 30 dB of it): beyond the command's band H1 divides noise by almost nothing, and
+#: with the few averages of a short run (3) noise alone passes γ² ≥ 0.5 on a quarter of the
+#: lines ((1 − 0.5)^(n_d − 1), Carter, Knapp & Nuttall 1973), so coherence alone cannot
+#: reject them
+COMMAND_POWER_MIN = 1e-3
+#: the figures' width (in) and the report's resolution (dpi): 1200 px, a page's width
+WIDTH_IN = 10.0
+#: legend and axis-label font sizes (pt): 16-18 px at 120 dpi, shown at the page's width
+LEGEND_FONTSIZE = 11
+LABEL_FONTSIZE = 12
+TICK_FONTSIZE = 11
+#: the models' lines: wide and translucent beneath the measured trace (thin, black, on
+#: top), so that both show where they agree
+MODEL_LW, MEASURED_LW, MODEL_ALPHA = 2.8, 1.0, 0.75
+MODEL_Z, MEASURED_Z = 2, 4
+
+
+def supported(coherence, command_psd=None, min_coherence: float = COHERENCE_MIN,
+              min_power: float = COMMAND_POWER_MIN) -> np.ndarray:
+    """Where a measured transfer function is drawn: coherence γ² ≥ `min_coherence` and,
+    with the command's power spectral density, that at least `min_power` x its peak."""
+    keep = np.asarray(coherence) >= min_coherence
+    if command_psd is not None:
+        g = np.asarray(command_psd, float)
+        keep &= g >= min_power * float(np.max(g, initial=0.0))
+    return keep
+
+
+def style_axes(*axes) -> None:
+    """Readable tick labels and axis labels (`TICK_FONTSIZE`, `LABEL_FONTSIZE`)."""
+    for a in axes:
+        a.tick_params(labelsize=TICK_FONTSIZE)
+        a.xaxis.label.set_fontsize(LABEL_FONTSIZE)
+        a.yaxis.label.set_fontsize(LABEL_FONTSIZE)
+
+
+def unwrapped_phase(h: np.ndarray, keep: np.ndarray, reference=None) -> np.ndarray:
+    """The phase of `h` in degrees, NaN where not `keep`; each contiguous stretch kept
+    unwrapped on its own, then turned by the whole turns (360°) that bring it nearest
+    `reference` (a model's phase), or, without one, that continue the stretch before it:
+    a gap's noise does not add turns to what follows it."""
+    out = np.full(h.shape, np.nan)
+    idx = np.flatnonzero(keep)
+    prev = None
+    for seg in np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1) if idx.size else []:
+        ph = np.degrees(np.unwrap(np.angle(h[seg])))
+        if reference is not None:
+            ph += 360.0 * np.round(np.mean(reference[seg] - ph) / 360.0)
+        elif prev is not None:
+            ph += 360.0 * np.round((prev - ph[0]) / 360.0)
+        out[seg], prev = ph, ph[-1]
+    return out
+
+
 def bode_figure(f, H, coherence=None, averages: int | None = None, models=(),
                 magnitude_label: str = "magnitude (dB)", title: str = "",
-                xlabel: str = "frequency (Hz)", measured_label: str = "measured (H1)"):
+                xlabel: str = "frequency (Hz)", measured_label: str = "measured (H1)",
+                min_coherence: float | None = None, command_psd=None):
     """A Bode plot, the one figure of every transfer function vtable draws (`tf --png`,
     the diagnosis and comparison reports): magnitude in dB on a log frequency axis,
     unwrapped phase, coherence beneath when given; with `averages`, the measured ±1σ
-    band (`magnitude_band`); `models` (label, H, colour) drawn under the measured trace
-    (black, on top). Frequencies at or below 0 are left out (log axis)."""
+    band (`magnitude_band`); `models` (label, H, colour) drawn wide and translucent under
+    the measured trace (black, thin, on top). With `min_coherence`, the measured trace and
+    its band only where `supported` (γ² at least that, and the command's power
+    `command_psd` within `COMMAND_POWER_MIN` of its peak), the rule in its legend and the
+    threshold on the coherence axis; with `command_psd`, the models (estimates from the
+    command too) only where it has power. Frequencies at or below 0 are left out (log
+    axis)."""
     f, H = np.asarray(f), np.asarray(H)
     sel = f > 0
     f = f[sel]
     rows = 3 if coherence is not None else 2
-    fig, ax = plt.subplots(rows, 1, sharex=True, figsize=(7, 6.4 if rows == 3 else 5.0),
+    fig, ax = plt.subplots(rows, 1, sharex=True,
+                           figsize=(WIDTH_IN, 8.0 if rows == 3 else 6.2),
                            gridspec_kw={"height_ratios": [3, 2, 1.2][:rows]})
 
     def db(h):
         return 20 * np.log10(np.maximum(np.abs(h), 1e-300))
 
-    def phase(h):
-        return np.degrees(np.unwrap(np.angle(h)))
-
+    psd = None if command_psd is None else np.asarray(command_psd, float)[sel]
+    powered = supported(np.ones(f.shape), psd, 0.0)  # a model's H1 too: not beyond the band
+    reference = None  # the first model's phase: the measured one's 360° turns follow it
     for label, Hm, color in models:
         Hm = np.asarray(Hm)[sel]
-        ax[0].semilogx(f, db(Hm), color=color, lw=1.3, label=label)
-        ax[1].semilogx(f, phase(Hm), color=color, lw=1.3)
+        ph = unwrapped_phase(Hm, powered)
+        reference = ph if reference is None else reference
+        ax[0].semilogx(f, np.where(powered, db(Hm), np.nan), color=color, lw=MODEL_LW,
+                       alpha=MODEL_ALPHA, label=label, zorder=MODEL_Z)
+        ax[1].semilogx(f, ph, color=color, lw=MODEL_LW, alpha=MODEL_ALPHA, zorder=MODEL_Z)
     Hs = H[sel]
-    if coherence is not None and averages:
-        eps = magnitude_band(Hs, np.asarray(coherence)[sel], averages)
-        mag = np.abs(Hs)
+    coh = None if coherence is None else np.asarray(coherence)[sel]
+    keep = np.ones(Hs.shape, bool)
+    if coh is not None and min_coherence is not None:
+        keep = supported(coh, psd, min_coherence)
+        measured_label += f", shown where γ² ≥ {min_coherence:g}" + (
+            " and the command has power" if command_psd is not None else "")
+    mag = np.where(keep, np.abs(Hs), np.nan)
+    if coh is not None and averages:
+        eps = magnitude_band(Hs, coh, averages)
         ax[0].fill_between(f, db(mag * (1 - np.minimum(eps, 0.99))), db(mag * (1 + eps)),
                            color="0.75", lw=0, label="measured ±1σ", zorder=3)
-    ax[0].semilogx(f, db(Hs), "k-", lw=1.0, label=measured_label, zorder=4)
-    ax[1].semilogx(f, phase(Hs), "k-", lw=1.0, zorder=4)
-    meas = db(Hs)[np.isfinite(db(Hs))]
+    ax[0].semilogx(f, np.where(keep, db(Hs), np.nan), "k-", lw=MEASURED_LW,
+                   label=measured_label, zorder=MEASURED_Z)
+    ax[1].semilogx(f, unwrapped_phase(Hs, keep, reference), "k-", lw=MEASURED_LW,
+                   zorder=MEASURED_Z)
+    meas = db(Hs)[keep & np.isfinite(db(Hs))]
     if meas.size:  # a model far below the measurement does not crush its axis
         lo, hi = ax[0].get_ylim()
         ax[0].set_ylim(max(lo, float(meas.min()) - 40.0), hi)
     ax[0].set_ylabel(magnitude_label)
     ax[1].set_ylabel("phase (deg, unwrapped)")
-    if coherence is not None:
-        ax[2].semilogx(f, np.asarray(coherence)[sel], "k-", lw=1.0)
+    if coh is not None:
+        ax[2].semilogx(f, coh, "k-", lw=MEASURED_LW)
+        if min_coherence is not None:
+            ax[2].axhline(min_coherence, color="tab:red", ls=":", lw=1.2,
+                          label=f"γ² = {min_coherence:g}: measured drawn above")
+            ax[2].legend(fontsize=LEGEND_FONTSIZE, loc="lower left")
         ax[2].set_ylabel("coherence γ²")
         ax[2].set_ylim(0, 1.05)
     ax[-1].set_xlabel(xlabel)
     for a in ax:
         a.grid(alpha=0.3, which="both")
+    style_axes(*ax)
     if title:
-        ax[0].set_title(title, fontsize=10)
-    if models or (coherence is not None and averages):
-        ax[0].legend(fontsize=8, loc="best")
+        ax[0].set_title(title, fontsize=LABEL_FONTSIZE)
+    if models or (coh is not None and averages):
+        ax[0].legend(fontsize=LEGEND_FONTSIZE, loc="best")
     fig.tight_layout()
     return fig
 

@@ -10,6 +10,16 @@ from vtable.diagnose.groups import short
 from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.statistics import Comparison
 from vtable.display import amplitude
+from vtable.params.specimen import NoSpecimen
+from vtable.runs.model import Run
+
+
+def linear_model(runs: list[Run]) -> str:
+    """What the linear model of `runs` holds, as the texts and reports name it: "servo loop
+    + specimen", or "servo loop + bare platen" on runs that declare no specimen
+    ([specimen] kind = "none")."""
+    bare = bool(runs) and all(isinstance(r.specimen(), NoSpecimen) for r in runs)
+    return "servo loop + bare platen" if bare else "servo loop + specimen"
 
 
 def mils(x_m: float) -> str:

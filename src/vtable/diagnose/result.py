@@ -20,7 +20,7 @@ from vtable import display
 from vtable.diagnose.limits import Limits, limits
 from vtable.diagnose.model import SCREEN, TableModel
 from vtable.diagnose.noise import UNEXPLAINED_RULE
-from vtable.diagnose.prose import localisation_text, unexplained
+from vtable.diagnose.prose import linear_model, localisation_text, unexplained
 from vtable.diagnose.selection import SELECTION, failing
 from vtable.diagnose.statistics import Comparison, Gain
 from vtable.effects.registry import get as effect
@@ -136,6 +136,9 @@ class Diagnosis:
     #: empty: one), declared by the runs or (not `states_declared`) one per run
     states: dict[str, dict[str, Any]] = field(default_factory=dict)
     states_declared: bool = False
+    #: a comparison's one model drawn as a diagnosis (`ModelComparison.as_diagnosis`): the
+    #: report names "the model", not start and final
+    compared: bool = False
 
     @property
     def final_effects(self) -> list[str]:
@@ -210,7 +213,7 @@ class Diagnosis:
         out = []
         for i, n in enumerate(d["notes"]):
             out.append(("notes:\n" if i == 0 else "") + f"  {n}")
-        out.append("starting model: servo loop + specimen"
+        out.append(f"starting model: {linear_model(self.runs)}"
                    + (f" + {', '.join(d['start_effects'])}" if d["start_effects"] else ""))
         out.append(f"  held-out error {d['start_error']:.2%} (noise floor "
                    f"{d['noise_floor']:.2%})")
@@ -390,6 +393,8 @@ class ModelComparison:
     comparison: Comparison | None = field(default=None, repr=False, compare=False)
     #: what the data allow the model (`limits.limits`: the black box, the bound)
     limits: Limits | None = None
+    #: what the linear model holds (`linear_model`: the specimen, or the bare platen)
+    holds: str = "servo loop + specimen"
 
     @classmethod
     def of(cls, m: TableModel) -> ModelComparison:
@@ -401,7 +406,8 @@ class ModelComparison:
                    {"f_o_hz": ol.f_o, "xi_o": ol.xi_o, "k_o_per_s": ol.k_o}, c.error,
                    c.noise_floor, c.per_run, localisation_text(c), unexplained(c),
                    m.notes_, m.base_, m.flags_, c.bands, display=c.display, model=m,
-                   predictions=pred, comparison=c, limits=limits(m.campaign_.runs, pred))
+                   predictions=pred, comparison=c, limits=limits(m.campaign_.runs, pred),
+                   holds=linear_model(m.campaign_.runs))
 
     def as_diagnosis(self) -> Diagnosis:
         """The comparison as a diagnosis of no rounds whose one stage is the fitted model,
@@ -413,7 +419,7 @@ class ModelComparison:
                       self.error, f"compare: {self.localisation}", self.comparison,
                       self.comparison, self.base_fit, self.unexplained, list(self.notes),
                       stages=[Stage("model", m.physics_, self.predictions)],
-                      runs=list(m.campaign_.runs), title="vtable compare")
+                      runs=list(m.campaign_.runs), title="vtable compare", compared=True)
         return d
 
     def plot(self, report: str | Path | None = None, rerun: str | Path | None = None
@@ -443,7 +449,7 @@ class ModelComparison:
         out = []
         for i, n in enumerate(self.notes):
             out.append(("notes:\n" if i == 0 else "") + f"  {n}")
-        out.append("model: servo loop + specimen"
+        out.append(f"model: {self.holds}"
                    + (f" + {', '.join(self.effects)}" if self.effects else ""))
         b = self.base
         out.append(f"  base loop: f_o {b['f_o_hz']:.2f} Hz, ξ_o {b['xi_o']:.3f}, "
