@@ -25,7 +25,7 @@ from vtable.diagnose.groups import group_signal
 #: the threshold the report states (γ² below it: more output noise than coherent output)
 COHERENCE_MIN = 0.5
 #: the command's power below this fraction of its peak: outside its band
-COMMAND_POWER_MIN = 1e-3
+COMMAND_POWER_MIN = 1e-4
 
 
 @functools.cache

@@ -26,11 +26,13 @@ def magnitude_band(H: np.ndarray, coherence: np.ndarray, averages: int) -> np.nd
 #: command (noise, nonlinearity, leakage), so the ratio shows that, not the transfer function
 COHERENCE_MIN = 0.5
 #: ... and where the command's power spectral density is at least this fraction of its peak
-#: (within 30 dB of it): beyond the command's band H1 divides noise by almost nothing, and
+#: (within 40 dB of it: an earthquake's displacement command falls steeply with frequency
+#: and stays coherent well below its peak; at 60 dB a band-limited random one's leakage
+#: beyond its band passed): beyond the command's band H1 divides noise by almost nothing, and
 #: with the few averages of a short run (3) noise alone passes γ² ≥ 0.5 on a quarter of the
 #: lines ((1 − 0.5)^(n_d − 1), Carter, Knapp & Nuttall 1973), so coherence alone cannot
 #: reject them
-COMMAND_POWER_MIN = 1e-3
+COMMAND_POWER_MIN = 1e-4
 #: the figures' width (in) and the report's resolution (dpi): 1200 px, a page's width
 WIDTH_IN = 10.0
 #: legend and axis-label font sizes (pt): 16-18 px at 120 dpi, shown at the page's width
