@@ -9,6 +9,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from vtable.fileio import atomic_path
+from vtable.signals.content import CONTENT_POWER
 
 plt.switch_backend("Agg")  # figures are written to files: no window, whatever the default
 
@@ -32,7 +33,7 @@ COHERENCE_MIN = 0.5
 #: with the few averages of a short run (3) noise alone passes γ² ≥ 0.5 on a quarter of the
 #: lines ((1 − 0.5)^(n_d − 1), Carter, Knapp & Nuttall 1973), so coherence alone cannot
 #: reject them
-COMMAND_POWER_MIN = 1e-4
+COMMAND_POWER_MIN = CONTENT_POWER  # 40 dB (vtable.signals.content)
 #: the figures' width (in) and the report's resolution (dpi): 1200 px, a page's width
 WIDTH_IN = 10.0
 #: legend and axis-label font sizes (pt): 16-18 px at 120 dpi, shown at the page's width

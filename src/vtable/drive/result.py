@@ -67,14 +67,21 @@ class DriveResult:
     h: float
     notes: list[str] = field(default_factory=list)
     files: list[Path] = field(default_factory=list)
+    #: the model's |H| from the drive to the objective at the table's band
+    #: ("table_band") and at the end of the correction band ("correction_band")
+    response: dict[str, float] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
+        """The result as `vtable drive --json` writes it (docs/drive.md): every row with
+        the same figures, null where a row has none (the elongation is not compared with
+        the target; the specimen's peak ratio needs an SDOF specimen)."""
         return jsonable({"format": "vtable-drive/1", "objective": self.objective,
                          "target": self.target.name, "fs_hz": self.fs,
                          "effective_height_m": self.h, "settings": self.settings,
+                         "table_response": self.response,
                          "iterations": len(self.history) - 1,
-                         "history_nrms": self.history, "drive": self.drive.metrics,
-                         "baselines": {b.name: b.metrics for b in self.baselines},
+                         "history_nrms": self.history, "drive": _row(self.drive.metrics),
+                         "baselines": {b.name: _row(b.metrics) for b in self.baselines},
                          "notes": self.notes})
 
     def report(self) -> str:
@@ -116,15 +123,21 @@ class DriveResult:
         cap = self.settings["cap"]
         near = ""
         if "near_fixed_base" in amp:
-            held = (f", held to the cap {cap:g} (it was {amp['near_fixed_base_uncapped']:.1f}; "
-                    "within 10 %)"
-                    if amp["capped"] and amp["held"] else
-                    f", above the cap {cap:g}: it could not be held to it" if amp["capped"]
-                    else f", within the cap {cap:g}")
-            near = (f"; near the specimen's fixed-base frequency (±{amp['window']:.0%}, "
-                    f"where the cap applies) {amp['near_fixed_base']:.1f} at "
-                    f"{amp['near_fixed_base_hz']:.2f} Hz{held}")
-        return (f"the drive's amplification of the target: largest {amp['largest']:.1f} at "
+            where = (f"; near the specimen's fixed-base frequency (±{amp['window']:.0%}, "
+                     "where the cap applies) ")
+            if amp["near_fixed_base"] is None:
+                near = where + "— (the target holds no content there)"
+            else:
+                held = (f", held to the cap {cap:g} (it was "
+                        f"{amp['near_fixed_base_uncapped']:.1f}; within 10 %)"
+                        if amp["capped"] and amp["held"] else
+                        f", above the cap {cap:g}: it could not be held to it"
+                        if amp["capped"] else f", within the cap {cap:g}")
+                near = (where + f"{amp['near_fixed_base']:.1f} at "
+                        f"{amp['near_fixed_base_hz']:.2f} Hz{held}")
+        return (f"the drive's amplification of the target (|D|/|T| of the drive as written, "
+                f"after the cap; where the target has content, its acceleration power within "
+                f"{amp['content_db']:g} dB of its largest): largest {amp['largest']:.1f} at "
                 f"{amp['at_hz']:.1f} Hz (the cap applies near the specimen's fixed-base "
                 f"frequencies only){near}")
 
@@ -147,6 +160,19 @@ class DriveResult:
         from vtable.viz.drive_report import write_report
 
         return write_report(self, path, self.psa)
+
+
+#: the figures of every row of the JSON (null where a row has none)
+ROW_KEYS = ("nrms", "peak_error", "specimen_peak_ratio")
+
+
+def _row(m: dict[str, Any]) -> dict[str, Any]:
+    """A row's metrics for the JSON: `ROW_KEYS` and `spectrum`'s two figures always
+    present, None (null) where the row has no such figure."""
+    sp = m.get("spectrum") or {}
+    return {**{k: None for k in ROW_KEYS}, **m,
+            "spectrum": {"worst_ratio_error": sp.get("worst_ratio_error"),
+                         "at_hz": sp.get("at_hz")}}
 
 
 def _use(v: float | None) -> str:

@@ -47,8 +47,12 @@ def read_target(spec: str, unit: str = "in", duration: float | None = None,
     if p.suffix.lower() == ".csv" and _is_displacement_csv(p):
         t, x = _read_csv(p, unit)
         name = p.stem
-        if peak is not None:
-            x = x * units.to_si(peak, unit) / np.max(np.abs(x))
+        if np.ptp(x) == 0:  # nothing to reproduce: every ratio to it would be 0/0 (nan)
+            raise VtableError(f"{p}: the target's displacement is constant "
+                              f"({units.from_si(x[0], unit):g} {unit} throughout): it does "
+                              "not move, there is no drive to compute")
+        if peak is not None:  # the motion from where it starts, as the drive plays it
+            x = (x - x[0]) * units.to_si(peak, unit) / np.max(np.abs(x - x[0]))
     else:
         peak_in = None if peak is None else units.from_si(units.to_si(peak, unit), "in")
         cmd = make_command("earthquake", record=spec, duration=duration, peak_in=peak_in)
