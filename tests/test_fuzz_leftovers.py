@@ -7,6 +7,7 @@ The base run comes from the independent truth simulator (tests/truth)."""
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
@@ -162,6 +163,42 @@ def test_ctrl_c_into_diagnose_is_one_line_and_exit_130(long_campaign):
         assert lines[0].startswith("vtable: interrupted"), (after, err)
         landed += 1
     assert landed >= 5, landed
+
+
+def test_the_command_starts_no_second_python_interpreter(tmp_path):
+    """`vtable` does not look for MuJoCo's OpenGL back-end (it renders nothing with it): the
+    search ran `python -c` to read GLFW's version, a second interpreter that Ctrl-C, sent to
+    the process group while it started, ended with "Fatal Python error: init_import_site"
+    and a traceback (CI of stop 40, Ctrl-C 2 s into `vtable diagnose`)."""
+    import json
+    import subprocess
+    import sys
+
+    probe = tmp_path / "probe.py"
+    probe.write_text(
+        "import json, subprocess, sys\n"
+        "started = []\n"
+        "real = subprocess.Popen.__init__\n"
+        "def record(self, args, *a, **k):\n"
+        "    started.append([str(x) for x in ([args] if isinstance(args, str) else args)])\n"
+        "    return real(self, args, *a, **k)\n"
+        "subprocess.Popen.__init__ = record\n"
+        f"sys.argv = ['vtable', 'simulate', '--specimen', 'sdof_frame', '--command', 'random',"
+        f" '--band', '0', '20', '--peak', '0.1', '--duration', '1', '--out', "
+        f"{str(tmp_path / 'r')!r}]\n"
+        "from vtable.__main__ import run\n"
+        "try:\n"
+        "    run()\n"
+        "finally:\n"
+        "    print(json.dumps([started, 'mujoco' in sys.modules]), file=sys.stderr)\n")
+    env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
+    p = subprocess.run([sys.executable, str(probe)], capture_output=True, text=True, env=env,
+                       timeout=120)
+    assert p.returncode == 0, p.stderr
+    started, loaded = json.loads(p.stderr.strip().splitlines()[-1])
+    assert loaded, "the simulation did not load MuJoCo: nothing was tested"
+    pythons = [a for a in started if a and Path(a[0]).name.startswith("python")]
+    assert not pythons, pythons
 
 
 def test_ctrl_c_while_numba_compiles_a_force_law_is_not_taken_for_a_typing_error(monkeypatch):

@@ -1,8 +1,15 @@
 """`python -m vtable` and the `vtable` command: the CLI, with an interrupt during start-up
-(while the libraries load) ending as quietly as one during a command."""
+(while the libraries load) ending as quietly as one during a command.
+
+The command renders nothing with MuJoCo (its views are Rerun's), so MuJoCo's OpenGL
+back-end is not looked for (``MUJOCO_GL=disable`` unless the user has set it): on Linux
+that search runs a second Python interpreter to read GLFW's version, which costs start-up
+time and, when Ctrl-C reaches the process group while it starts, prints
+"Fatal Python error: init_import_site" with its traceback."""
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 
@@ -18,6 +25,7 @@ def _quiet_interrupts(u) -> None:
 
 def run() -> None:
     signal.signal(signal.SIGINT, on_sigint)  # first: an interrupt while loading is seen
+    os.environ.setdefault("MUJOCO_GL", "disable")  # module docstring
     sys.unraisablehook = _quiet_interrupts
     try:
         from vtable.cli import main  # in the try: Ctrl-C while the libraries load

@@ -194,5 +194,7 @@ def main(argv: list[str] | None = None) -> int:
         raise
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+if __name__ == "__main__":  # python -m vtable.cli: the same start as the `vtable` command
+    from vtable.__main__ import run
+
+    run()
