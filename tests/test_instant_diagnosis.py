@@ -114,6 +114,17 @@ def test_secant_jacobian():
     np.testing.assert_allclose(sol.x, ref.x, atol=1e-6)
     np.testing.assert_allclose(sol.x, [1.0, 1.0], atol=1e-6)
 
+    # a fit taking every Jacobian by differences: the covariance's Jacobian where it ends
+    # is the last one it took (no second set of simulations), and equals a fresh one
+    s = Secant(rosen, np.full(2, -5.0), np.full(2, 5.0), refresh=1)
+    sol = scipy.optimize.least_squares(s.fun, [-1.2, 1.0], jac=s.jac, bounds=(-5, 5),
+                                       max_nfev=7)
+    n = s.evals
+    np.testing.assert_array_equal(s.at_end(sol.x), Secant(rosen, s.lo, s.hi).at(sol.x))
+    assert s.evals == n
+    s.at_end(sol.x + 0.1)  # elsewhere: taken there
+    assert s.evals == n + 3
+
 
 def test_the_amplitude_screen_tells_friction_from_a_missing_linear_effect():
     """On the starting model's residual: the table's pitch missing (linear) leaves the same

@@ -395,7 +395,7 @@ class TableModel(Layout):
         # short of the minimum: a pitch fit ten times the cost it can reach), the last of
         # them the covariance the flags read
         sol = solve(x0, 40, refresh=1)
-        return self._done(campaign, start, lay, sol.x, sol.fun, sol.secant.at(sol.x))
+        return self._done(campaign, start, lay, sol.x, sol.fun, sol.secant.at_end(sol.x))
 
     def _refine(self, x: np.ndarray, eff: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                 start: Physics, lay, campaign: Campaign) -> tuple[float, np.ndarray]:

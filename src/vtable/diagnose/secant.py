@@ -40,6 +40,7 @@ class Secant:
         self._f: np.ndarray | None = None
         self._calls = 0
         self.evals = 0
+        self._fd: tuple[bytes, np.ndarray] | None = None  # the last `jac` taken by differences
 
     def fun(self, x: np.ndarray) -> np.ndarray:
         f = self._fun(x)
@@ -68,6 +69,14 @@ class Secant:
             J[:, i] = (self.fun(xi) - f0) / h
         return J
 
+    def at_end(self, x: np.ndarray) -> np.ndarray:
+        """`at(x)`, or the forward-difference Jacobian `jac` last took there (a fit whose
+        every Jacobian is taken by differences ends where it took its last one)."""
+        x = np.asarray(x, dtype=float)
+        if self._fd is not None and self._fd[0] == x.tobytes():
+            return self._fd[1].copy()
+        return self.at(x)
+
     def seed(self, x: np.ndarray, J: np.ndarray) -> None:
         """Start from the Jacobian `J` at `x` (Broyden's updates from there)."""
         self._J, self._x, self._f = J, np.asarray(x, dtype=float).copy(), self._value(x)
@@ -78,6 +87,7 @@ class Secant:
         f = self._value(x)
         if self._J is None or self._calls % self.refresh == 0:
             J = self.at(x)
+            self._fd = (x.tobytes(), J.copy())
         else:
             J = self._J.copy()
             dx = x - self._x
