@@ -23,7 +23,7 @@ from vtable.opensees.stepper import OpenSeesStepper
 MAX_DRAWN_NODES = 500
 
 
-class OpenSeesSpecimen:
+class OpenSeesController:
     """The model `model` at `depth` (m, the actuator line below the table top), stepped
     at `dt` (the control step)."""
 

@@ -32,7 +32,7 @@ COMMAND_POWER_MIN = 1e-4
 def campaign():
     """(comparison with pitch_flexibility, two-stage diagnosis, bare-table comparison)."""
     from vtable.diagnose.model import TableModel
-    from vtable.diagnose.result import ModelComparison, Stage
+    from vtable.diagnose.result import DiagnosisStage, ModelComparison
     from vtable.models.physics import Physics, nominal_open_loop
     from vtable.params import presets
     from vtable.params.specimen import NoSpecimen
@@ -47,7 +47,7 @@ def campaign():
     start = TableModel([]).fit([run])
     d = c.as_diagnosis()  # drawn as a diagnosis of two stages: start and final
     d.compared = False
-    d.stages = [Stage("start", start.physics_, start.predictions()), *d.stages]
+    d.stages = [DiagnosisStage("start", start.physics_, start.predictions()), *d.stages]
     d.stages[1].label = "pitch_flexibility"
     bare = simulate(Physics(nominal_open_loop(), NoSpecimen(), {}), cmd, noise=0.01, seed=1,
                     name="bare")

@@ -38,7 +38,7 @@ def _names(files: list[Path]) -> list[str]:
 
 # ---- analytical models -------------------------------------------------------------------
 @dataclass
-class Modes:
+class ModesResult:
     """Eigen-modes of a model (eqs 9.1-9.4): `modes` each {f_hz, damping}, the real roots
     in 1/s."""
 
@@ -75,7 +75,7 @@ class Modes:
 
 
 @dataclass
-class Margins:
+class MarginsResult:
     """Gain and phase margins of the loop L = H/(1-H) (`loop` says which H)."""
 
     model: str
@@ -334,8 +334,8 @@ class Demo:
     run (`simulation`, unless left out)."""
 
     configuration: str
-    modes: Modes
-    margins: Margins
+    modes: ModesResult
+    margins: MarginsResult
     x_t: dict[str, float]  # x_t/x_c: peak, f_peak_hz, notch, f_notch_hz
     x_eff_notch_hz: float
     theta_h_peak_hz: float
@@ -348,11 +348,11 @@ class Demo:
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Demo:
         """From the dictionary `to_json` gives (before JSON)."""
-        modes = Modes(**{k: d[k] for k in ("model", "stable", "modes", "real_roots_per_s")})
+        modes = ModesResult(**{k: d[k] for k in ("model", "stable", "modes", "real_roots_per_s")})
         if "reference" in d:
             r = d["reference"]
             modes.reference = (r["source"], [(m["f_hz"], m["damping"]) for m in r["modes"]])
-        return cls(d["configuration"], modes, Margins(**d["margins"]), d["x_t/x_c"],
+        return cls(d["configuration"], modes, MarginsResult(**d["margins"]), d["x_t/x_c"],
                    d["x_eff/x_c notch_hz"], d["theta_h/x_c peak_hz"], d.get("simulation"))
 
     def to_json(self) -> dict[str, Any]:
@@ -380,7 +380,7 @@ class Demo:
 
 # ---- interaction studies -----------------------------------------------------------------
 @dataclass
-class Assessment:
+class AssessmentResult:
     """The five models of §9.4 for a specimen and a record: the verdict, the coupled modes
     (model -> f_hz, damping), the PSV at the specimen's period (m/s), the rocking share,
     the time elongation, the compensated error, and the figures written."""
@@ -427,7 +427,7 @@ class Assessment:
 
 
 @dataclass
-class Study:
+class StudyResult:
     """A heights x records study: its store, the model (virtual or analytic) and each
     point's result (key -> what `vtable.studies.scaleout.run_study` stored)."""
 

@@ -41,8 +41,8 @@ from vtable.diagnose.result import (
     Candidate,
     Diagnosis,
     DiagnosisInterrupted,
+    DiagnosisStage,
     Round,
-    Stage,
     evidence,
     localise,
 )
@@ -64,8 +64,8 @@ from vtable.runs.model import Run
 REFINE_FACTOR = 3.0
 
 __all__ = ["BASE_PARAMS", "ERROR_DEFINITION", "WORKERS", "Candidate", "Diagnoser", "Diagnosis",
-           "DiagnosisInterrupted", "Round", "Stage", "check_campaign", "diagnose", "failing",
-           "localise"]
+           "DiagnosisInterrupted", "DiagnosisStage", "Round", "check_campaign", "diagnose",
+           "failing", "localise"]
 
 
 class Diagnoser:
@@ -235,7 +235,7 @@ class Diagnoser:
         self.notes += [f"starting model: {f}" for f in fitted.flags_]
         self.start_fitted = current
         st.current = current
-        st.stages.append(Stage("start", current, self.predict(current)))
+        st.stages.append(DiagnosisStage("start", current, self.predict(current)))
         done += 1
         st.cmp0 = self._detail(st)
         st.err = st.start_err = err = st.cmp0.error
@@ -302,7 +302,7 @@ class Diagnoser:
                 st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
                 current, err, cost = best.physics, best.error_after, best.cost
                 st.current, st.err, st.cmp = current, err, None
-                st.stages.append(Stage(f"{len(st.stages)}_{best.effect}", current,
+                st.stages.append(DiagnosisStage(f"{len(st.stages)}_{best.effect}", current,
                                        best.predictions))
                 progress(done, steps, f"round {k} done: added {best.effect}")
                 backward = [e for e in current.effects
@@ -480,7 +480,7 @@ class Diagnoser:
                 "the noise cannot produce: " + "; ".join(fails))
             rnd.error = err
             st.current, st.err, st.cmp = physics, err, None
-            st.stages.append(Stage(f"{len(st.stages)}_without_{name}", physics, pred))
+            st.stages.append(DiagnosisStage(f"{len(st.stages)}_without_{name}", physics, pred))
             progress(done, steps, f"round {k}: removed {name}")
             return physics, err, cost
         return None

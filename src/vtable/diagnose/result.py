@@ -3,7 +3,7 @@ results with `to_json()` (the JSON the command line writes: the diagnosis's keys
 interchange contract of docs/diagnosis-json.md), `report()` (the text it prints) and, for a
 diagnosis, `plot()` (the HTML report and the Rerun recording, `vtable.viz`).
 
-A diagnosis keeps its stages (`Stage`: each model it went through, with its predictions and
+A diagnosis keeps its stages (`DiagnosisStage`: each model it went through, with its predictions and
 comparison), its rounds (`Round`: the ranking of `Candidate`s, what was added and removed)
 and the verdict; `DiagnosisInterrupted` carries the rounds finished on Ctrl-C.
 """
@@ -38,7 +38,7 @@ ERROR_DEFINITION = ("mean over runs and channel groups of the normalised RMS err
 
 
 @dataclass
-class Stage:
+class DiagnosisStage:
     """A model the diagnosis went through, with what it predicts for every run (analysis
     rate) and how that compares with the measurements: the report and the recording render
     these without simulating again."""
@@ -119,7 +119,7 @@ class Diagnosis:
     unexplained: dict[str, Any] | None = None
     notes: list[str] = field(default_factory=list)
     interrupted: bool = False
-    stages: list[Stage] = field(default_factory=list, repr=False)
+    stages: list[DiagnosisStage] = field(default_factory=list, repr=False)
     runs: list[Run] = field(default_factory=list, repr=False)
     #: the files written from it (`plot`: the Rerun recording, the HTML report)
     files: list[Path] = field(default_factory=list)
@@ -418,7 +418,7 @@ class ModelComparison:
         d = Diagnosis(list(self.effects), self.error, self.noise_floor, [], m.physics_,
                       self.error, f"compare: {self.localisation}", self.comparison,
                       self.comparison, self.base_fit, self.unexplained, list(self.notes),
-                      stages=[Stage("model", m.physics_, self.predictions)],
+                      stages=[DiagnosisStage("model", m.physics_, self.predictions)],
                       runs=list(m.campaign_.runs), title="vtable compare", compared=True)
         return d
 

@@ -17,7 +17,7 @@ from typing import Any
 
 from vtable.diagnose.compare import compare
 from vtable.diagnose.plants import PlantDifference, plant_differences
-from vtable.diagnose.result import Stage
+from vtable.diagnose.result import DiagnosisStage
 from vtable.diagnose.selection import failing
 from vtable.diagnose.statistics import held_out_gain
 
@@ -54,7 +54,7 @@ def split(dg, st) -> list[PlantDifference] | None:
         return pairs
     dg.campaign = per_run
     st.current, st.err, st.cmp = m.physics_, err, None
-    st.stages.append(Stage(f"{len(st.stages)}_states", m.physics_, pred))
+    st.stages.append(DiagnosisStage(f"{len(st.stages)}_states", m.physics_, pred))
     st.split = True
     return pairs
 

@@ -14,7 +14,7 @@ from vtable.diagnose.limits import limits
 from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.plants import plant_differences
 from vtable.diagnose.prose import unexplained
-from vtable.diagnose.result import Diagnosis, Round, Stage
+from vtable.diagnose.result import Diagnosis, DiagnosisStage, Round
 from vtable.diagnose.states import state_rows
 from vtable.diagnose.stationarity import stationarity_check
 from vtable.diagnose.statistics import Comparison
@@ -31,7 +31,7 @@ class State:
     cmp0: Comparison | None = None
     cmp: Comparison | None = None  # detailed comparison of `current`, when made
     rounds: list[Round] = field(default_factory=list)
-    stages: list[Stage] = field(default_factory=list)
+    stages: list[DiagnosisStage] = field(default_factory=list)
     result: Diagnosis | None = None
     error: BaseException | None = None
     #: declarations the final model leans on that a widened refit moves beyond their

@@ -352,7 +352,7 @@ def rocking_springs_fit(tf: TransferFunction, f_hz: float, what: str = "G_r") ->
 
 # ---- time domain: hysteresis loops, eqs 5.12-5.14 -------------------------------------------
 @dataclass(frozen=True)
-class Hysteresis:
+class HysteresisLoop:
     """Regression stiffness and the loop measures of Fig 5.7; `fit` is the regression
     F = k x + c ẋ + F₀ (standard errors, R²), `crest_factor` max|x - x̄|/rms(x - x̄) of
     the motion (√2 for the steady sine the loop measures assume)."""
@@ -366,7 +366,7 @@ class Hysteresis:
     crest_factor: float = float("nan")
 
 
-def hysteresis(x: np.ndarray, force: np.ndarray, dt: float, f_hz: float) -> Hysteresis:
+def hysteresis(x: np.ndarray, force: np.ndarray, dt: float, f_hz: float) -> HysteresisLoop:
     """Force-displacement (or moment-rotation) loop measures: k from the regression of F
     on x and ẋ, W_D the loop area per cycle (∮F dx over the record / cycles at f_hz),
     W_s = k x_max²/2, ξ_v = W_D/(4π W_s) (5.12), C = W_D/(π ω x_max²) (5.13).
@@ -394,7 +394,7 @@ def hysteresis(x: np.ndarray, force: np.ndarray, dt: float, f_hz: float) -> Hyst
     xc = x - x.mean()
     xmax = float(np.max(np.abs(xc)))
     ws = 0.5 * k * xmax**2
-    return Hysteresis(k, wd / (np.pi * TWO_PI * f_hz * xmax**2),
+    return HysteresisLoop(k, wd / (np.pi * TWO_PI * f_hz * xmax**2),
                       wd / (4 * np.pi * ws) if ws else float("nan"), wd, ws, reg,
                       xmax / float(np.sqrt(np.mean(xc**2))))
 

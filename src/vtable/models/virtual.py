@@ -24,7 +24,7 @@ from vtable.controllers import (
     ServoController,
     quadratic_damper,
 )
-from vtable.controllers.opensees_specimen import OpenSeesSpecimen
+from vtable.controllers.opensees_specimen import OpenSeesController
 from vtable.effects.table import TableView
 from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.hydraulics.law import group_law
@@ -140,7 +140,7 @@ class VirtualAssembly:
     def add_opensees(self, spec) -> None:
         """An OpenSees specimen stepped with the platen (`controllers.opensees_specimen`)."""
         depth = self.vt.table.geometry.actuator_line_depth
-        self.controllers.append(OpenSeesSpecimen(load_model(spec.model), depth,
+        self.controllers.append(OpenSeesController(load_model(spec.model), depth,
                                                  float(self.ts.spec.option.timestep)))
 
     def add_output_filter(self, fn: Callable, channels=None) -> None:

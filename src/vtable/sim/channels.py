@@ -68,7 +68,7 @@ def channels(res: SimResult, full_state: bool = True) -> tuple[dict[str, np.ndar
             si[f"floor{k}_acc"] = res.sensor(f"floor{k}_acc")[:, 0]
             x = res.sensor(f"floor{k}_pos")[:, 0]
             si[f"floor{k}_disp"] = x - x[0] if len(x) else x
-    if res.specimen is not None:  # an OpenSees model's floors (`OpenSeesSpecimen.history`)
+    if res.specimen is not None:  # an OpenSees model's floors (`OpenSeesController.history`)
         si.update(opensees_channels(res))
     if getattr(b.specimen, "hysteresis", None) is not None:  # a yielding specimen's storeys
         n = len(b.structure_joints)

@@ -71,7 +71,7 @@ class SimResult:
     pressure_forces: np.ndarray | None = None
     #: the units of `controller_state_names` (`vtable.units`)
     controller_state_units: tuple[str, ...] = ()
-    #: an OpenSees specimen's recorded floors and wrench (`OpenSeesSpecimen.history`)
+    #: an OpenSees specimen's recorded floors and wrench (`OpenSeesController.history`)
     specimen: dict[str, np.ndarray] | None = None
 
     def joint(self, name: str, what: str = "qpos") -> np.ndarray:

@@ -9,11 +9,11 @@ import numpy as np
 
 from vtable.analytic import configs
 from vtable.errors import VtableError
-from vtable.results import FrequencyResponse, Margins, Modes, Presets
+from vtable.results import FrequencyResponse, MarginsResult, ModesResult, Presets
 
 
 def modes_dict(model) -> dict[str, Any]:
-    """A model's oscillatory modes and real roots (eqs 9.1-9.4), as `Modes` takes them."""
+    """A model's oscillatory modes and real roots (eqs 9.1-9.4), as `ModesResult` takes them."""
     m = model.modes()
     return {"model": model.title, "stable": model.is_stable(),
             "modes": [{"f_hz": x.f_hz, "damping": x.damping} for x in m.oscillatory],
@@ -21,7 +21,7 @@ def modes_dict(model) -> dict[str, Any]:
 
 
 def margins_dict(model, out: str, inp: str) -> dict[str, Any]:
-    """A model's gain and phase margins of L = H/(1-H), H = out/inp, as `Margins` takes
+    """A model's gain and phase margins of L = H/(1-H), H = out/inp, as `MarginsResult` takes
     them."""
     g = model.margins(out, inp)
     return {"model": model.title, "loop": f"L = H/(1-H), H = {out}/{inp}",
@@ -29,16 +29,16 @@ def margins_dict(model, out: str, inp: str) -> dict[str, Any]:
             "f_phase_crossover_hz": g.f_phase_crossover, "f_gain_crossover_hz": g.f_gain_crossover}
 
 
-def modes(config: str) -> Modes:
+def modes(config: str) -> ModesResult:
     """Eigen-modes of a named configuration or a model file (eqs 9.1-9.4)."""
     model = configs.load(config)
     model.check_stable()
-    return Modes(**modes_dict(model))
+    return ModesResult(**modes_dict(model))
 
 
-def margins(config: str, out: str = "x_t", inp: str = "x_c") -> Margins:
+def margins(config: str, out: str = "x_t", inp: str = "x_c") -> MarginsResult:
     """Gain and phase margins of L = H/(1-H), H = out/inp."""
-    return Margins(**margins_dict(configs.load(config), out, inp))
+    return MarginsResult(**margins_dict(configs.load(config), out, inp))
 
 
 def presets() -> Presets:

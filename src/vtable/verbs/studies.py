@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from vtable.params.specimen import SDOFSpecimen
-from vtable.results import Assessment, Study
+from vtable.results import AssessmentResult, StudyResult
 from vtable.signals.processing import process_record
 from vtable.signals.records import load_record
 from vtable.sim.experiment import load_specimen
@@ -22,7 +22,7 @@ from vtable.viz import figures
 
 
 def assess(specimen: str = "sdof_frame", record: str = "elcentro", raw: bool = False,
-           out: str = "vtable-assess") -> Assessment:
+           out: str = "vtable-assess") -> AssessmentResult:
     """The five models of §9.4 for a specimen and a record: coupled modes, PSV spectra,
     the verdict, and the sweeps of Figs 9.4-9.12 (written as PNGs)."""
     rec = load_record(record)
@@ -73,7 +73,7 @@ def assess(specimen: str = "sdof_frame", record: str = "elcentro", raw: bool = F
             files.append(figures.ductility_png(
                 folder / "ductility_vs_period.png", ductility, 1.0 / s.frequency,
                 f"{s.title}: ductility and residual drift, {rec.name}"))
-    return Assessment(res.verdict(), s.title, label,
+    return AssessmentResult(res.verdict(), s.title, label,
                       {k: {"f_hz": f, "damping": z} for k, (f, z) in res.modes.items()},
                       res.psv_at_specimen, res.rocking_share, res.elongation,
                       res.compensated_error, [Path(f) for f in files], notes, ductility)
@@ -81,10 +81,10 @@ def assess(specimen: str = "sdof_frame", record: str = "elcentro", raw: bool = F
 
 def study(store: str, heights: Sequence[float], records: Sequence[str] = ("elcentro",),
           specimen: str = "sdof_frame", model: str = "virtual", duration: float | None = None,
-          scheduler: str | None = None, workers: int = 2) -> Study:
+          scheduler: str | None = None, workers: int = 2) -> StudyResult:
     """A heights x records study on Dask, stored as it runs and resumable."""
     common: dict[str, Any] = {"specimen": specimen}
     if duration is not None or model == "virtual":
         common["duration"] = duration if duration is not None else 4.0
     s = height_record_study(list(heights), list(records), model, **common)
-    return Study(store, model, run_study(s, store, scheduler=scheduler, n_workers=workers))
+    return StudyResult(store, model, run_study(s, store, scheduler=scheduler, n_workers=workers))
