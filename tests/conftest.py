@@ -239,3 +239,27 @@ def vtable_exe() -> list[str]:
 
     exe = shutil.which("vtable")
     return [exe] if exe else [sys.executable, "-m", "vtable.cli"]
+
+
+def nonlinear_controllers(vt, air_ratio: float = 0.0, friction: float = 0.0) -> list:
+    """The multibody table `vt`'s controllers with appendix C valves on H1-H3: the stages
+    of the valve_flow_nonlinearity (orifice flow from the table's supply pressure) and
+    flow_saturation (the rated flow) effects, optionally oil_column_air's (`air_ratio`)
+    and actuator_friction's (`friction`, N per actuator), after the table's own stages;
+    linear loops on V1-V4, passive stabilizers."""
+    from vtable.controllers import HydraulicServo, PassiveStabilizers, ServoController
+    from vtable.effects.actuator_friction import FRICTION, V_EPS
+    from vtable.effects.flow_saturation import FLOW_CAP
+    from vtable.effects.oil_column_air import AIR
+    from vtable.effects.valve_flow_nonlinearity import ORIFICE
+    from vtable.hydraulics.table_stages import table_stages
+
+    ps = vt.table.geometry.supply_pressure
+    stages = [*table_stages(vt), (ORIFICE, {"supply_pressure": ps}),
+              (FLOW_CAP, {"max_flow": vt.table.rated_flow("H1")})]
+    if air_ratio:
+        stages.append((AIR, {"air_ratio": air_ratio, "mean_pressure": ps}))
+    if friction:
+        stages.append((FRICTION, {"friction": friction, "v_eps": V_EPS}))
+    return [HydraulicServo(vt, stages=tuple(stages)), ServoController(vt, groups=("vertical",))] \
+        + ([PassiveStabilizers(vt)] if vt.stabilizers.pairs else [])

@@ -181,8 +181,9 @@ def test_analytic_and_params_import_at_the_top():
 
 
 def test_one_valve_rating_for_the_appendix_c_valve_and_flow_saturation():
+    from conftest import nonlinear_controllers
+
     from vtable import units
-    from vtable.controllers import nonlinear_controllers
     from vtable.effects import get
     from vtable.effects.flow_saturation import FLOW_CAP
 

@@ -8,9 +8,10 @@ import tomllib
 
 import numpy as np
 import pytest
+from conftest import nonlinear_controllers
 
 from vtable import units
-from vtable.controllers import nonlinear_controllers, standard_controllers
+from vtable.controllers import standard_controllers
 from vtable.errors import VtableError
 from vtable.ident import transfer_function
 from vtable.mjcf import build

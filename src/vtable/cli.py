@@ -195,6 +195,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":  # python -m vtable.cli: the same start as the `vtable` command
-    from vtable.__main__ import run
+    import runpy
 
-    run()
+    runpy.run_module("vtable", run_name="__main__")

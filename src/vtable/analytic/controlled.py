@@ -21,8 +21,8 @@ import dataclasses
 import numpy as np
 
 from vtable.analytic.servo import servo_from_open_loop
-from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.hydraulics.law import group_law
+from vtable.hydraulics.table_stages import SPOOL_LAG
 from vtable.params.loops import OpenLoop
 from vtable.params.virtual import VirtualTable
 

@@ -1,27 +1,12 @@
 """force_feedback_filter: an RC high-pass filter on the ΔP (force) feedback (app. B,
 eqs B.4-B.7): the horizontal loop feeds back the filtered pressure P_f,
 Ṗ_f = -P_f/RC + Ṗ_L, instead of P_L — a feedback stage of the hydraulic element
-(linear)."""
+(linear; the law is `vtable.hydraulics.table_stages.RC_FILTER`, the EERC table's own)."""
 
 from __future__ import annotations
 
 from vtable.effects.base import Effect, Param
-from vtable.hydraulics.stage import Stage
-
-
-def filtered(P, z, p):
-    """The pressure fed back: the filter's state P_f."""
-    return z[0]
-
-
-def filter_rate(P, dP, z, p, dz):
-    """Ṗ_f = -P_f/RC + Ṗ_L (eq B.4)."""
-    dz[0] = dP - z[0] / p.rc
-
-
-RC_FILTER = Stage("rc_filter", "feedback", filtered, ("rc",), states=1, state_units=("Pa",),
-                  linear=True,
-                  rate=filter_rate)
+from vtable.hydraulics.table_stages import RC_FILTER
 
 
 class ForceFeedbackFilter(Effect):

@@ -2,26 +2,12 @@
 flow q_v follows the commanded flow q through a first-order spool lag τ,
 τ q̇_v = q - q_v — a valve stage of the hydraulic element (linear). On a table that
 declares its valve's time constant (its own `SPOOL_LAG`) the effect is a further lag in
-series (`VALVE_LAG`)."""
+series (`VALVE_LAG`); both laws are `vtable.hydraulics.table_stages`'."""
 
 from __future__ import annotations
 
 from vtable.effects.base import Effect, Param
-from vtable.hydraulics.stage import Stage
-
-
-def spool_lag(q, z, p, dz):
-    """The valve flow z[0] lagging the commanded flow q by τ = p.tau."""
-    dz[0] = (q - z[0]) / p.tau
-    return z[0]
-
-
-SPOOL_LAG = Stage("spool_lag", "valve", spool_lag, ("tau",), states=1, linear=True,
-                  state_units=("m3/s",))
-#: the same law as the effect's own stage: a lag beyond a table's declared valve lag
-#: (`SPOOL_LAG`, the table's own), in series with it
-VALVE_LAG = Stage("valve_lag", "valve", spool_lag, ("tau",), states=1, linear=True,
-                  state_units=("m3/s",))
+from vtable.hydraulics.table_stages import VALVE_LAG
 
 
 class ValveDynamics(Effect):

@@ -25,12 +25,12 @@ from vtable.analytic.structure import storey_channels, storey_masses
 from vtable.analytic.virtual_table import mechanics
 from vtable.controllers.force_law import law_params, named
 from vtable.effects.table import TableView
-from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.errors import VtableError, interrupted
 from vtable.hydraulics import group_law
 from vtable.hydraulics.compose import ElementLaw
 from vtable.hydraulics.element import PISTON_AREA
 from vtable.hydraulics.stage import Stage, add_stage
+from vtable.hydraulics.table_stages import SPOOL_LAG
 from vtable.interpolate import upsampled
 from vtable.models import physics as phys
 from vtable.models.modal import ModalOutputs

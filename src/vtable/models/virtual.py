@@ -26,9 +26,9 @@ from vtable.controllers import (
 )
 from vtable.controllers.opensees_specimen import OpenSeesController
 from vtable.effects.table import TableView
-from vtable.effects.valve_dynamics import SPOOL_LAG
 from vtable.hydraulics.law import group_law
 from vtable.hydraulics.stage import Stage, add_stage
+from vtable.hydraulics.table_stages import SPOOL_LAG
 from vtable.mjcf import edit
 from vtable.mjcf.builder import BuiltModel, compile_table, table_spec
 from vtable.models import physics as phys
