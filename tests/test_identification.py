@@ -10,7 +10,6 @@ import pytest
 
 from vtable import units
 from vtable.analytic.servo import open_loop_from_servo
-from vtable.analytic.virtual_table import VirtualTableModel
 from vtable.ident import transfer_function
 from vtable.ident.fits import (
     amplitude_fit,
@@ -30,6 +29,7 @@ from vtable.ident.structure import (
     table_3_1,
 )
 from vtable.mjcf import build
+from vtable.models.linear_table import VirtualTableModel
 from vtable.params import presets
 from vtable.runs.model import with_noise
 from vtable.sim.linearize import linearize

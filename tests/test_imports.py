@@ -1,6 +1,7 @@
 """The package's shape (issue 17): no import circles between vtable's modules, no
 module of src/vtable over 500 lines, and imports at the top of modules (an import inside a
-function only where `LATE_IMPORTS` says why).
+function only where `LATE_IMPORTS` says why); between packages, arrows that point down the
+layers of docs/architecture.md (issue 34), the upward ones listed with why.
 
 Every module under src/vtable, controllers/ (installed as vtable.controllers) and viz/
 (as vtable.viz) is parsed with `ast`; an import anywhere in a module (at the top, in a
@@ -225,6 +226,76 @@ def test_no_import_circles():
 
 def test_no_module_over_500_lines():
     assert not long_modules(), long_modules()
+
+
+#: vtable's packages from the bottom up (docs/architecture.md): a package imports only
+#: packages of its own layer or below. Top-level modules count as packages of their own.
+LAYERS = (("vtable", "errors", "units", "fileio", "userfile", "jsonable", "interpolate",
+           "_numba", "display"),
+          ("params",), ("hydraulics",), ("analytic",), ("opensees",), ("controllers",),
+          ("runs",), ("signals",), ("ident",), ("effects",), ("mjcf",), ("models",), ("sim",),
+          ("studies",), ("diagnose",), ("drive",), ("viz",), ("results",), ("verbs",),
+          ("cli_args", "cli", "__main__"))
+#: the arrows that still point up, each with why (docs/architecture.md): the list may
+#: only shrink (an arrow fixed must leave it: `test_every_listed_upward_arrow_exists`)
+UPWARD = {
+    ("diagnose", "viz"): "the plotting hook: a diagnosis's .report()/.rerun() load their "
+                         "renderer when called",
+    ("drive", "viz"): "the plotting hook: a drive's .report()/.figure() load their renderer "
+                      "when called",
+    ("params", "analytic"): "presets and the virtual table's description derive numbers "
+                            "with the report's formulas (issue 34, one table)",
+    ("params", "controllers"): "params.lab reads a run's controller kind (issue 34, one "
+                               "table)",
+    ("params", "runs"): "params.lab reads a run's [table] (issue 34, one table)",
+}
+
+
+def package_arrows() -> dict[tuple[str, str], list[str]]:
+    """(package, package it imports) -> the module imports behind that arrow, between
+    vtable's packages (vtable.X's X; vtable itself "vtable")."""
+    def package(m: str) -> str:
+        parts = m.split(".")
+        return parts[1] if len(parts) > 1 else "vtable"
+
+    out: dict[tuple[str, str], list[str]] = {}
+    for a, targets in import_graph().items():
+        for b in targets:
+            if package(a) != package(b):
+                out.setdefault((package(a), package(b)), []).append(f"{a} -> {b}")
+    return out
+
+
+def upward(arrows: dict[tuple[str, str], list[str]]) -> dict[tuple[str, str], list[str]]:
+    """The arrows that point up `LAYERS` and `UPWARD` does not list."""
+    rank = {p: i for i, layer in enumerate(LAYERS) for p in layer}
+    return {k: v for k, v in arrows.items() if rank[k[0]] < rank[k[1]] and k not in UPWARD}
+
+
+def test_package_arrows_point_down():
+    """Every package sits in `LAYERS` and imports only its layer or below, except the
+    arrows `UPWARD` lists (so no package-level import circle can form outside them)."""
+    arrows = package_arrows()
+    placed = {p for layer in LAYERS for p in layer}
+    unplaced = {p for pair in arrows for p in pair} - placed
+    assert not unplaced, f"packages not in LAYERS: {sorted(unplaced)}"
+    up = upward(arrows)
+    assert not up, "upward imports: " + "; ".join(f"{a} -> {b} ({v[0]})"
+                                                  for (a, b), v in sorted(up.items()))
+
+
+def test_every_listed_upward_arrow_exists():
+    gone = set(UPWARD) - set(package_arrows())
+    assert not gone, f"fixed, take them out of UPWARD: {sorted(gone)}"
+
+
+def test_an_upward_arrow_is_caught():
+    """The check itself: params importing models (the bottom reaching the top) is
+    reported, a downward arrow of the same modules is not."""
+    arrows = package_arrows()
+    assert ("models", "params") in arrows and not upward(arrows)
+    bad = {**arrows, ("params", "models"): ["vtable.params.x -> vtable.models.y"]}
+    assert set(upward(bad)) == {("params", "models")}
 
 
 def test_every_package_is_installed():

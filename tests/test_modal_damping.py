@@ -20,9 +20,9 @@ import scipy.linalg
 
 from vtable.analytic.mdof import MDOFHybrid
 from vtable.analytic.structure import building_matrices, modal_damping
-from vtable.analytic.virtual_table import mechanics
 from vtable.errors import VtableError
 from vtable.mjcf import build
+from vtable.models.linear_table import mechanics
 from vtable.params import presets
 from vtable.params.bodies import specimen_damping
 from vtable.params.specimen import specimen_from_dict

@@ -14,11 +14,11 @@ from conftest import periodic_random_run, relative_errors
 from vtable import units
 from vtable.analytic import TwoDirectionalTable
 from vtable.analytic.servo import open_loop_from_servo
-from vtable.analytic.virtual_table import VirtualTableModel
 from vtable.controllers import PassiveStabilizers, ServoController
 from vtable.ident import transfer_function
 from vtable.mjcf import build
 from vtable.mjcf.export import DEFAULTS, export_mjcf
+from vtable.models.linear_table import VirtualTableModel
 from vtable.params import OpenLoop, StructureRatios, TwoDirectionalParams, presets
 from vtable.params.bodies import slab_body
 from vtable.sim.experiment import load_specimen
@@ -234,7 +234,7 @@ def test_a_buildings_damping_is_xi_in_every_fixed_base_mode(vt):
     ξ in the first and more above (stiffness-proportional storey dampers gave 2.67 ξ and
     4.0 ξ here); the drift damping matrix is Lᵀ C_u L of the modal C_u."""
     from vtable.analytic.structure import building_matrices
-    from vtable.analytic.virtual_table import mechanics
+    from vtable.models.linear_table import mechanics
     from vtable.params import ShearBuilding
     from vtable.params.bodies import specimen_bodies, specimen_damping
 

@@ -36,10 +36,10 @@ import math
 
 import numpy as np
 
+from vtable.analytic.hysteresis import storey_coordinate
 from vtable.analytic.structure import specimen_frequencies, storey_masses, storey_stiffnesses_of
 from vtable.effects.base import Effect, Param
 from vtable.errors import VtableError
-from vtable.models.hysteresis import storey_coordinate
 from vtable.params.specimen import SDOFSpecimen, ShearBuilding
 
 #: the drift ratio whose elastic energy is the unit of dissipated energy

@@ -1,5 +1,5 @@
 """storey_yield: a storey of the specimen yields — the Bouc–Wen storey of
-`vtable.models.hysteresis` (Wen 1976; Baber & Wen 1981) on storey `storey`, with its yield
+`vtable.analytic.hysteresis` (Wen 1976; Baber & Wen 1981) on storey `storey`, with its yield
 drift u_y and post-yield stiffness ratio α fitted (n = 2, β = γ = 0.5, the usual shape).
 
 A default candidate of `diagnose` like every catalog effect: it is fitted only where the
@@ -14,10 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from vtable.analytic.hysteresis import add_yielding_storey
 from vtable.analytic.structure import storey_masses
 from vtable.effects.base import Effect, Param
 from vtable.errors import VtableError
-from vtable.models.hysteresis import add_yielding_storey
 from vtable.units import from_si
 
 

@@ -8,10 +8,10 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
+from vtable.analytic.hysteresis import add_specimen_hysteresis
 from vtable.analytic.servo import open_loop_from_servo, servo_from_open_loop
 from vtable.effects.registry import get
 from vtable.errors import VtableError
-from vtable.models.hysteresis import add_specimen_hysteresis
 from vtable.params.loops import OpenLoop
 from vtable.params.specimen import OpenSeesSpecimen, Specimen
 from vtable.params.table import ServoConstants
@@ -102,7 +102,7 @@ class Physics:
         return out
 
     def apply(self, assembly, model: str) -> None:
-        """The specimen's declared yielding storeys (`models.hysteresis`) or OpenSees model,
+        """The specimen's declared yielding storeys (`analytic.hysteresis`) or OpenSees model,
         then every
         effect through its hook for `model` ("reduced" or "virtual"), its table-dependent
         defaults on the assembly's table."""

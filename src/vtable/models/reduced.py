@@ -3,7 +3,7 @@
 `ReducedAssembly` starts from the planar table of report chapter 7 — the platen in x
 carrying the specimen's storeys, one equivalent horizontal actuator under the DOF servo
 law (`vtable.hydraulics`), mechanics from the same assembly as the virtual table's linear
-model (`analytic.virtual_table.mechanics`: the platen cannot pitch until an effect frees
+model (`models.linear_table.mechanics`: the platen cannot pitch until an effect frees
 it) — and offers effects the vocabulary of `vtable.effects.base.Assembly`: degrees of
 freedom, springs, linear control loops, the hydraulic element's stages, force
 elements (a law of a relative motion, compiled with numba when it can be, else run as
@@ -22,7 +22,6 @@ import numpy as np
 
 from vtable.analytic.hold import first_order_hold
 from vtable.analytic.structure import storey_channels, storey_masses
-from vtable.analytic.virtual_table import mechanics
 from vtable.controllers.force_law import law_params, named
 from vtable.effects.table import TableView
 from vtable.errors import VtableError, interrupted
@@ -33,6 +32,7 @@ from vtable.hydraulics.stage import Stage, add_stage
 from vtable.hydraulics.table_stages import SPOOL_LAG
 from vtable.interpolate import upsampled
 from vtable.models import physics as phys
+from vtable.models.linear_table import mechanics
 from vtable.models.modal import ModalOutputs
 from vtable.models.reduced_kernel import (
     ELEMENT_KERNELS,

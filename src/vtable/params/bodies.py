@@ -90,7 +90,7 @@ def specimen_damping(spec: Specimen) -> np.ndarray:
     """The specimen's damping matrix C_d on its slide coordinates (N s/m), in the order of
     the slide joints of `specimen_bodies`; the one source of the specimen's damping for the
     MuJoCo table (`mjcf.builder`) and the analytic and reduced models
-    (`analytic.virtual_table.mechanics`).
+    (`models.linear_table.mechanics`).
 
     A SDOF frame: [[c_s]]. A shear building: the slides chain (storey j's joint is its
     drift d_j relative to storey j-1), so the storeys' displacements relative to the table

@@ -7,7 +7,7 @@ declared hysteresis kept: a yield drift stays that drift, a yield strength that 
 `Hysteresis.of_storey`) and played twice under the same command:
 
 - **fixed base**: the specimen alone on an ideal table, m (ü + ẍ_c) + c u̇ + k u − F_h = 0,
-  F_h the Bouc–Wen force of `vtable.models.hysteresis.bouc_wen` (the law written once),
+  F_h the Bouc–Wen force of `vtable.analytic.hysteresis.bouc_wen` (the law written once),
   integrated by scipy's RK45 with ẍ_c linear between samples;
 - **on the table**: the reduced model of the table carrying it (the standard table's loop
   and pitch system, `vtable.models.reduced.ReducedModel`), driven by x_c.
@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from vtable.analytic.hysteresis import bouc_wen
 from vtable.controllers.force_law import law_argument, law_params
 from vtable.errors import VtableError
-from vtable.models.hysteresis import bouc_wen
 from vtable.models.reduced import ReducedModel
 from vtable.params.specimen import SDOFSpecimen
 from vtable.params.virtual import VirtualTable
