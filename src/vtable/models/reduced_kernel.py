@@ -76,6 +76,36 @@ def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, 
     return force
 
 
+@njit(cache=True)
+def _record(k, y, k1, nq, Q, Qd, Qdd, PL):
+    """Sample k of the histories: q, q̇, q̈ (from the rates k1) and P_L."""
+    PL[k] = y[2 * nq]
+    for i in range(nq):
+        Q[k, i] = y[i]
+        Qd[k, i] = y[nq + i]
+        Qdd[k, i] = k1[nq + i]
+
+
+@njit(cache=True)
+def _trial(yt, y, kx, c):
+    """RK4's trial state yt = y + c kx."""
+    for i in range(y.shape[0]):
+        yt[i] = y[i] + c * kx[i]
+
+
+@njit(cache=True)
+def _advance(y, k1, k2, k3, k4, dt, k, Q, Qd, Qdd, F, PL):
+    """RK4's step y += dt/6 (k1 + 2 k2 + 2 k3 + k4); a state that blows up ends the
+    histories with NaN from sample k + 1 on (returns False)."""
+    for i in range(y.shape[0]):
+        y[i] += dt / 6.0 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i])
+    if not np.isfinite(y[0]) or abs(y[0]) > 10.0:
+        Q[k + 1:], Qd[k + 1:], Qdd[k + 1:], F[k + 1:] = np.nan, np.nan, np.nan, np.nan
+        PL[k + 1:] = np.nan
+        return False
+    return True
+
+
 @njit(cache=True, nogil=True)
 def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw):
     """RK4 at step dt (the command linear between samples); returns q, q̇, q̈ (n_t x nq),
@@ -93,31 +123,20 @@ def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, A
     for k in range(n):
         F[k] = _rates(y, xc[k], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
                       Fw, fe, k1, ws)
-        PL[k] = y[2 * nq]
-        for i in range(nq):
-            Q[k, i] = y[i]
-            Qd[k, i] = y[nq + i]
-            Qdd[k, i] = k1[nq + i]
+        _record(k, y, k1, nq, Q, Qd, Qdd, PL)
         if k == n - 1:
             break
         xm = 0.5 * (xc[k] + xc[k + 1])
-        for i in range(ny):
-            yt[i] = y[i] + 0.5 * dt * k1[i]
+        _trial(yt, y, k1, 0.5 * dt)
         _rates(yt, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, fe, k2,
                ws)
-        for i in range(ny):
-            yt[i] = y[i] + 0.5 * dt * k2[i]
+        _trial(yt, y, k2, 0.5 * dt)
         _rates(yt, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, fe, k3,
                ws)
-        for i in range(ny):
-            yt[i] = y[i] + dt * k3[i]
+        _trial(yt, y, k3, dt)
         _rates(yt, xc[k + 1], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
                fe, k4, ws)
-        for i in range(ny):
-            y[i] += dt / 6.0 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i])
-        if not np.isfinite(y[0]) or abs(y[0]) > 10.0:
-            Q[k + 1:], Qd[k + 1:], Qdd[k + 1:], F[k + 1:] = np.nan, np.nan, np.nan, np.nan
-            PL[k + 1:] = np.nan
+        if not _advance(y, k1, k2, k3, k4, dt, k, Q, Qd, Qdd, F, PL):
             break
     return Q, Qd, Qdd, F, PL
 
@@ -203,37 +222,26 @@ def simulate_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, 
     for k in range(n):
         F[k] = _rates_with_elements(y, xc[k], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp,
                                     kv, Aw, Wq, Wv, Fw, pe, ia, ib, ne, k1, fe, ws)
-        PL[k] = y[2 * nq]
-        for i in range(nq):
-            Q[k, i] = y[i]
-            Qd[k, i] = y[nq + i]
-            Qdd[k, i] = k1[nq + i]
+        _record(k, y, k1, nq, Q, Qd, Qdd, PL)
         if k == n - 1:
             break
         xm = 0.5 * (xc[k] + xc[k + 1])
-        for i in range(ny):
-            yt[i] = y[i] + 0.5 * dt * k1[i]
+        _trial(yt, y, k1, 0.5 * dt)
         _rates_with_elements(yt, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
                              Wv, Fw, pe, ia, ib, ne, k2, fe, ws)
-        for i in range(ny):
-            yt[i] = y[i] + 0.5 * dt * k2[i]
+        _trial(yt, y, k2, 0.5 * dt)
         _rates_with_elements(yt, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
                              Wv, Fw, pe, ia, ib, ne, k3, fe, ws)
-        for i in range(ny):
-            yt[i] = y[i] + dt * k3[i]
+        _trial(yt, y, k3, dt)
         _rates_with_elements(yt, xc[k + 1], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv,
                              Aw, Wq, Wv, Fw, pe, ia, ib, ne, k4, fe, ws)
-        for i in range(ny):
-            y[i] += dt / 6.0 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i])
-        if not np.isfinite(y[0]) or abs(y[0]) > 10.0:
-            Q[k + 1:], Qd[k + 1:], Qdd[k + 1:], F[k + 1:] = np.nan, np.nan, np.nan, np.nan
-            PL[k + 1:] = np.nan
+        if not _advance(y, k1, k2, k3, k4, dt, k, Q, Qd, Qdd, F, PL):
             break
     return Q, Qd, Qdd, F, PL
 
 
 #: the kernels a stage set's compiled element carries (`vtable.hydraulics.compose`) ...
-KERNELS = (_rates, simulate_reduced)
+KERNELS = (_rates, _record, _trial, _advance, simulate_reduced)
 #: ... and those it carries when the model has force elements (their laws written in too)
 ELEMENT_KERNELS = (*KERNELS, _rates_with_elements, simulate_elements)
 
