@@ -4,7 +4,7 @@ one catalog effect hidden with `--effect`, noise-free or with `--noise`. The vir
 always has its own pitch system and Table B.5's RC filter on ΔP, which the bare reduced
 model lacks, so the exact set a diagnosis must end with is {pitch_flexibility,
 force_feedback_filter} plus the hidden effect (`expected`). Used by
-tests/test_readme_campaigns.py and benchmarks/bench_readme_campaigns.py."""
+tests/acceptance/test_readme_campaigns.py and benchmarks/bench_readme_campaigns.py."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """The diagnosis scorecard (issue 12): generated cases with a hidden truth, their campaigns
 made by the independent truth simulator (tests/truth, not vtable's own simulator), the
 diagnosis of each, and the acceptance rules. Shared by benchmarks/bench_diagnosis_scorecard.py
-and tests/test_scorecard.py.
+and tests/acceptance/test_scorecard.py.
 
 Every case is three runs of one configuration: band-limited random 0-25 Hz at two spans
 (`RANDOM_S` s each) and an earthquake (El Centro 1940 NS or a synthetic Kanai-Tajimi record,
@@ -49,7 +49,7 @@ RANDOM_S = 12.0  # s, each random run
 SPANS_IN = (0.1, 0.5)  # peak command of the two random runs
 QUAKE_PEAK_IN = 3.0  # peak command of the earthquake run (El Centro reaches ~17 in/s)
 #: vtable's EERC preset: slab + ribs c.o.m. above the horizontal actuator line (in), the
-#: value the run's [table] preset = "eerc" declares (tests/test_truth.py uses the same)
+#: value the run's [table] preset = "eerc" declares (tests/models/test_truth.py uses the same)
 DECLARED_COM_IN = 20.2
 
 KINDS = ("in_catalog", "null", "misdeclared_null", "outside")
@@ -206,7 +206,7 @@ def _cases() -> list[Case]:
                   "pump_pressure_drop": {"drop_psi_per_gpm": 5.0}}, **vary()))
     # the table accelerometer on a mount (issue 32), appended so that no earlier case's
     # rate, noise or seed changes: a stiff mount in front of the §2.3 filter, and the one
-    # LNEC's run shows (tests/test_sensor_mount.py)
+    # LNEC's run shows (tests/acceptance/test_sensor_mount.py)
     for j, dose in enumerate(({"f_m": 40.0, "zeta_m": 0.1, "f_c": 100.0},
                               {"f_m": 17.0, "zeta_m": 0.09, "f_c": 30.0})):
         out.append(C(f"sensor_mount_{j + 1}", "in_catalog", {"sensor_mount": dose},
@@ -426,9 +426,10 @@ def totals(results: list[tuple[Case, dict]]) -> dict[str, Any]:
 
 # ---------------------------------------------------------------------------------------------
 # issue 18's new cases (CASES_18: in the benchmark with --set 18; the cached-subset test
-# does not diagnose them, tests/test_scorecard.py checks their rule, `judge18`). Each is a
-# truth table (its controller declared in [table.controller] when not the preset's own,
-# force_measured when set, a platen mass off by platen_mass_factor undeclared), the true and
+# does not diagnose them, tests/acceptance/test_scorecard.py checks their rule, `judge18`).
+# Each is a truth table (its controller declared in [table.controller] when not the
+# preset's own, force_measured when set, a platen mass off by platen_mass_factor
+# undeclared), the true and
 # the declared specimen, the commands, and what a perfect diagnosis says: the exact effect
 # set, "unexplained", or "suspect declaration" naming the declared values the data push
 # beyond their bounds.

@@ -58,7 +58,7 @@ REGULARISATION = 0.05
 #: fixed-base frequencies (`NEAR_FIXED_BASE`; the report's warning, §10.2). Table 9.2's
 #: frame (ξ 1 %) needs 7.7 on the EERC table for x_t + θh to follow El Centro; at a cap
 #: of 4 (held at 4.06) its peak drift on the truth fell to 0.74 of the fixed-base peak
-#: (truth NRMS 1.3 %; tests/test_drive.py's SDOF campaign)
+#: (truth NRMS 1.3 %; tests/acceptance/test_drive.py's SDOF campaign)
 CAP = 10.0
 #: the largest amplification |H⁺| of any one correction (the iteration's step)
 STEP_CAP = 4.0

@@ -28,7 +28,7 @@ nodes' displaced positions (the moment M_y about O included: Σ η' F_ξ − ξ'
 
 The platen's accelerations at the step being solved are not known yet (they depend on
 what the model returns): the loads use the prediction 2 a_{k−1} − a_{k−2} from the two
-before (on the Table 9.2-like building of tests/test_opensees.py, the table's pitch
+before (on the Table 9.2-like building of tests/models/test_opensees.py, the table's pitch
 acceleration was 56 % off the converged solution at 1 kHz with a_{k−1}, 4 % with the
 prediction; 0.05 % at 8 kHz).
 """

@@ -53,7 +53,8 @@ def fast(argv: list[str]) -> list[str]:
         keep = shortest(runs)
         argv = [a for a in argv if a not in runs or a == keep]
     if verb == "diagnose":  # one cheap candidate; a user effect's own diagnosis is
-        # tests/test_user_effects.py's (test_with_the_file_it_ranks_first_and_closes_the_gap,
+        # tests/acceptance/test_user_effects.py's
+        # (test_with_the_file_it_ranks_first_and_closes_the_gap,
         # test_diagnose_ranks_the_valve_overlap_and_the_error_falls): here its file loads
         argv += ["--effects", "pitch_flexibility", "--max-rounds", "1", "--calibrate", "none"]
     return argv

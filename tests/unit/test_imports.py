@@ -18,7 +18,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 #: where each package's files are: (folder, dotted name of that folder)
 TREES = ((ROOT / "src" / "vtable", "vtable"), (ROOT / "controllers", "vtable.controllers"),
          (ROOT / "viz", "vtable.viz"))
@@ -298,12 +298,35 @@ def test_an_upward_arrow_is_caught():
     assert set(upward(bad)) == {("params", "models")}
 
 
+#: the folders tests live in, by kind (docs/development.md)
+TEST_KINDS = ("unit", "models", "acceptance", "real")
+
+
+def test_tests_are_in_their_folders_and_import_no_test_module():
+    """Every test module sits in one of `TEST_KINDS`; none imports another test module
+    (the shared pieces are the truth package, the helpers beside the folders, conftest)."""
+    tests = ROOT / "tests"
+    loose = sorted(p.name for p in tests.glob("test_*.py"))
+    assert not loose, f"test modules outside {TEST_KINDS}: {loose}"
+    found = sorted(tests.glob("*/test_*.py"))
+    assert {p.parent.name for p in found} <= set(TEST_KINDS), {p.parent.name for p in found}
+    assert len(found) > 70
+    bad = []
+    for p in found:
+        for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            bad += [f"{p.name} imports {n}" for n in names
+                    if n.split(".")[-1].startswith("test_")]
+    assert not bad, bad
+
+
 def test_every_package_is_installed():
     """pyproject.toml lists the packages one by one: a new one left out would be missing
     from `pip install .` (it was, for a moment, vtable.drive)."""
     import tomllib
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     listed = set(tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]
                  ["packages"])
     found = {".".join(p.parent.relative_to(root / "src").parts)

@@ -23,8 +23,8 @@ from vtable.signals.command import make_command
 from vtable.sim.experiment import load_specimen, run_experiment
 from vtable.units import G
 
-HERE = Path(__file__).parent / "opensees"
-EXAMPLES = Path(__file__).parents[1] / "examples"
+HERE = Path(__file__).parents[1] / "opensees"
+EXAMPLES = Path(__file__).parents[2] / "examples"
 
 
 def nrms(ref: np.ndarray, x: np.ndarray) -> float:

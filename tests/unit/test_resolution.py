@@ -27,7 +27,7 @@ def test_every_catalog_effect_has_a_figure_saying_how_and_when():
     assert set(data["agreement"]) == {res.BASE, *BUILT_IN}
     for v in data["agreement"].values():
         # the reduced model reproduces the multibody table to well under 1 % (the
-        # agreement tests of tests/test_effects.py hold each channel to 2 %)
+        # agreement tests of tests/models/test_effects.py hold each channel to 2 %)
         assert 0.001 < v["nrms"] < 0.01 and v["nrms"] <= v["worst_nrms"] < 0.02
     # the rule's sum against the standard table's pair measured together
     assert data["check"]["summed"] == pytest.approx(data["check"]["measured"], rel=0.05)

@@ -1,7 +1,7 @@
 """Controllers as objects (issue 18): the declared digital controller (PID with a filtered
 derivative and feedforward, TVC with a reference generator and acceleration feedback,
 notches, ΔP stabilisation) in the reduced model and the virtual table, against the
-closed loop x_t/x_c derived by hand in tests/test_truth_controllers.py (not vtable's
+closed loop x_t/x_c derived by hand in tests/models/test_truth_controllers.py (not vtable's
 code), and the truth simulator's runs."""
 
 from __future__ import annotations

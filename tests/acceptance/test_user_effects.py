@@ -21,7 +21,7 @@ from vtable.models.physics import Physics, nominal_open_loop
 from vtable.params import presets
 from vtable.sim import simulate
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "swivel_backlash.py"
 VALVE = ROOT / "examples" / "valve_overlap.py"
 GAP_IN = 0.005  # the hidden backlash: 5 mils of free play

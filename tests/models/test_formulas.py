@@ -21,7 +21,7 @@ from vtable.analytic.servo import (
 from vtable.params import OpenLoop, presets
 from vtable.params.virtual import split_rocking, virtual_table
 
-SRC = Path(__file__).resolve().parents[1] / "src" / "vtable"
+SRC = Path(__file__).resolve().parents[2] / "src" / "vtable"
 
 
 def test_loop_row_is_the_denominator_of_eq_6_15b():

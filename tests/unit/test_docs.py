@@ -23,7 +23,7 @@ from vtable.runs.channels import FORMAT_UNITS
 from vtable.runs.format import COMMAND_KEYS, COMMAND_KINDS
 from vtable.runs.meta import TOP_KEYS
 
-DOCS = Path(__file__).resolve().parents[1] / "docs"
+DOCS = Path(__file__).resolve().parents[2] / "docs"
 
 
 def _text(name: str) -> str:

@@ -13,7 +13,7 @@ import pytest
 
 from vtable.cli import main
 
-YIELDING = str(Path(__file__).resolve().parents[1] / "examples" / "yielding_frame.toml")
+YIELDING = str(Path(__file__).resolve().parents[2] / "examples" / "yielding_frame.toml")
 G = 9.80665
 INCH = 0.0254
 

@@ -221,7 +221,7 @@ def test_a_cut_earthquake_shakes_as_the_whole_record_does():
         a_full, a_cut = acc(full)[:n], acc(cut)
         # the same shaking: 1.03 g peak in both, 2.0-2.1 % NRMS apart, all of it in the last
         # 2 s (1.7 s of the 5) that bring the cut to rest, at most 0.014 g there
-        # (tests/test_simulate_edges.py holds the cut to the whole before them)
+        # (tests/unit/test_simulate_edges.py holds the cut to the whole before them)
         assert np.abs(a_cut).max() == pytest.approx(np.abs(a_full).max(), rel=0.01)
         assert np.linalg.norm(a_cut - a_full) / np.linalg.norm(a_full) < 0.03
         assert cut.table["peak_in"] == pytest.approx(2.0)  # the whole record's peak

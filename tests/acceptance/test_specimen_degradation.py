@@ -1,6 +1,6 @@
 """specimen_degradation (issue 32, deliverable 2): the specimen's stiffness falls during a
 run with the energy it dissipates (k/(1 + δεⁿ), Baber & Noori). Its law against a hand
-integration; both models agree (tests/test_effects.py's DOSES); the notch it moves is read
+integration; both models agree (tests/models/test_effects.py's DOSES); the notch it moves is read
 from the run alone and gates the effect; and a fit on a campaign the independent truth makes
 (tests/truth: its own law, the whole stiffness matrix times 1 − L(1 − e^(−E/E₀)), no vtable
 code) predicts the held-out end of the run far better than the time-invariant model."""

@@ -300,7 +300,7 @@ def test_from_a_diagnosis_json_with_a_txt_drive_and_a_figure(capsys):
 
 def test_docs_name_every_key_the_drive_json_has():
     result, *_ = drive("sdof", "elcentro")
-    doc = (Path(__file__).resolve().parents[1] / "docs" / "drive.md").read_text()
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "drive.md").read_text()
     keys = set(result) | set(result["settings"]) | set(result["baselines"])
     for m in (result["drive"], *result["baselines"].values()):
         keys |= set(m) | set(m.get("spectrum", {}))

@@ -164,7 +164,7 @@ def test_readme_table_description_is_the_lnec_preset():
     import re
     import tomllib
 
-    text = (pathlib.Path(__file__).parents[1] / "docs/tutorials/lab-table.md").read_text()
+    text = (pathlib.Path(__file__).parents[2] / "docs/tutorials/lab-table.md").read_text()
     sec = text.split("# Your own table", 1)[1]
     block = re.search(r"```toml\n(.*?)```", sec, re.S).group(1)
     d = tomllib.loads(block)

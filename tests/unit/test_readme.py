@@ -51,7 +51,7 @@ def test_readme_opens_with_the_two_commands():
     head = README.split("\n## ")[0]
     assert "python -m pip install . && vtable demo" in head
     assert 'python -m pip install -e ".[test]" && python -m pytest -q' in head
-    ci = (Path(__file__).resolve().parents[1] / ".ci" / "run").read_text()
+    ci = (Path(__file__).resolve().parents[2] / ".ci" / "run").read_text()
     assert 'python -m pip install -q -e ".[test]" && python -m pytest -q' in ci
 
 

@@ -24,7 +24,7 @@ from vtable.params.bodies import slab_body
 from vtable.sim.experiment import load_specimen
 from vtable.sim.linearize import linearize
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 IN = units.to_si(1.0, "in")
 
 

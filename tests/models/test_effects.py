@@ -31,7 +31,7 @@ def test_catalog_has_the_spec_names():
 
 #: every registered effect at a visible dose: the catalog's and the README's user effects
 #: (examples/swivel_backlash.py and examples/valve_overlap.py, loaded as a user would)
-EXAMPLES = [Path(__file__).resolve().parents[1] / "examples" / f
+EXAMPLES = [Path(__file__).resolve().parents[2] / "examples" / f
             for f in ("swivel_backlash.py", "valve_overlap.py")]
 DOSES = {**HIDDEN, "platen_resonator": {"m_r": 20.0, "f_r": 12.0, "xi_r": 0.03},
          "swivel_backlash": {"gap": 0.005}, "valve_overlap": {"overlap": 0.5},

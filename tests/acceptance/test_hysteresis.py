@@ -301,7 +301,7 @@ def test_ductility_on_the_table_matches_the_virtual_table():
     from vtable.sim.experiment import load_specimen, run_experiment
     from vtable.studies import yielding
 
-    spec = load_specimen(str(Path(__file__).parents[1] / "examples" / "yielding_frame.toml"))
+    spec = load_specimen(str(Path(__file__).parents[2] / "examples" / "yielding_frame.toml"))
     cmd = make_command("earthquake", peak_in=2.0, duration=10.0)
     acc = np.gradient(np.gradient(cmd.x, cmd.t), cmd.t)
     T_s = 1.0 / spec.frequency

@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 import scipy.signal as sg
 
-sys.path.insert(0, str(Path(__file__).parent))
+sys.path.insert(0, str(Path(__file__).parents[1]))
 import real_data
 import truth
 

@@ -25,7 +25,7 @@ from vtable.params.specimen import NoSpecimen
 from vtable.params.virtual import virtual_table_for
 from vtable.runs.table import table_from_dict
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "leaky_pi_controller.py"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "leaky_pi_controller.py"
 F = np.array([0.05, 0.3, 1.0, 3.0, 6.0, 10.0, 15.0, 22.0, 30.0])
 P, KI, TL = 1.2, 1.5, 4.0
 CONTROLLER = {"kind": "leaky_pi", "displacement_gain_v_per_m": 129.93, "p": P,
