@@ -310,7 +310,7 @@ def test_tests_are_in_their_folders_and_import_no_test_module():
     assert not loose, f"test modules outside {TEST_KINDS}: {loose}"
     found = sorted(tests.glob("*/test_*.py"))
     assert {p.parent.name for p in found} <= set(TEST_KINDS), {p.parent.name for p in found}
-    assert len(found) > 70
+    assert len(found) >= 70
     bad = []
     for p in found:
         for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):
