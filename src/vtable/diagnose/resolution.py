@@ -43,7 +43,7 @@ import numpy as np
 from vtable.diagnose.groups import group_prediction, group_signal, run_groups
 from vtable.diagnose.sampling import analysis_run, segments
 from vtable.diagnose.statistics import nrms
-from vtable.effects.registry import BUILT_IN
+from vtable.effects.registry import BUILT_IN, STANDARD
 from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
 from vtable.models.reduced import ReducedModel
@@ -149,7 +149,7 @@ def measure(names: Iterable[str] = BUILT_IN) -> str:
         lines.append(f"{name} = {{ nrms = {r:.6f}, worst_group = {_quote(g)}, "
                      f"worst_nrms = {w:.6f} }}")
         print(f"{name:<30} {r:.4%}  (worst: {g} {w:.3%})", file=sys.stderr)
-    pair = ("pitch_flexibility", "force_feedback_filter")
+    pair = STANDARD
     if set(pair) <= set(figures):
         r, _, _ = agreement({e: {} for e in pair})
         b = figures[BASE]

@@ -21,6 +21,8 @@ BUILT_IN = ("pitch_flexibility", "force_feedback_filter", "valve_flow_nonlineari
 #: what the standard virtual table has beyond the chapter-7 base: its pitch system (Table
 #: 8.1) and the RC filter on the horizontal ΔP feedback (Table B.5), at their defaults
 STANDARD = ("pitch_flexibility", "force_feedback_filter")
+#: the standard table's RC filter among them (`simulate --no-rc-filter` leaves it out)
+STANDARD_RC_FILTER = STANDARD[1]
 
 _REGISTRY: dict[str, Effect] = {}
 _USER: set[str] = set()

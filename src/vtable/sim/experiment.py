@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from vtable import units
+from vtable.effects.registry import STANDARD_RC_FILTER
 from vtable.errors import VtableError
 from vtable.models.physics import Physics
 from vtable.opensees.model import load_model
@@ -96,7 +97,7 @@ def load_specimen(name_or_path: str | None) -> Specimen:
 #: `--valve nonlinear`: the appendix C valve, an alias for these two effects
 NONLINEAR_VALVE = ("valve_flow_nonlinearity", "flow_saturation")
 #: the standard table's ΔP feedback RC filter (eq B.4), left out by `rc_filter=False`
-RC_FILTER = "force_feedback_filter"
+RC_FILTER = STANDARD_RC_FILTER
 
 
 def experiment_physics(specimen: Specimen, vt: VirtualTable | None = None, *,
