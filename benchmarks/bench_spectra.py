@@ -8,7 +8,7 @@ import timeit
 import numpy as np
 
 from vtable.signals.records import el_centro
-from vtable.studies.spectra import response_spectrum
+from vtable.signals.spectra import response_spectrum
 
 
 def main() -> None:

@@ -11,8 +11,8 @@ from vtable.errors import VtableError
 from vtable.params import ShearBuilding, presets
 from vtable.signals.processing import process_record
 from vtable.signals.records import el_centro
+from vtable.signals.spectra import response_spectrum
 from vtable.studies import interaction as ia
-from vtable.studies.spectra import response_spectrum
 
 
 @pytest.fixture(scope="module")

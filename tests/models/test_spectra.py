@@ -4,7 +4,7 @@ import pytest
 from vtable.errors import VtableError
 from vtable.runs.model import Run
 from vtable.signals import records
-from vtable.studies.spectra import (
+from vtable.signals.spectra import (
     _peaks,
     channel_spectrum,
     effective_spectrum,

@@ -86,7 +86,7 @@ def test_numba_cache_never_inside_the_installed_package(wheel, tmp_path):
                         str(target), str(wheel)], capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
     cache = tmp_path / "xdg"
-    code = ("import numpy as np; from vtable.studies import response_spectrum;"
+    code = ("import numpy as np; from vtable.signals.spectra import response_spectrum;"
             "s = response_spectrum(np.sin(np.arange(400) * 0.1), 0.01, np.array([0.5]), 0.05);"
             "print(float(s.psa[0]) > 0)")
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}

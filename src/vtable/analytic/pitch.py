@@ -12,7 +12,7 @@ from vtable.params.loops import HybridParams, StructureRatios, TwoDirectionalPar
 TWO_PI = 2 * np.pi
 
 
-def _structure_rows(st: StructureRatios, w_theta: float, xi_theta: float) -> np.ndarray:
+def structure_rows(st: StructureRatios, w_theta: float, xi_theta: float) -> np.ndarray:
     """Rows 4-6 (ẍ_t, ẍ_r, ẍ_s^t) of eqs 8.13-8.15 over [x_t, x_r, x_st, v_t, v_r, v_st]."""
     ws, xs, u, v = st.omega_s, st.xi_s, st.u, st.v
     a, c, e = 2 * xs * ws * u, 2 * xs * ws * v, 2 * xs * ws
@@ -52,7 +52,7 @@ class HybridModel(LinearModel):
         wt = TWO_PI * p.f_theta
         A = np.zeros((7, 7))
         A[0:3, 3:6] = np.eye(3)
-        A[3:6, 0:6] = _structure_rows(p.structure, wt, p.xi_theta)
+        A[3:6, 0:6] = structure_rows(p.structure, wt, p.xi_theta)
         A[3, 6] = 1.0
         B = np.zeros((7, 1))
         A[6, [0, 3, 6]], B[6, 0] = loop_row(ol)
@@ -74,7 +74,7 @@ class TwoDirectionalTable(LinearModel):
         ol, pl = p.open_loop, p.pitch_loop
         A = np.zeros((8, 8))
         A[0:3, 3:6] = np.eye(3)
-        A[3:6, 0:6] = _structure_rows(p.structure, TWO_PI * p.f_p, p.xi_p)
+        A[3:6, 0:6] = structure_rows(p.structure, TWO_PI * p.f_p, p.xi_p)
         A[3, 6] = 1.0
         A[4, 7] = 1.0
         B = np.zeros((8, 2))

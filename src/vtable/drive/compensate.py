@@ -49,7 +49,7 @@ from vtable.params.limits import check_force, check_motion, motion_limits, share
 from vtable.params.specimen import SDOFSpecimen
 from vtable.signals import band_limited_random
 from vtable.signals.content import CONTENT_DB
-from vtable.studies.spectra import response_spectrum
+from vtable.signals.spectra import response_spectrum
 
 OBJECTIVES = ("effective", "table")
 #: Tikhonov weight λ, relative to the largest |H| in the band

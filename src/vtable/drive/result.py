@@ -14,7 +14,7 @@ import numpy as np
 
 from vtable.drive.target import Target
 from vtable.jsonable import jsonable
-from vtable.studies.spectra import response_spectrum
+from vtable.signals.spectra import response_spectrum
 
 #: the response spectrum's frequencies (Hz) and damping (issue 20: 0.5-20 Hz, 5 %)
 SPECTRUM_HZ = (0.5, 20.0)

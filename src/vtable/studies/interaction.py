@@ -19,8 +19,9 @@ from vtable._numba import njit
 from vtable.analytic.base import LinearModel
 from vtable.analytic.closed_forms import effective_height_first_mode, modal_mass
 from vtable.analytic.hold import first_order_hold
+from vtable.analytic.interaction import FixedBaseModel, RockingModel
 from vtable.analytic.mechanical import MechanicalModel
-from vtable.analytic.pitch import HybridModel, _structure_rows
+from vtable.analytic.pitch import HybridModel
 from vtable.analytic.sdof import TableSDOF
 from vtable.analytic.structure import building_matrices, fixed_base_modes
 from vtable.errors import VtableError
@@ -31,7 +32,6 @@ from vtable.params.loops import (
     MechanicalParams,
     OpenLoop,
     RockingSpring,
-    StructureRatios,
     TableSDOFParams,
 )
 from vtable.params.specimen import SDOFSpecimen, ShearBuilding, Specimen
@@ -39,44 +39,6 @@ from vtable.units import G
 
 TWO_PI = 2 * np.pi
 MODELS = ("fixed base", "one-directional", "rocking", "hybrid", "mechanical")
-
-
-def _displacement_driven(A: np.ndarray, b: np.ndarray, positions: dict[str, np.ndarray]
-                         ) -> tuple[np.ndarray, dict[str, tuple]]:
-    """ż = A z + b ẍ_c rewritten for input x_c: w = z - A b x_c - b ẋ_c obeys
-    ẇ = A w + A² b x_c, and a position output c z (c b = 0) is c w + (c A b) x_c."""
-    Ab = A @ b
-    return (A @ Ab).reshape(-1, 1), {k: (c, [c @ Ab]) for k, c in positions.items()}
-
-
-class FixedBaseModel(LinearModel):
-    """The specimen alone on an ideal table: ẍ_s + 2ξ_sω_s ẋ_s + ω_s² x_s = -ẍ_c."""
-
-    def __init__(self, st: StructureRatios) -> None:
-        ws = st.omega_s
-        A = np.array([[0.0, 1.0], [-ws**2, -2 * st.xi_s * ws]])
-        B, out = _displacement_driven(A, np.array([0.0, -1.0]), {"x_s": np.array([1.0, 0])})
-        super().__init__(**self._build(A, B, ("x_s", "v_s"), ("x_c",), out,
-                                       title="fixed-base structure"))
-
-
-class RockingModel(LinearModel):
-    """§9.4 rocking model (Fig 5.2): the table follows x_c horizontally and only rocks on
-    the spring and dashpot ω_θ, ξ_θ. Rows of eqs 8.13-8.15 with x_t prescribed, written
-    in y = x_s^t - x_t: states y, x_r = θh, ẏ, ẋ_r; deformation x_s = y - x_r."""
-
-    def __init__(self, st: StructureRatios, f_theta: float, xi_theta: float) -> None:
-        R = _structure_rows(st, TWO_PI * f_theta, xi_theta)  # over [x_t,x_r,x_st,v_t,v_r,v_st]
-        # substitute x_st = y + x_t: the x_t terms cancel; ÿ = ẍ_st - ẍ_c
-        A = np.zeros((4, 4))
-        A[0:2, 2:4] = np.eye(2)
-        A[2] = [R[2, 2], R[2, 1], R[2, 5], R[2, 4]]
-        A[3] = [R[1, 2], R[1, 1], R[1, 5], R[1, 4]]
-        B, out = _displacement_driven(A, np.array([0.0, 0, -1, 0]),
-                                      {"x_s": np.array([1.0, -1, 0, 0]),
-                                       "theta_h": np.array([0.0, 1, 0, 0])})
-        super().__init__(**self._build(A, B, ("y", "x_r", "v_y", "v_r"), ("x_c",), out,
-                                       title="rocking model"))
 
 
 # ---- the table: one source for the EERC values ------------------------------------------

@@ -28,10 +28,10 @@ from vtable.jsonable import jsonable
 from vtable.signals import COMMAND_DT, Command
 from vtable.signals.processing import process_record
 from vtable.signals.records import load_record
+from vtable.signals.spectra import effective_motion, response_spectrum
 from vtable.sim.experiment import load_specimen
 from vtable.sim.run import simulate, standard_physics
 from vtable.studies.interaction import assess
-from vtable.studies.spectra import effective_motion, response_spectrum
 
 FORMAT = "vtable-study/1"
 

@@ -24,8 +24,8 @@ from vtable.results import Demo, DemoSimulation, SimulationSummary, Written
 from vtable.runs import write_run
 from vtable.runs.model import with_noise
 from vtable.signals import make_command
+from vtable.signals.spectra import response_spectrum
 from vtable.sim.experiment import load_specimen, load_table, run_experiment
-from vtable.studies import response_spectrum
 from vtable.units import to_si
 from vtable.verbs.analytic import margins_dict, modes_dict
 from vtable.viz.rerun_scene import log_run
