@@ -32,6 +32,7 @@ from vtable.diagnose.calibration import Calibration, bounding_setting
 from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import compare
 from vtable.diagnose.evidence import evidence_view
+from vtable.diagnose.judge import judged, not_fitted
 from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
 from vtable.diagnose.projected import Frame
@@ -51,6 +52,7 @@ from vtable.diagnose.selection import LATE, failing, preferred, preferred_note
 from vtable.diagnose.states import split
 from vtable.diagnose.statistics import Comparison, held_out_gain
 from vtable.diagnose.verdict import State, diagnosis_of
+from vtable.diagnose.workers import Fit
 from vtable.effects.registry import default_candidates
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
@@ -133,14 +135,14 @@ class Diagnoser:
             return None
         return wider, [b["parameter"] for b in lean]
 
-    def _widened(self, lean: tuple, fitted: tuple) -> tuple:
+    def _widened(self, lean: tuple, fitted: Fit) -> tuple:
         """(wider calibration, the parameters, the refit's held-out predictions) from the
         starting model's refit with `lean`'s bounds (`_leaning`)."""
         wider, names = lean
         self.notes.append(f"the calibrated starting model leans on its bounds "
                           f"({', '.join(names)}): candidates must also beat it refitted with "
                           f"--calibrate {wider.text()}")
-        return wider, names, self.predict(fitted[0])
+        return wider, names, self.predict(fitted.physics)
 
     def _pushed_beyond(self, st: State) -> list[dict[str, Any]]:
         """`bounds.pushed_beyond` of the final model."""
@@ -254,17 +256,7 @@ class Diagnoser:
                     break
                 drift = True
             k += 1
-            todo, skipped = [], {}
-            for e in self.catalog:
-                if current.has(e):
-                    continue
-                why = self._inapplicable(current.with_effect(e)) or \
-                    effect(e).unsupported(self.campaign) or \
-                    (LATE[drift] if (e in late) != drift else None)  # not this round's kind
-                if why:
-                    skipped[e] = why
-                else:
-                    todo.append(e)
+            todo, skipped = self._todo(current, late, drift)
             if not todo and not backward:
                 if not drift and late - set(current.effects):
                     drift = True
@@ -287,17 +279,7 @@ class Diagnoser:
                 break
             ranking.sort(key=lambda c: c.score)
             seeds.update({c.effect: c.params for c in ranking if not c.screened})
-            # SELECTION: the candidate with the largest held-out gain that passes the
-            # statistical criteria and whose fit is sound (no parameter at a bound, none
-            # entangled with the base) is added
-            passing = [c for c in ranking if self._admissible(c, widened)]
-            best = preferred(passing)
-            for c in ranking:
-                c.evidence = evidence(c, err, self.floor, cmp_cur)
-                if c is not best:
-                    c.predictions = None  # only the added model's predictions are kept
-            if best is not None and best is not passing[0]:
-                best.evidence += preferred_note(best, passing[0])
+            best = self._select(ranking, widened, err, cmp_cur)
             if best is not None:
                 st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
                 current, err, cost = best.physics, best.error_after, best.cost
@@ -331,6 +313,40 @@ class Diagnoser:
         progress(steps, steps, "done")
         return self._diagnosis(st, final_cmp, reason)
 
+    def _todo(self, current: Physics, late: set[str], drift: bool
+              ) -> tuple[list[str], dict[str, str]]:
+        """This round's candidates, and why each other catalog effect not in `current` is
+        not one: it cannot enter the model, the runs cannot show it, or it is not this
+        round's kind (what accumulates over a run is tried after the rest: `drift`)."""
+        todo, skipped = [], {}
+        for e in self.catalog:
+            if current.has(e):
+                continue
+            why = self._inapplicable(current.with_effect(e)) or \
+                effect(e).unsupported(self.campaign) or \
+                (LATE[drift] if (e in late) != drift else None)
+            if why:
+                skipped[e] = why
+            else:
+                todo.append(e)
+        return todo, skipped
+
+    def _select(self, ranking: list[Candidate], widened: tuple | None, err: float,
+                cmp_cur: Comparison) -> Candidate | None:
+        """SELECTION: of the candidates whose held-out gain passes the statistical criteria
+        and whose fit is sound (no parameter at a bound, none entangled with the base),
+        the preferred one (`selection.preferred`), or None; every candidate's evidence
+        written, only the chosen one's predictions kept."""
+        passing = [c for c in ranking if self._admissible(c, widened)]
+        best = preferred(passing)
+        for c in ranking:
+            c.evidence = evidence(c, err, self.floor, cmp_cur)
+            if c is not best:
+                c.predictions = None
+        if best is not None and best is not passing[0]:
+            best.evidence += preferred_note(best, passing[0])
+        return best
+
     def _admissible(self, c: Candidate, widened: tuple | None) -> bool:
         """Whether SELECTION would add `c`: its gain passes the statistical criteria, its
         fit is sound, and (when the starting model leans on its bounds, `widened`) it
@@ -341,25 +357,17 @@ class Diagnoser:
                                  c.physics, c.effect, self.table_view)
         return not c.failing() and not c.blocking and not c.stand_in
 
-    def _judged(self, st: State, name: str, fitted: tuple, spent: dict[str, float],
+    def _judged(self, st: State, name: str, fitted: Fit, spent: dict[str, float],
                 unrefined: str = "") -> Candidate:
-        """The candidate a fit (`workers.fitted`'s tuple) makes, scored held out."""
-        cand, train, flags, cost_, screened, pred, secs, _ = fitted
-        spent[name] = spent.get(name, 0.0) + secs if unrefined else secs
-        if isinstance(pred, Exception):  # the fit found no model it could build
-            return Candidate(name, dict(cand.effects[name]), float("inf"), train, "",
-                             len(effect(name).params), cand,
-                             [f"no valid model found: {pred}"], None)
-        err = compare(pred, self.runs, scored="held", floor=self.floor).error
-        gain = held_out_gain(st.stages[-1].predictions, pred, self.runs, self.campaign.noise)
-        return Candidate(name, dict(cand.effects[name]), err, train, "",
-                         len(effect(name).params), cand, flags, pred, screened, cost_, gain,
-                         self.table_view, unrefined=unrefined)
+        """The candidate a fit makes (`judge.judged`); its CPU seconds counted in `spent`."""
+        spent[name] = spent.get(name, 0.0) + fitted.cpu_s if unrefined else fitted.cpu_s
+        return judged(name, fitted, st.stages[-1].predictions, self.campaign, self.floor,
+                      self.table_view, unrefined)
 
     def _candidates(self, st: State, current: Physics, cost: float, todo: list[str],
                     backward: list[str], seeds: dict, spent: dict, lean: tuple | None,
                     progress, done: int, steps: int, k: int
-                    ) -> tuple[list[Candidate], dict[str, tuple], int]:
+                    ) -> tuple[list[Candidate], dict[str, Fit], int]:
         """A round's candidates, and the backward step's refits beside them: (the ranking,
         unsorted; the refits without each effect of `backward`; the progress count).
 
@@ -377,8 +385,9 @@ class Diagnoser:
         if not screen.present:
             for e in [e for e in todo if not self._linear(current.with_effect(e))]:
                 todo = [t for t in todo if t != e]
-                ranking.append(self._not_fitted(current.with_effect(e), e, cost, st,
-                                                screen.text()))
+                ranking.append(not_fitted(e, current.with_effect(e), cost, st.err,
+                                          st.stages[-1].predictions, self.campaign,
+                                          self.table_view, screen.text()))
                 done += 1
         # the costliest fits go first (what each took last round; nonlinear ones before
         # linear ones in the first), so that no long fit starts last on an idle core
@@ -400,8 +409,8 @@ class Diagnoser:
         if lean is not None:  # the starting model refitted with its leaning bounds widened
             jobs.insert(0, (("widened", ""), {"start": self.start, "calibration": lean[0]}))
         jobs += [(("screen", e), screened(e)) for e in todo]
-        left: dict[str, tuple] = {}
-        passed: dict[str, tuple] = {}
+        left: dict[str, Fit] = {}
+        passed: dict[str, Fit] = {}
         fitted_now: list[Candidate] = []
         for (kind, name), fitted in self.fits.dispatch(jobs):
             if kind == "without":
@@ -411,26 +420,26 @@ class Diagnoser:
                 self.widened = self._widened(lean, fitted)
                 continue
             done += 1
-            if fitted[-1] is None:  # screened out, refined at once, or no valid model
+            if fitted.passed is None:  # screened out, refined at once, or no valid model
                 c = self._judged(st, name, fitted, spent)
                 ranking.append(c)
                 fitted_now.append(c)
                 progress(done, steps, f"round {k}: tried {name}")
             else:
                 passed[name] = fitted
-                spent[name] = fitted[-2]
-        order = sorted(passed, key=lambda e: passed[e][3])
+                spent[name] = fitted.cpu_s
+        order = sorted(passed, key=lambda e: passed[e].cost)
         best: Candidate | None = None
         for c in fitted_now:  # a candidate refined in its screen's task may have won
             if not c.screened and not apart(c.physics) and self._admissible(c, self.widened) and \
                     (best is None or c.score < best.score):
                 best = c
         while order:
-            if best is not None and passed[order[0]][3] > REFINE_FACTOR * best.cost:
+            if best is not None and passed[order[0]].cost > REFINE_FACTOR * best.cost:
                 break
             batch, order = order[:max(1, self.workers)], order[max(1, self.workers):]
             batch.sort(key=lambda e: -spent.get(e, 0.0))
-            refits = [(("add", e), job(e, begin=passed[e][-1])) for e in batch]
+            refits = [(("add", e), job(e, begin=passed[e].passed)) for e in batch]
             for (_, name), fitted in self.fits.dispatch(refits):
                 c = self._judged(st, name, fitted, spent)
                 ranking.append(c)
@@ -441,23 +450,13 @@ class Diagnoser:
         for e in order:  # cannot win: kept where their screen left them
             ranking.append(self._judged(
                 st, e, passed[e], spent,
-                unrefined=f"its training cost after the screen ({passed[e][3]:.4g}) is above "
+                unrefined=f"its training cost after the screen ({passed[e].cost:.4g}) is above "
                           f"{REFINE_FACTOR:g} x that of {best.effect} refined "
                           f"({best.cost:.4g}): not refined further"))
             progress(done, steps, f"round {k}: tried {e}")
         return ranking, left, done
 
-    def _not_fitted(self, ph: Physics, name: str, cost: float, st: State,
-                    why: str) -> Candidate:
-        """A candidate the screen keeps from being fitted: at its defaults, credited with
-        the current model's predictions (no gain claimed), marked screened."""
-        pred = st.stages[-1].predictions
-        gain = held_out_gain(pred, pred, self.runs, self.campaign.noise)
-        return Candidate(name, dict(ph.effects[name]), st.err, float("nan"), "",
-                         len(effect(name).params), ph, [], pred, True, cost, gain,
-                         self.table_view, not_fitted=why)
-
-    def _backward(self, st: State, names: list[str], fitted: dict[str, tuple],
+    def _backward(self, st: State, names: list[str], fitted: dict[str, Fit],
                   progress, done: int, steps: int, k: int):
         """The backward step: the current model against each fit without one of `names`;
         the first effect whose keeping is not a gain `SELECTION` would count is removed
@@ -465,7 +464,7 @@ class Diagnoser:
         None."""
         pred_cur = st.stages[-1].predictions
         for name in names:
-            physics, _, _, cost, _, pred, _, _ = fitted[name]
+            physics, pred = fitted[name].physics, fitted[name].predictions
             if isinstance(pred, Exception):
                 continue
             fails = failing(held_out_gain(pred, pred_cur, self.runs, self.campaign.noise),
@@ -482,7 +481,7 @@ class Diagnoser:
             st.current, st.err, st.cmp = physics, err, None
             st.stages.append(DiagnosisStage(f"{len(st.stages)}_without_{name}", physics, pred))
             progress(done, steps, f"round {k}: removed {name}")
-            return physics, err, cost
+            return physics, err, fitted[name].cost
         return None
 
     def _diagnosis(self, st: State, final_cmp: Comparison | None, reason: str,

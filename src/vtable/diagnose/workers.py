@@ -12,8 +12,7 @@ loaded, where spawned ones would import everything again; they ignore Ctrl-C (th
 disposition they are forked with), which the parent handles.
 
 A diagnosis scatters its campaign to every worker once (`Tasks.campaign`) and submits
-`_fit` tasks: each returns what `fitted` does — (physics, train error, flags, cost,
-screened, predictions or the error that prevented them, CPU seconds). User files (effects
+`_fit` tasks: each returns what `fitted` does (a `Fit`). User files (effects
 and controller kinds registered with `--effects-from`, `--controller-from`) are sent to
 the workers as text and loaded there (`_load_files`), so a remote worker needs vtable
 installed, not the user's files. A stop (Ctrl-C) sets a Dask `Event` each fit polls
@@ -35,7 +34,7 @@ import time
 import uuid
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import dask
 import distributed.utils
@@ -118,11 +117,22 @@ def _fit(campaign: Campaign, job: dict[str, Any], calibration: Calibration, stop
     return fitted(TableModel(**{"calibration": calibration, **job}, stop=stop), campaign)
 
 
-def fitted(model, campaign: Campaign) -> tuple:
-    """Fit `model` (a `TableModel`) on `campaign`: (physics, train error, flags, cost,
-    screened, its predictions or the error that prevented them, CPU seconds of this
-    thread, where a screen that passed stopped or None) — what a candidate's fit hands the
-    diagnosis, in a worker or in its own process."""
+class Fit(NamedTuple):
+    """What a candidate's fit hands the diagnosis (`fitted`), from a worker or its own
+    process."""
+
+    physics: Any  # the fitted `Physics`
+    train_error: float
+    flags: list[str]
+    cost: float  # the training cost (data and priors)
+    screened: bool  # stopped by the screen (not refined)
+    predictions: Any  # each run's channels, or the error that prevented them
+    cpu_s: float  # CPU seconds of the thread that fitted it
+    passed: Any  # where a screen that passed stopped (fitted scale), or None
+
+
+def fitted(model, campaign: Campaign) -> Fit:
+    """Fit `model` (a `TableModel`) on `campaign` (`Fit`: what the diagnosis reads)."""
     t0 = time.thread_time()
     m = model.fit(campaign)
     try:
@@ -133,8 +143,8 @@ def fitted(model, campaign: Campaign) -> tuple:
     if not isinstance(pred, Exception):  # an effect fitted beyond what the runs reach
         flags += [why for name, v in m.physics_.effects.items()
                   if (why := effect(name).unseen(v, pred))]
-    return (m.physics_, m.train_error_, flags, m.cost_, m.screened_, pred,
-            time.thread_time() - t0, m.passed_)
+    return Fit(m.physics_, m.train_error_, flags, m.cost_, m.screened_, pred,
+               time.thread_time() - t0, m.passed_)
 
 
 # -- in the parent ----------------------------------------------------------------------
