@@ -28,8 +28,7 @@ def pytest_sessionfinish(session, exitstatus):
 def _catalog_as_shipped() -> tuple:
     from vtable.effects import registry
 
-    registry.names()  # the catalog's own effects, loaded
-    return dict(registry._REGISTRY), set(registry._USER), dict(registry._FILES)
+    return registry.EFFECTS.snapshot()  # the catalog's own effects, loaded
 
 
 _SHIPPED = _catalog_as_shipped()
@@ -38,10 +37,7 @@ _SHIPPED = _catalog_as_shipped()
 def _restore_catalog() -> None:
     from vtable.effects import registry
 
-    for live, shipped in zip((registry._REGISTRY, registry._USER, registry._FILES), _SHIPPED,
-                             strict=True):
-        live.clear()
-        live.update(shipped)
+    registry.EFFECTS.restore(_SHIPPED)
 
 
 @pytest.fixture(autouse=True)

@@ -4,83 +4,61 @@
 
 from __future__ import annotations
 
-import importlib
 from pathlib import Path
 
 from vtable.controllers.kinds.base import ControllerKind, ControlUse
 from vtable.errors import VtableError
-from vtable.userfile import run_user_file
+from vtable.userfile import Registry
 
 BUILT_IN = ("three_variable", "pid", "tvc")
-_REGISTRY: dict[str, ControllerKind] = {}
-_FILES: dict[str, str] = {}  # a lab's kind -> the file that registered it
 
 
-def _load_built_in() -> None:
-    if not _REGISTRY:
-        for name in BUILT_IN:
-            _REGISTRY[name] = importlib.import_module(f"vtable.controllers.kinds.{name}").KIND
+def _check(kind: ControllerKind, where: str) -> None:
+    if not isinstance(kind, ControllerKind):
+        raise VtableError(f"register() takes a ControllerKind, got {type(kind).__name__}")
+
+
+KINDS: Registry[ControllerKind] = Registry(
+    BUILT_IN, "vtable.controllers.kinds.{}", "KIND", prefix="vtable_user_controller_",
+    flag="--controller-from", check=_check,
+    unknown=lambda name, known: (f"controller kind {name!r} is not known; expected one of "
+                                 f"{', '.join(known)} (a lab's own: --controller-from FILE)"))
 
 
 def register(kind: ControllerKind) -> ControllerKind:
     """Add a lab's controller kind; a name the catalog has is refused."""
-    _load_built_in()
-    if not isinstance(kind, ControllerKind):
-        raise VtableError(f"register() takes a ControllerKind, got {type(kind).__name__}")
+    _check(kind, "register()")
     if kind.name in BUILT_IN:
         raise VtableError(f"controller kind {kind.name!r} is the catalog's; name yours "
                           "another way")
-    _REGISTRY[kind.name] = kind
-    _FILES.pop(kind.name, None)  # load_file records it again when it is loading one
-    _LOADING.append(kind.name)
-    return kind
-
-
-_LOADING: list[str] = []  # the kinds registered while a file loads (load_file)
+    return KINDS.add(kind.name, kind, KINDS.loading_file or "register()")
 
 
 def names() -> list[str]:
-    _load_built_in()
-    return list(_REGISTRY)
+    return KINDS.names()
 
 
 def get(name: str) -> ControllerKind:
-    _load_built_in()
-    if name not in _REGISTRY:
-        raise VtableError(f"controller kind {name!r} is not known; expected one of "
-                          f"{', '.join(_REGISTRY)} (a lab's own: --controller-from FILE)")
-    return _REGISTRY[name]
+    return KINDS.get(name)
 
 
 def load_file(path: str | Path) -> list[str]:
     """Run a lab's controller file (it calls `register`); returns the kinds it registered.
     Any problem is one line naming the file (`vtable.userfile.run_user_file`)."""
-    p = Path(path)
-    _load_built_in()
-    _LOADING.clear()
-    try:
-        resolved = run_user_file(p, "vtable_user_controller_", "--controller-from")
-    finally:
-        added = list(dict.fromkeys(_LOADING))
-        _LOADING.clear()
-    if not added:
-        raise VtableError(f"{p}: registers no controller kind (call "
-                          "vtable.controllers.kinds.register(...))")
-    for n in added:
-        _FILES[n] = str(resolved)
-    return added
+    return KINDS.load_file(path, "registers no controller kind (call "
+                                 "vtable.controllers.kinds.register(...))")
 
 
 def loaded(path: str | Path) -> bool:
     """Whether this process has loaded the file at `path` (`load_file`)."""
-    return str(Path(path).resolve()) in set(_FILES.values())
+    return KINDS.loaded(path)
 
 
 def source_file(name: str) -> str | None:
     """The file a lab's kind was loaded from (`load_file`); None for the catalog's and for
     one registered from code (another process cannot load it again)."""
-    return _FILES.get(name)
+    return KINDS.source_file(name)
 
 
-__all__ = ["BUILT_IN", "ControlUse", "ControllerKind", "get", "load_file", "names", "register",
-           "source_file"]
+__all__ = ["BUILT_IN", "KINDS", "ControlUse", "ControllerKind", "get", "load_file", "loaded",
+           "names", "register", "source_file"]

@@ -83,11 +83,12 @@ def test_simulate_and_compare_through_the_cli(tmp_path, capsys, table):
     d = json.loads((tmp_path / "c.json").read_text())
     assert d["error"] < 0.01, d["error"]  # the model that made the run reads it back
     # the same run read where the kind is not registered: one line, exit code 2
-    saved = kinds._REGISTRY.pop("leaky_pi")
+    saved = kinds.KINDS.snapshot()
+    kinds.KINDS.remove("leaky_pi")
     try:
         capsys.readouterr()
         code = main(["compare", f"{stem}.toml"])
         err = capsys.readouterr().err
         assert code == 2 and err.count("\n") == 1 and "leaky_pi" in err, err
     finally:
-        kinds._REGISTRY["leaky_pi"] = saved
+        kinds.KINDS.restore(saved)

@@ -3,13 +3,12 @@ docs/effects.md) and the ones users register from their own files."""
 
 from __future__ import annotations
 
-import importlib
 from pathlib import Path
 
 from vtable.effects.base import Effect
 from vtable.effects.verbs import check_verbs
 from vtable.errors import VtableError, did_you_mean
-from vtable.userfile import run_user_file
+from vtable.userfile import Registry
 
 #: the catalog, in the spec's order (modules of vtable.effects)
 BUILT_IN = ("pitch_flexibility", "force_feedback_filter", "valve_flow_nonlinearity",
@@ -23,20 +22,6 @@ BUILT_IN = ("pitch_flexibility", "force_feedback_filter", "valve_flow_nonlineari
 STANDARD = ("pitch_flexibility", "force_feedback_filter")
 #: the standard table's RC filter among them (`simulate --no-rc-filter` leaves it out)
 STANDARD_RC_FILTER = STANDARD[1]
-
-_REGISTRY: dict[str, Effect] = {}
-_USER: set[str] = set()
-_loaded = False
-
-
-def _load_built_in() -> None:
-    global _loaded
-    if _loaded:
-        return
-    _loaded = True
-    for name in BUILT_IN:
-        mod = importlib.import_module(f"vtable.effects.{name}")
-        _add(mod.EFFECT, f"vtable.effects.{name}")
 
 
 def _check(e: Effect, where: str) -> None:
@@ -62,9 +47,11 @@ def _check(e: Effect, where: str) -> None:
                           "reduced(m, p) and virtual(v, p)")
 
 
-def _add(e: Effect, where: str) -> None:
-    _check(e, where)
-    _REGISTRY[e.name] = e
+EFFECTS: Registry[Effect] = Registry(
+    BUILT_IN, "vtable.effects.{}", "EFFECT", prefix="vtable_user_effects_",
+    flag="--effects-from", check=_check,
+    unknown=lambda name, known: (f"unknown effect {name!r}{did_you_mean(name, known)}; the "
+                                 f"registry has {', '.join(known)}"))
 
 
 def register(effect: Effect) -> Effect:
@@ -72,37 +59,22 @@ def register(effect: Effect) -> Effect:
     the report and the recording). A name the catalog has is refused, and so is a verb
     one model cannot realise (`verbs.check_verbs`); registering the same user effect
     again replaces it."""
-    _load_built_in()
-    where = getattr(effect, "__module__", "") or "register()"
+    where = EFFECTS.loading_file or getattr(effect, "__module__", "") or "register()"
     if getattr(effect, "name", None) in BUILT_IN:
-        raise VtableError(f"{_SOURCE.get('file', where)}: effect name {effect.name!r} clashes "
-                          "with a built-in effect; choose another name")
-    _check(effect, _SOURCE.get("file", where))
-    check_verbs(effect, _SOURCE.get("file", where))
-    _add(effect, _SOURCE.get("file", where))
-    _USER.add(effect.name)
-    _FILES.pop(effect.name, None)  # load_file records it again when it is loading one
-    _SOURCE.setdefault("registered", []).append(effect.name)
-    return effect
-
-
-_SOURCE: dict = {}  # the user file being loaded (for messages)
+        raise VtableError(f"{where}: effect name {effect.name!r} clashes with a built-in "
+                          "effect; choose another name")
+    _check(effect, where)
+    check_verbs(effect, where)
+    return EFFECTS.add(effect.name, effect, where)
 
 
 def get(name: str) -> Effect:
-    _load_built_in()
-    try:
-        return _REGISTRY[name]
-    except KeyError:
-        raise VtableError(f"unknown effect {name!r}{did_you_mean(name, _REGISTRY)}; "
-                          f"the registry has "
-                          f"{', '.join(_REGISTRY)}") from None
+    return EFFECTS.get(name)
 
 
 def names() -> list[str]:
     """Every registered effect: the catalog's, then users'."""
-    _load_built_in()
-    return list(_REGISTRY)
+    return EFFECTS.names()
 
 
 def default_candidates() -> list[str]:
@@ -128,7 +100,7 @@ def parse_spec(text: str, where: str = "--effect") -> tuple[str, dict[str, float
 
 
 def is_user(name: str) -> bool:
-    return name in _USER
+    return EFFECTS.is_user(name)
 
 
 def load_file(path: str | Path) -> list[str]:
@@ -136,31 +108,15 @@ def load_file(path: str | Path) -> list[str]:
     registered. Any problem — a missing file, a syntax error, an exception while it runs,
     a bad declaration, a name clash, registering nothing — is one line naming the file
     (`vtable.userfile.run_user_file`)."""
-    p = Path(path)
-    _load_built_in()
-    _SOURCE.clear()
-    _SOURCE["file"] = str(p)
-    try:
-        resolved = run_user_file(p, "vtable_user_effects_", "--effects-from")
-    finally:
-        done = list(_SOURCE.get("registered", []))
-        _SOURCE.clear()
-    if not done:
-        raise VtableError(f"{p}: registers no effect (call vtable.effects.register(...))")
-    for name in done:
-        _FILES[name] = str(resolved)
-    return done
-
-
-_FILES: dict[str, str] = {}  # user effect -> the file that registered it
+    return EFFECTS.load_file(path, "registers no effect (call vtable.effects.register(...))")
 
 
 def loaded(path: str | Path) -> bool:
     """Whether this process has loaded the file at `path` (`load_file`)."""
-    return str(Path(path).resolve()) in set(_FILES.values())
+    return EFFECTS.loaded(path)
 
 
 def source_file(name: str) -> str | None:
     """The file a user's effect was loaded from (`load_file`); None for the catalog's and
     for one registered from code (another process cannot load it again)."""
-    return _FILES.get(name)
+    return EFFECTS.source_file(name)
