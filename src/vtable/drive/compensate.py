@@ -29,7 +29,6 @@ elongation (the record slowed by the ratio of the fixed-base to the coupled freq
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -39,15 +38,13 @@ import scipy.signal
 from vtable.analytic.structure import specimen_frequencies
 from vtable.diagnose.model import TableModel
 from vtable.drive.notes import above_band_note, cap_note
+from vtable.drive.plant import BAND_HZ, DrivePlant, driven
 from vtable.drive.result import DriveResult, Played, acceleration, nrms, spectrum_error
 from vtable.drive.target import Target
 from vtable.errors import VtableError
 from vtable.ident.structure import effective_height
-from vtable.ident.tf import transfer_function
-from vtable.models.reduced import ReducedModel
 from vtable.params.limits import check_force, check_motion, motion_limits, share_above
 from vtable.params.specimen import SDOFSpecimen
-from vtable.signals import band_limited_random
 from vtable.signals.content import CONTENT_DB
 from vtable.signals.spectra import response_spectrum
 
@@ -65,8 +62,6 @@ STEP_CAP = 4.0
 #: the iteration stops when the predicted NRMS error falls by less than this fraction
 STALL = 0.02
 MAX_ITERATIONS = 8
-#: the band the inverse acts in (Hz); above it the drive is the target's
-BAND_HZ = (0.0, 30.0)
 #: |D|/|T| is a ratio to the target: where the target holds nothing it is leakage over
 #: leakage (a 2 Hz burst's "largest amplification" was 3e145 at 30 Hz), so the
 #: amplification is taken, and capped, only where the target's acceleration power (averaged
@@ -96,55 +91,6 @@ UPDATE_BAND_HZ = 5.0
 #: 4th-order weights): friction the model lacks shows at 6-20 Hz in the acceleration ~10x
 #: above its noise, and not at all through the displacement's (2 % noise, the truth)
 UPDATE_CROSSOVER_HZ = 2.0
-
-
-def driven(model: TableModel):
-    """(the model's physics a drive is played on, its specimen state or None): of a model
-    fitted on several specimen states, the state of the campaign's last run (the specimen
-    as the runs left it)."""
-    camp = getattr(model, "campaign_", None)
-    if camp is None or not model.physics_.states:
-        return model.physics_, None
-    state = camp.state(camp.runs[-1])
-    return model.physics_.in_state(state), state
-
-
-@dataclass
-class DrivePlant:
-    """The calibrated model a drive is played on: the fitted `TableModel`'s reduced model
-    and the effective height h of x_eff = x_t + θh."""
-
-    model: TableModel
-    h: float
-
-    def __post_init__(self) -> None:
-        self.physics, self.state = driven(self.model)
-        self.reduced = ReducedModel(self.physics, self.model.vt)
-
-    def play(self, t: np.ndarray, d: np.ndarray) -> dict[str, np.ndarray]:
-        """The model's channels (SI) under drive `d`, with x_t, x_eff and the storey
-        drift (top relative to the effective base) added."""
-        out = dict(self.reduced.simulate(t, d))
-        th = out.get("pitch_disp", np.zeros_like(d))
-        out["x_t"] = out["avg_hdisp"]
-        out["x_eff"] = out["avg_hdisp"] + self.h * th
-        out["a_t"] = out["avg_hacc"]
-        out["a_eff"] = out["avg_hacc"] + self.h * out.get("pitch_acc", np.zeros_like(d))
-        if "pot_n_sw" in out:
-            out["drift"] = out["pot_n_sw"] - out["avg_hdisp"] - self.reduced.h_top * th
-        return out
-
-    def frequency_response(self, output: str, fs: float, peak: float,
-                           seconds: float = 60.0, seed: int = 0
-                           ) -> tuple[np.ndarray, np.ndarray]:
-        """H1 from the drive to `output` (a `play` channel: x_eff, x_t, drift) over a
-        random drive of `peak` (m), flat over 0-30 Hz (`vtable.signals.
-        band_limited_random`), played on the model: what a lab's white-noise run gives."""
-        t, d = band_limited_random(seconds - 1 / fs, 1 / fs, BAND_HZ, peak=peak, seed=seed)
-        d = d * scipy.signal.windows.tukey(len(d), 0.05)
-        y = self.play(t, d)[output]
-        tf = transfer_function(d, y, fs, 2048 if len(d) >= 8 * 1024 else 512)
-        return tf.f, tf.H
 
 
 def regularised_inverse(f: np.ndarray, H: np.ndarray, lam: float, cap: float,
@@ -348,35 +294,11 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
     # the corrections act in the band only: above it the drive stays the target's (a
     # correction there would add the target's content again at every iteration)
     Hc = Hi * np.clip((band[1] - f) / (0.1 * band[1]), 0.0, 1.0)
-    bias = np.zeros_like(T)
     if measured is None:
-        d = at_rest(apply_filter(T, fs, f, Hi), fs)
+        d, bias = at_rest(apply_filter(T, fs, f, Hi), fs), np.zeros_like(T)
     else:
-        d0, y0, *a0 = (np.asarray(v, dtype=float) for v in measured)
-        if any(len(v) != len(T) for v in (d0, y0, *a0)):
-            raise VtableError(f"the measured run has {len(d0)} samples at {fs:g} Hz, the "
-                              f"target {len(T)}: play the drive as written")
-        played = plant.play(t, d0)
-        bias = model_miss(y0 - played[key], fs,
-                          a0[0] - played["a_eff" if objective == "effective" else "a_t"]
-                          if a0 else None, band[1])
-        d = d0
-    out = plant.play(t, d)
-    history = [nrms(out[key] + bias - T, T)]
-    best = (history[0], d, out)
-    for _ in range(max_iterations):
-        d = at_rest(d + apply_filter(T - out[key] - bias, fs, f, Hc), fs)
-        out = plant.play(t, d)
-        history.append(nrms(out[key] + bias - T, T))
-        if history[-1] < best[0]:
-            stalled = history[-1] > best[0] * (1 - STALL)
-            best = (history[-1], d, out)
-            if stalled:
-                break
-        else:
-            break
-    _, d, out = best
-    uncapped = best[0]
+        d, bias = _from_measured(plant, target, measured, objective, band[1])
+    uncapped, d, out, history = _iterate(plant, target, d, bias, key, f, Hc, max_iterations)
     d, out, amp = capped_near_fixed_base(plant, t, T, d, out, cap, fs, band[1])
     capped = nrms(out[key] + bias - T, T)
     check_limits(model.vt, t, d, out.get("h1_force"))
@@ -409,15 +331,64 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
                                     "correction_band_hz": band[1], "table_band_hz": bw},
                       h, [n for n in notes if n is not None], response=response)
     if baselines:
-        res.baselines.append(_played("target as it is", T, plant.play(t, T), target, model,
-                                     fs))
-        if objective == "effective":
-            hz = compensate(model, target, h, "table", regularisation, cap, max_iterations,
-                            baselines=False, band_hz=band_hz)
-            res.baselines.append(_played("horizontal-only correction", hz.drive.drive,
-                                         hz.drive.channels, target, model, fs))
-        res.baselines.append(_elongated(plant, target, model, fs))
+        res.baselines += _baselines(plant, model, target, h, objective, regularisation, cap,
+                                    max_iterations, band_hz)
     return res
+
+
+def _from_measured(plant: DrivePlant, target: Target, measured: tuple, objective: str,
+                   band_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """The lab loop's start (`compensate`'s `measured`): the drive played, and what the
+    model lacks of the motion the lab measured with it, low-passed (`model_miss`)."""
+    T, t, fs = target.x, target.t, target.fs
+    key = "x_eff" if objective == "effective" else "x_t"
+    d0, y0, *a0 = (np.asarray(v, dtype=float) for v in measured)
+    if any(len(v) != len(T) for v in (d0, y0, *a0)):
+        raise VtableError(f"the measured run has {len(d0)} samples at {fs:g} Hz, the "
+                          f"target {len(T)}: play the drive as written")
+    played = plant.play(t, d0)
+    bias = model_miss(y0 - played[key], fs,
+                      a0[0] - played["a_eff" if objective == "effective" else "a_t"]
+                      if a0 else None, band_hz)
+    return d0, bias
+
+
+def _iterate(plant: DrivePlant, target: Target, d: np.ndarray, bias: np.ndarray, key: str,
+             f: np.ndarray, Hc: np.ndarray, max_iterations: int) -> tuple:
+    """The iterations on the model from the drive `d`: each adds the inverse `Hc` of the
+    remaining error, until it stalls (`STALL`), grows, or `max_iterations` are done.
+    Returns (the best NRMS, its drive, the model's channels for it, the NRMS history)."""
+    T, t, fs = target.x, target.t, target.fs
+    out = plant.play(t, d)
+    history = [nrms(out[key] + bias - T, T)]
+    best = (history[0], d, out)
+    for _ in range(max_iterations):
+        d = at_rest(d + apply_filter(T - out[key] - bias, fs, f, Hc), fs)
+        out = plant.play(t, d)
+        history.append(nrms(out[key] + bias - T, T))
+        if history[-1] < best[0]:
+            stalled = history[-1] > best[0] * (1 - STALL)
+            best = (history[-1], d, out)
+            if stalled:
+                break
+        else:
+            break
+    return (*best, history)
+
+
+def _baselines(plant: DrivePlant, model: TableModel, target: Target, h: float,
+               objective: str, regularisation: float, cap: float, max_iterations: int,
+               band_hz: float) -> list[Played]:
+    """What the drive is measured against: the target played as it is, the horizontal-only
+    correction (for the effective objective), and §10.2's time-scale elongation."""
+    fs, T = target.fs, target.x
+    out = [_played("target as it is", T, plant.play(target.t, T), target, model, fs)]
+    if objective == "effective":
+        hz = compensate(model, target, h, "table", regularisation, cap, max_iterations,
+                        baselines=False, band_hz=band_hz)
+        out.append(_played("horizontal-only correction", hz.drive.drive, hz.drive.channels,
+                           target, model, fs))
+    return [*out, _elongated(plant, target, model, fs)]
 
 
 def _played(name: str, d: np.ndarray, out: dict[str, np.ndarray], target: Target,
