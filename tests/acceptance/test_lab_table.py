@@ -186,3 +186,41 @@ def dataclasses_equal(a, b) -> bool:
     return same and all(getattr(sa, f.name) == pytest.approx(getattr(sb, f.name), rel=1e-12)
                         for f in dataclasses.fields(sa)
                         if isinstance(getattr(sa, f.name), float))
+
+
+def test_a_limit_the_table_does_not_declare_is_absent_not_a_big_number():
+    """LNEC's table described without its [limits] (issue 34: a uniaxial table had 1e9
+    stand-ins): its stroke, velocity, acceleration, overhead clearance and overturning
+    capacity are None; nothing checks a motion or a specimen's height against them; the
+    drive's use of them is null; flow_saturation's default cap is its range's top (60 in/s,
+    not 4e10); declared, the limits are LNEC's (100 mm, 0.40 m/s) and the cap 15.7 in/s."""
+    import tomllib
+    from importlib.resources import files
+
+    from vtable.drive.compensate import limit_use
+    from vtable.effects.registry import get
+    from vtable.effects.table import TableView
+    from vtable.mjcf.builder import check_specimen
+    from vtable.params.limits import check_motion, motion_limits
+    from vtable.params.specimen import SDOFSpecimen
+
+    d = tomllib.loads(files("vtable.params").joinpath("data/lnec_st1d.toml").read_text())
+    d.pop("source")
+    declared = virtual_table_for(lab_table(table_from_dict(d)))
+    d.pop("limits")
+    vt = virtual_table_for(lab_table(table_from_dict(d)))
+    sp = vt.table.specs
+    assert (sp.stroke_h, sp.velocity_h, sp.acceleration_h, sp.overhead_clearance,
+            sp.overturning_capacity) == (None, None, None, None, None)
+    assert motion_limits(vt) == {}
+    t = np.linspace(0.0, 1.0, 201)
+    check_motion(vt, t, 2.0 * np.sin(2 * np.pi * 5 * t))  # 2 m at 5 Hz: nothing to pass
+    check_specimen(vt, SDOFSpecimen(weight=9806.65, height=30.0, frequency=2.0, damping=0.02))
+    use = limit_use(vt, 0.01 * np.sin(2 * np.pi * t), 200.0, None)
+    assert use == {"displacement": None, "velocity": None}
+    v_max = get("flow_saturation").params[0]
+    assert v_max.default_on(TableView.of(vt)) == 60.0
+    assert motion_limits(declared) == {"stroke": (0.1, "in"), "velocity limit": (0.4, "in/s")}
+    assert v_max.default_on(TableView.of(declared)) == pytest.approx(0.4 / 0.0254)
+    with pytest.raises(Exception, match="stroke"):
+        check_motion(declared, t, 0.2 * np.sin(2 * np.pi * t))

@@ -155,11 +155,14 @@ def check_limits(vt, t: np.ndarray, d: np.ndarray, force: np.ndarray | None = No
 
 def limit_use(vt, d: np.ndarray, fs: float, force: np.ndarray | None) -> dict[str, float]:
     """The drive's peaks as fractions of the table's limits: displacement and velocity
-    (stroke and velocity of Table 2.2 or the run's [table]) and the predicted force per
-    horizontal actuator (its capacity, Table 2.1)."""
+    (stroke and velocity of Table 2.2 or the run's [table]; None where the table declares
+    no such limit) and the predicted force per horizontal actuator (its capacity, Table
+    2.1)."""
     lim = motion_limits(vt)
-    use = {"displacement": float(np.max(np.abs(d)) / lim["stroke"][0]),
-           "velocity": float(np.max(np.abs(np.gradient(d, 1 / fs))) / lim["velocity limit"][0])}
+    peaks = {"displacement": ("stroke", float(np.max(np.abs(d)))),
+             "velocity": ("velocity limit", float(np.max(np.abs(np.gradient(d, 1 / fs)))))}
+    use = {k: peak / lim[name][0] if name in lim else None
+           for k, (name, peak) in peaks.items()}
     acts = vt.group("horizontal")
     if force is not None and acts:
         use["force"] = float(np.max(np.abs(force)) / min(a.capacity for a in acts))

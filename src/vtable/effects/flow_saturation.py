@@ -23,9 +23,11 @@ class FlowSaturation(Effect):
     section = "§2.2, app. C"
     signature = ("clipping when the command velocity exceeds the cap; large spans and "
                  "earthquakes only")
-    params = (Param("v_max", "in/s", lambda t: units.from_si(t.velocity_limit, "in/s"),
+    params = (Param("v_max", "in/s", lambda t: (units.from_si(t.velocity_limit, "in/s")
+                                                if t.velocity_limit is not None else 60.0),
                     1.0, 60.0, log=True, source="the table's horizontal velocity "
-                    "limit (EERC: Table 2.2, 25 in/s)"),)
+                    "limit (EERC: Table 2.2, 25 in/s; a table that declares none: the "
+                    "range's top)"),)
 
     def apply(self, m, p):
         m.add_stage(FLOW_CAP, max_flow=p["v_max"] * m.table.piston_area)

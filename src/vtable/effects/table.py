@@ -23,7 +23,7 @@ class TableView:
     stroke: float  # m: one horizontal actuator's stroke
     capacity: float  # N: one horizontal actuator's force capacity
     rated_flow: float  # m³/s: one horizontal servovalve's rated flow (0: not given)
-    velocity_limit: float  # m/s: the table's horizontal velocity limit
+    velocity_limit: float | None  # m/s: the table's horizontal velocity limit (None: none)
     supply_pressure: float  # Pa
     rc: float  # s: the RC filter of the ΔP feedback (eq B.4)
     #: what a campaign's runs show of the effects' parameters (`Effect.evidence`): effect ->

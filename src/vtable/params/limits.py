@@ -22,12 +22,13 @@ def _first_beyond(t: np.ndarray, x: np.ndarray, limit: float) -> tuple[float, fl
 
 
 def motion_limits(vt, dof: str = "x") -> dict[str, tuple[float, str]]:
-    """The stroke and velocity limits of `dof` ("x" horizontal, "z" vertical): name ->
-    (SI value, report unit)."""
+    """The stroke and velocity limits of `dof` ("x" horizontal, "z" vertical) the table
+    has: name -> (SI value, report unit); a limit it does not declare is left out."""
     s = vt.table.specs
-    if dof == "x":
-        return {"stroke": (s.stroke_h, "in"), "velocity limit": (s.velocity_h, "in/s")}
-    return {"stroke": (s.stroke_v, "in"), "velocity limit": (s.velocity_v, "in/s")}
+    pairs = ({"stroke": (s.stroke_h, "in"), "velocity limit": (s.velocity_h, "in/s")}
+             if dof == "x" else
+             {"stroke": (s.stroke_v, "in"), "velocity limit": (s.velocity_v, "in/s")})
+    return {k: v for k, v in pairs.items() if v[0] is not None}
 
 
 def check_motion(vt, t: np.ndarray, x: np.ndarray, what: str = "x command",
@@ -36,7 +37,11 @@ def check_motion(vt, t: np.ndarray, x: np.ndarray, what: str = "x command",
     `dof`, naming `what`, the peak, the limit and the first time it is passed."""
     fam = display.table_family(vt)
     v = np.gradient(x, t) if len(t) > 1 else np.zeros_like(x)
-    for (name, (lim, unit)), y in zip(motion_limits(vt, dof).items(), (x, v), strict=True):
+    limits = motion_limits(vt, dof)
+    for name, y in (("stroke", x), ("velocity limit", v)):
+        if name not in limits:
+            continue
+        lim, unit = limits[name]
         hit = _first_beyond(t, y, lim)
         if hit is not None:
             label = what if name == "stroke" else f"{what} velocity"

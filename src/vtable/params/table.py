@@ -51,17 +51,19 @@ class TableGeometry(Params):
 
 @dataclass(frozen=True)
 class TableSpecs(Params):
-    """Performance limits of the EERC table (Table 2.2)."""
+    """Performance limits of the EERC table (Table 2.2). A limit a table does not have (a
+    lab's uniaxial table that declares no stroke, no overhead clearance) is None: nothing
+    is checked against it."""
 
     weight_capacity: float = quantity("kip", "weight_capacity_kip", minimum=0)
-    overhead_clearance: float = quantity("ft", "overhead_clearance_ft", minimum=0)
-    overturning_capacity: float = quantity("kip-ft", "overturning_kip_ft", minimum=0,
-                                           exclusive=False)
-    stroke_h: float = quantity("in", "displacement_h_in", minimum=0)
+    overhead_clearance: float | None = quantity("ft", "overhead_clearance_ft", minimum=0)
+    overturning_capacity: float | None = quantity("kip-ft", "overturning_kip_ft", minimum=0,
+                                                  exclusive=False)
+    stroke_h: float | None = quantity("in", "displacement_h_in", minimum=0)
     stroke_v: float = quantity("in", "displacement_v_in", minimum=0, exclusive=False)
-    velocity_h: float = quantity("in/s", "velocity_h_in_per_s", minimum=0)
+    velocity_h: float | None = quantity("in/s", "velocity_h_in_per_s", minimum=0)
     velocity_v: float = quantity("in/s", "velocity_v_in_per_s", minimum=0, exclusive=False)
-    acceleration_h: float = quantity("g", "acceleration_h_g", minimum=0)
+    acceleration_h: float | None = quantity("g", "acceleration_h_g", minimum=0)
     acceleration_v: float = quantity("g", "acceleration_v_g", minimum=0, exclusive=False)
     bandwidth: float = quantity("Hz", "bandwidth_hz", minimum=0)
     source: str = plain(default="")
@@ -223,7 +225,11 @@ class EERCTable:
         if kind not in ("horizontal", "vertical"):
             raise VtableError(f"no rated velocity for {kind!r} actuators (horizontal or "
                               "vertical)")
-        return self.specs.velocity_h if kind == "horizontal" else self.specs.velocity_v
+        v = self.specs.velocity_h if kind == "horizontal" else self.specs.velocity_v
+        if v is None:
+            raise VtableError(f"the table declares no velocity limit for its {kind} "
+                              "actuators ([table.limits] velocity_m_per_s)")
+        return v
 
     def rated_flow(self, name: str) -> float:
         """Rated flow (m³/s) of actuator `name`'s servovalve, fully open: the rated

@@ -314,11 +314,10 @@ def uniaxial_table(lab) -> VirtualTable:
                       horizontal_offset=w / 4 if n > 1 else 0.0, pit_pressure=0.0,
                       foundation_weight=d["foundation"]["mass_over_platen"] * m * units.G,
                       supply_pressure=supply, source=f"{lab.name}: assumed plate")
-    big = 1e9
-    specs = TableSpecs(weight_capacity=(lab.payload or m) * units.G, overhead_clearance=big,
-                       overturning_capacity=big, stroke_h=lab.stroke or big, stroke_v=0.0,
-                       velocity_h=lab.velocity or big, velocity_v=0.0,
-                       acceleration_h=lab.acceleration or big, acceleration_v=0.0,
+    specs = TableSpecs(weight_capacity=(lab.payload or m) * units.G, overhead_clearance=None,
+                       overturning_capacity=None, stroke_h=lab.stroke, stroke_v=0.0,
+                       velocity_h=lab.velocity, velocity_v=0.0,
+                       acceleration_h=lab.acceleration, acceleration_v=0.0,
                        bandwidth=(lab.band or (0.0, 100.0))[1], source=lab.name)
     acts = tuple(ActuatorSpec(name=f"H{i}", model="described", area=s.area,
                               stroke=2 * (lab.stroke or 1.0), capacity=supply * s.area,
