@@ -7,7 +7,7 @@ virtual table, the reduced model and the closed loop of `vtable.analytic.control
 step, and the stage's parameters worked out from the declared gains.
 
 The loop every kind shares is the report's (eqs 6.1-6.4): the displacement error e
-through the P gain, velocity and ΔP feedback, the valve; `vtable.params.lab` turns the
+through the P gain, velocity and ΔP feedback, the valve; `vtable.runs.lab` turns the
 declared gains of that part into the servo constants (k_t = K_q k_d p, k_v, k_p). A kind's
 stage adds its terms per unit of that P gain: its law returns the drive in metres of
 displacement error, as the element's P law does.

@@ -8,7 +8,7 @@ and ``tvc`` kinds (docs/run-format.md):
 
 with e = x_r - x_t through the notches placed on the error, u through those placed on
 the drive. The element's P law (eqs 6.1-6.4) already holds k_d p e, k_v ẋ_t and k_dp ΔP
-(`vtable.params.lab`); this stage adds the rest per unit of k_d p.
+(`vtable.runs.lab`); this stage adds the rest per unit of k_d p.
 
 - x_r: the reference generator x_r/x_c = ω_g²/(s² + 2ζ_g ω_g s + ω_g²) when declared (e is
   then x_r - x_t). Otherwise x_r = x_c, and the feedforward reads the command's

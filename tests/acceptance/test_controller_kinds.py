@@ -14,9 +14,9 @@ from truth.closed_loop import closed_loop, lnec_constants
 
 from vtable.models.physics import Physics
 from vtable.models.reduced import ReducedModel
-from vtable.params.lab import lab_table
 from vtable.params.specimen import NoSpecimen
 from vtable.params.virtual import virtual_table_for
+from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
 
 F = np.array([0.3, 1.0, 3.0, 6.0, 10.0, 15.0, 22.0, 30.0])
@@ -124,8 +124,8 @@ def test_identify_fits_the_declared_controllers_loop(tmp_path, capsys, controlle
     import json
 
     from vtable.cli import main
-    from vtable.params.lab import run_table
     from vtable.runs import read_run
+    from vtable.runs.lab import run_table
     path = _truth_run(tmp_path, controller, seed=5)
     code = main(["identify", str(path), "--json", str(tmp_path / "id.json")])
     err = capsys.readouterr().err

@@ -30,8 +30,8 @@ from vtable.cli import main
 from vtable.ident.drive import align
 from vtable.ident.report import identify_run
 from vtable.ident.result import Identification
-from vtable.params.lab import lab_table
 from vtable.runs import read_run
+from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
 
 FS = 200.0

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from vtable.cli import main
-from vtable.params.lab import lab_table
 from vtable.params.virtual import virtual_table_for
+from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
 
 # the LNEC ST1D published model, as given in issue 11 (SI)

@@ -20,9 +20,9 @@ from vtable.cli import main
 from vtable.controllers import kinds
 from vtable.models.physics import Physics
 from vtable.models.reduced import ReducedModel
-from vtable.params.lab import lab_table
 from vtable.params.specimen import NoSpecimen
 from vtable.params.virtual import virtual_table_for
+from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "leaky_pi_controller.py"

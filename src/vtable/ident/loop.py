@@ -144,7 +144,7 @@ def declared_structure(vt) -> Structure:
 
 
 def prior_of(table) -> Prior:
-    """What a run's table (`vtable.params.lab.LabTable`) predicts of its loop: eq 6.16,
+    """What a run's table (`vtable.runs.lab.LabTable`) predicts of its loop: eq 6.16,
     its valve time constant and its declared controller's structure."""
     declared = declared_structure(virtual_table_for(table)) if table.control is not None \
         else None

@@ -7,7 +7,7 @@ with the reason, and the others are still made. Every fitted number carries its 
 flags (vtable.ident.validity); numbers derived from flagged fits inherit them. Notes say
 what was assumed (no [specimen], a table without pitch).
 
-The table is the run's own (`vtable.params.lab.run_table`: its [table], the EERC table
+The table is the run's own (`vtable.runs.lab.run_table`: its [table], the EERC table
 when it has none): the platen mass m_t of eq 7.9's mass ratio u = m_s/m_t and of the
 springs of eqs 5.15-5.16, its DOFs (the pitch sections are skipped, with the reason, on
 a table that does not pitch), its valve time constant τ (eq 6.15 x a first-order valve
@@ -48,10 +48,10 @@ from vtable.ident.structure import (
 )
 from vtable.ident.tf import TransferFunction, transfer_function
 from vtable.ident.validity import Flag, flags_json, inherit, loop_flags, settled
-from vtable.params.lab import LabTable, run_table
 from vtable.params.loops import OpenLoop
 from vtable.params.specimen import NoSpecimen, RigidBlock, SDOFSpecimen, ShearBuilding
 from vtable.runs.channels import FORMAT_UNITS
+from vtable.runs.lab import LabTable, run_table
 from vtable.runs.model import Run
 from vtable.units import to_si
 
@@ -96,7 +96,7 @@ def _unusable_channels(run: Run) -> list[str]:
 
 def identify_run(run: Run) -> Identification:
     """Everything identifiable from the run's channels on the run's table
-    (`vtable.params.lab.run_table`), each section in its own guarded step; sections that
+    (`vtable.runs.lab.run_table`), each section in its own guarded step; sections that
     cannot be made (a channel absent, a DOF the table does not have, a fit that fails)
     are listed under `skipped` with the reason.
 

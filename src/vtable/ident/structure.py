@@ -19,8 +19,8 @@ from vtable.ident.fits import Fit, amplitude_fit, circle_fit, fit_mode
 from vtable.ident.frames import FrameChoice, frame_for_mode
 from vtable.ident.tf import TransferFunction, transfer_function, transfer_function_via
 from vtable.ident.validity import settled
-from vtable.params.lab import run_table
 from vtable.params.specimen import RigidBlock, SDOFSpecimen, ShearBuilding
+from vtable.runs.lab import run_table
 from vtable.runs.model import Run
 
 TWO_PI = 2 * np.pi
@@ -59,7 +59,7 @@ def accelerations(run: Run) -> dict[str, np.ndarray]:
 
     A pitch_acc of zeros (a table without pitch) gives x_eff = x_t; `pitch_is_zero`
     tells the caller, which must say so. On a table whose DOFs have no pitch (the run's
-    [table], `vtable.params.lab.run_table`) x_eff = x_t without a pitch channel."""
+    [table], `vtable.runs.lab.run_table`) x_eff = x_t without a pitch channel."""
     h = effective_height(run)
     (a_t,) = channels.require(run, "avg_hacc", purpose="the table motion")
     if not run.has("pitch_acc") and not run_table(run).pitches:

@@ -16,8 +16,8 @@ from vtable.ident.frames import MIN_AVERAGES, frame_for_averages
 from vtable.ident.loop import LoopData, compare_structures, prior_of
 from vtable.ident.report import servo_band
 from vtable.ident.tf import transfer_function
-from vtable.params.lab import run_table
 from vtable.params.specimen import NoSpecimen, RigidBlock
+from vtable.runs.lab import run_table
 from vtable.runs.model import Run
 
 

@@ -273,7 +273,7 @@ def virtual_table(table: EERCTable | None = None,
 
 
 def virtual_table_for(lab) -> VirtualTable:
-    """The multibody table of a `vtable.params.lab.LabTable`: the EERC table itself, or a
+    """The multibody table of a `vtable.runs.lab.LabTable`: the EERC table itself, or a
     uniaxial platen (`uniaxial_table`); what the lab description changes of the EERC
     table (its mass, its loop constants) is applied to the EERC model; the controller's
     own terms (a control stage) go with it."""

@@ -12,7 +12,7 @@ controller kind, a PID controller without gains, and an unknown key at any level
 models read this table, so a key they would not use (a misspelt unit suffix, a gain
 named without its unit) would change the physics without a word.
 
-`vtable.params.lab.lab_table` turns the description into the table the models read.
+`vtable.runs.lab.lab_table` turns the description into the table the models read.
 """
 
 from __future__ import annotations

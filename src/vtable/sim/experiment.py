@@ -18,10 +18,10 @@ from vtable.models.physics import Physics
 from vtable.opensees.model import load_model
 from vtable.params import presets
 from vtable.params.base import read_toml
-from vtable.params.lab import lab_table
 from vtable.params.specimen import NoSpecimen, OpenSeesSpecimen, Specimen, specimen_from_dict
 from vtable.params.virtual import VirtualTable, virtual_table
 from vtable.runs import write_run
+from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
 from vtable.signals.command import Command
 from vtable.sim.run import SimulatedRun, simulate, simulation_step, standard_physics
@@ -60,7 +60,7 @@ def check_playable(command: Command, vt: VirtualTable, control_dt: float,
 
 def load_table(name_or_path: str | None):
     """A table preset name (eerc, lnec-st1d) or a TOML file with a run-format [table]
-    table, as the models read it (`vtable.params.lab.LabTable`)."""
+    table, as the models read it (`vtable.runs.lab.LabTable`)."""
     if name_or_path in (None, "", "eerc"):
         return lab_table(None)
     p = Path(name_or_path)
