@@ -128,8 +128,26 @@ def long_campaign(tmp_path_factory) -> list[str]:
     return paths
 
 
-#: seconds into `vtable diagnose` at which Ctrl-C is pressed: while the process imports,
-#: while its Dask workers are forked, fitting the starting model, in the rounds
+def _python_started(pid: int, timeout: float = 30.0) -> None:
+    """Wait until the process `pid` runs vtable's own code: numpy's extension is mapped
+    (Python's start-up, its `site` import, is over: a Ctrl-C before that is Python's own
+    fatal error, whatever the program; on a loaded machine it lasted past 0.3 s)."""
+    import time
+
+    maps = Path(f"/proc/{pid}/maps")
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        try:
+            if "_multiarray_umath" in maps.read_text():
+                return
+        except OSError:  # no /proc here, or the process has ended
+            return
+        time.sleep(0.01)
+
+
+#: seconds into `vtable diagnose` (from its first import of numpy) at which Ctrl-C is
+#: pressed: while the process imports, while its Dask workers are forked, fitting the
+#: starting model, in the rounds
 CTRL_C_AT = (0.3, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 7.0)
 
 
@@ -151,6 +169,7 @@ def test_ctrl_c_into_diagnose_is_one_line_and_exit_130(long_campaign):
         p = subprocess.Popen([*vtable_exe(), "diagnose", *long_campaign], stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True, start_new_session=True,
                              preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+        _python_started(p.pid)
         time.sleep(after)
         if p.poll() is not None:  # done before the interrupt: nothing to test there
             p.communicate()
