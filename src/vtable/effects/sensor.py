@@ -27,8 +27,10 @@ def _response(nfft: int, fs: float, ba: tuple[tuple[float, ...], tuple[float, ..
     return H
 
 
+@lru_cache(maxsize=256)
 def butterworth_ba(cutoff_hz: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """The anti-aliasing low-pass: an analog `ORDER`-pole Butterworth at `cutoff_hz`."""
+    """The anti-aliasing low-pass: an analog `ORDER`-pole Butterworth at `cutoff_hz` (kept:
+    a fit's forward differences ask for the same cut-off once per other parameter)."""
     b, a = scipy.signal.butter(ORDER, 2 * np.pi * cutoff_hz, analog=True)
     return tuple(map(float, b)), tuple(map(float, a))
 
