@@ -24,7 +24,6 @@ from vtable.controllers import (
     ServoController,
     quadratic_damper,
 )
-from vtable.controllers.opensees_specimen import OpenSeesController
 from vtable.effects.table import TableView
 from vtable.hydraulics.law import group_law
 from vtable.hydraulics.stage import Stage, add_stage
@@ -33,6 +32,7 @@ from vtable.mjcf import edit
 from vtable.mjcf.builder import BuiltModel, compile_table, table_spec
 from vtable.models import physics as phys
 from vtable.models.stiffness import needed_stiffness
+from vtable.opensees.controller import OpenSeesController
 from vtable.opensees.model import load_model
 from vtable.params.virtual import VirtualTable, with_rocking
 
@@ -138,7 +138,7 @@ class VirtualAssembly:
         self.add_storey_force(quadratic_damper, [c2])
 
     def add_opensees(self, spec) -> None:
-        """An OpenSees specimen stepped with the platen (`controllers.opensees_specimen`)."""
+        """An OpenSees specimen stepped with the platen (`opensees.controller`)."""
         depth = self.vt.table.geometry.actuator_line_depth
         self.controllers.append(OpenSeesController(load_model(spec.model), depth,
                                                  float(self.ts.spec.option.timestep)))

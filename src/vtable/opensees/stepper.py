@@ -1,5 +1,5 @@
 """Stepping an OpenSees model with the platen (the virtual table's side is
-`vtable.controllers.opensees_specimen`).
+`vtable.opensees.controller`).
 
 The model moves with the platen, in the platen's frame (origin O at the centre of the
 horizontal actuator line, ξ along the shaking direction, η up, pitch θ positive when the

@@ -1,5 +1,7 @@
-"""An OpenSees specimen on the virtual table: the controller that steps the model
-(`vtable.opensees.stepper`) with the platen and returns its reactions to it.
+"""An OpenSees specimen on the virtual table: the piece that steps the model
+(`vtable.opensees.stepper`) with the platen, as the simulator steps its controllers, and
+returns its reactions to it (the specimen owns its step hook, as a dm_control `Entity`
+does).
 
 It drives no actuator. Given the simulator's MuJoCo model and data (`attach`), each
 control step it reads the platen (the slab's joints: the accelerations of the two steps
