@@ -60,10 +60,19 @@ def test_reduced_model_force_is_a_dp_or_the_net_force():
     dp = ReducedModel(ph, dataclasses.replace(virtual_table(), force_measured="delta_p"))
     lc = ReducedModel(ph)
     assert not dp.linear  # the friction stage: the RK4 path
-    _h, up, _, _, _, _, _, P = dp.histories(t, xc)
+    hist = dp.histories(t, xc)
+    up, P = hist.up, hist.p_l
     na = len(dp.vt.group("horizontal"))
     a_dp = dp.sp[PISTON_AREA] * P[::up] / na  # one actuator's A·P_L
     f_dp, f_lc = dp.simulate(t, xc), lc.simulate(t, xc)
+    # a typed prediction: the channels by name on the run's grid, the step it was
+    # integrated at, and through pickle (a Dask worker's result) unchanged
+    import pickle
+
+    assert np.array_equal(f_dp.t, t) and f_dp.h == pytest.approx((t[1] - t[0]) / up)
+    assert hist.h == f_dp.h and len(f_dp["h1_force"]) == len(t)
+    back = pickle.loads(pickle.dumps(f_dp))
+    assert back.h == f_dp.h and np.array_equal(back["h1_force"], f_dp["h1_force"])
     assert np.max(np.abs(f_dp["h1_force"] - a_dp)) <= 1e-9 * np.max(np.abs(a_dp))
     for ch in ("h2_force", "h3_force"):
         assert np.array_equal(f_dp[ch], f_dp["h1_force"])

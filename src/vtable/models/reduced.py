@@ -17,6 +17,7 @@ import math
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -47,6 +48,31 @@ from vtable.runs.model import Run
 
 SIM_DT = 0.0025  # s: the largest integration step (a run step is divided until below it)
 LINEAR_PATH = True  # step linear models exactly (False: RK4 for every model; for tests)
+
+class Histories(NamedTuple):
+    """The integrator's histories on the model step `h` (the run step / `up`): the command
+    upsampled, the generalized coordinates q, q̇, q̈ (n x coordinates), the lumped
+    actuator's force and its load pressure P_L."""
+
+    h: float
+    up: int
+    x_c: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    force: np.ndarray
+    p_l: np.ndarray
+
+
+class Channels(dict):
+    """A reduced model's prediction of a run: its channels by run-format name (SI, each
+    array on the run's time grid `t`), as a run's own channels are held; `h` the step the
+    model was integrated at."""
+
+    def __init__(self, channels: dict[str, np.ndarray], t: np.ndarray, h: float) -> None:
+        super().__init__(channels)
+        self.t, self.h = t, h
+
 
 @dataclass
 class ForceElement:
@@ -351,13 +377,12 @@ class ReducedModel(ModalOutputs):
             return self.sp[PISTON_AREA] * P
         return F
 
-    def histories(self, t: np.ndarray, x_c: np.ndarray) -> tuple:
-        """The integrator's histories on the model step h = dt/up of the command x_c on the
-        uniform grid `t`: (h, up, x_c upsampled, q, q̇, q̈, the lumped actuator's force F,
-        its load pressure P_L). The model integrates at the run step divided by the
-        smallest integer that brings it to `SIM_DT` (or a stiff element's step) or below
-        (any sample rate); the command is interpolated band-limited (`resample_poly`) in
-        between."""
+    def histories(self, t: np.ndarray, x_c: np.ndarray) -> Histories:
+        """The integrator's histories (`Histories`) on the model step h = dt/up of the
+        command x_c on the uniform grid `t`. The model integrates at the run step divided
+        by the smallest integer that brings it to `SIM_DT` (or a stiff element's step) or
+        below (any sample rate); the command is interpolated band-limited
+        (`resample_poly`) in between."""
         t = np.asarray(t, dtype=float)
         if len(t) < 2:
             raise VtableError("the model needs a command of at least two samples")
@@ -381,11 +406,11 @@ class ReducedModel(ModalOutputs):
         else:
             Q, Qd, Qdd, F, PL = self.element.module.simulate_elements(
                 *args, self.pe, self.ia, self.ib, self.ne)
-        return h, up, xc, Q, Qd, Qdd, F, PL
+        return Histories(h, up, xc, Q, Qd, Qdd, F, PL)
 
-    def simulate(self, t: np.ndarray, x_c: np.ndarray) -> dict[str, np.ndarray]:
-        """Channels (SI) on the uniform time grid `t` of a command x_c sampled on it (the
-        integration: `histories`)."""
+    def simulate(self, t: np.ndarray, x_c: np.ndarray) -> Channels:
+        """The run's channels (`Channels`, SI) on the uniform time grid `t` of a command x_c
+        sampled on it (the integration: `histories`)."""
         h, up, _xc, Q, Qd, Qdd, F, PL = self.histories(t, x_c)
         out = self._channels(Q, Qd, Qdd, F, PL)
         for fn, only in self.assembly.filters:  # each distinct signal once (zeros stay
@@ -396,7 +421,8 @@ class ReducedModel(ModalOutputs):
                 if id(v) not in done:
                     done[id(v)] = fn(v, 1.0 / h) if np.any(v) else v
                 out[k] = done[id(v)]
-        return self._aliased({k: v[::up] for k, v in out.items()})
+        return Channels(self._aliased({k: v[::up] for k, v in out.items()}),
+                        np.asarray(t, dtype=float), h)
 
     def _aliased(self, out: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         """The channels each lumped quantity stands for: every horizontal actuator's
@@ -443,6 +469,6 @@ class ReducedModel(ModalOutputs):
                                        storey_masses(self.specimen)))
         return out
 
-    def predict(self, run: Run) -> dict[str, np.ndarray]:
+    def predict(self, run: Run) -> Channels:
         """The run's predictable channels, from its command (h_span)."""
         return self.simulate(run.time, run.channel("h_span"))
