@@ -42,8 +42,10 @@ RC_FILTER = Stage("rc_filter", "feedback", filtered, ("rc",), states=1, state_un
 def table_stages(vt, rc: bool = True) -> list:
     """The stages a table `vt` (a `VirtualTable`) declares on its horizontal group, as
     (stage, parameters): its RC filter on the ΔP feedback (eq B.4; left out when not
-    `rc`), a lab table's digital controller's terms, its servovalves' lag."""
+    `rc`: the reduced and multibody models carry it in their base loop), its
+    servovalves' lag, a lab table's digital controller's terms. Every model reads them
+    here."""
     out = [(RC_FILTER, {"rc": vt.horizontal_servo.rc})] if vt.horizontal_servo.rc and rc \
         else []
-    out += [vt.control.use] if vt.control is not None else []
-    return out + ([(SPOOL_LAG, {"tau": vt.valve_lag})] if vt.valve_lag else [])
+    out += [(SPOOL_LAG, {"tau": vt.valve_lag})] if vt.valve_lag else []
+    return out + ([vt.control.use] if vt.control is not None else [])

@@ -30,7 +30,7 @@ from vtable.hydraulics import group_law
 from vtable.hydraulics.compose import ElementLaw
 from vtable.hydraulics.element import PISTON_AREA
 from vtable.hydraulics.stage import Stage, add_stage
-from vtable.hydraulics.table_stages import SPOOL_LAG
+from vtable.hydraulics.table_stages import table_stages
 from vtable.interpolate import upsampled
 from vtable.models import physics as phys
 from vtable.models.linear_table import mechanics
@@ -111,10 +111,9 @@ class ReducedAssembly:
         self.stages: list[tuple[Stage, dict[str, float]]] = []
         self.table = TableView.of(vt, piston_area=self.servo.area)
         self.n_actuators = len(vt.group("horizontal"))
-        if vt.valve_lag:  # a lab table's own servovalve lag
-            self.add_stage(SPOOL_LAG, tau=vt.valve_lag)
+        for stage, params in table_stages(vt, rc=False):  # its valve lag, its controller's
+            self.add_stage(stage, **params)
         if vt.control is not None:  # a digital controller's own terms (RK4: |λ| h < 2.8)
-            self.add_stage(vt.control.stage, **vt.control.params)
             rate = group_law(vt, "horizontal", stages=[vt.control.use]).lumped("x") \
                 .fastest_rate()
             self.max_step = min(self.max_step, 2.0 / rate)

@@ -27,7 +27,7 @@ from vtable.controllers import (
 from vtable.effects.table import TableView
 from vtable.hydraulics.law import group_law
 from vtable.hydraulics.stage import Stage, add_stage
-from vtable.hydraulics.table_stages import SPOOL_LAG
+from vtable.hydraulics.table_stages import table_stages
 from vtable.mjcf import edit
 from vtable.mjcf.builder import BuiltModel, compile_table, table_spec
 from vtable.models import physics as phys
@@ -60,10 +60,9 @@ class VirtualAssembly:
         self.filters: list[tuple[Callable, frozenset | None]] = []
         self.n_actuators = len(self.vt.group("horizontal"))
         self.max_step = MAX_STEP
-        if vt.valve_lag:  # a lab table's own servovalve lag
-            self.add_stage(SPOOL_LAG, tau=vt.valve_lag)
+        for stage, params in table_stages(vt, rc=False):  # its valve lag, its
+            self.add_stage(stage, **params)                # controller's terms
         if vt.control is not None:  # a digital controller's own terms (ω·dt ≤ 1)
-            self.add_stage(vt.control.stage, **vt.control.params)
             rate = group_law(vt, "horizontal", stages=[vt.control.use]).fastest_rate()
             self.max_step = min(self.max_step, 1.0 / rate)
 
