@@ -87,7 +87,7 @@ class Secant:
         f = self._value(x)
         if self._J is None or self._calls % self.refresh == 0:
             J = self.at(x)
-            self._fd = (x.tobytes(), J.copy())
+            self._fd = (x.tobytes(), J)  # never changed in place: a Broyden step copies it
         else:
             J = self._J.copy()
             dx = x - self._x
