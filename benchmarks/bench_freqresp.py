@@ -19,7 +19,7 @@ import timeit
 import numpy as np
 
 from vtable.analytic import TwoDirectionalTable
-from vtable.params import presets
+from vtable.analytic.pitch import two_directional
 
 ROUNDS = 15
 
@@ -27,7 +27,7 @@ ROUNDS = 15
 def main() -> None:
     import control
 
-    model = TwoDirectionalTable(presets.two_directional(21.0))
+    model = TwoDirectionalTable(two_directional(21.0))
     sys = model.to_control()
     f = np.geomspace(0.1, 50.0, 512)
     w = 2 * np.pi * f

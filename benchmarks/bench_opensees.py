@@ -17,9 +17,9 @@ import numpy as np
 
 from vtable.opensees.equivalent import equivalent_building
 from vtable.opensees.stepper import OpenSeesStepper
-from vtable.params.virtual import virtual_table
 from vtable.signals.command import make_command
 from vtable.sim.experiment import load_specimen, run_experiment
+from vtable.tables.eerc import virtual_table
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

@@ -78,7 +78,7 @@ RMS_IN = 0.0003  # small-signal periodic random: the linear regime of the multib
 
 @functools.cache
 def virtual():
-    from vtable.params.virtual import virtual_table
+    from vtable.tables.eerc import virtual_table
 
     return virtual_table()
 

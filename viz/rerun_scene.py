@@ -17,8 +17,8 @@ from scipy.spatial.transform import Rotation
 
 from vtable.mjcf.meshes import braced_frame, slab_with_ribs
 from vtable.opensees.model import load_model
-from vtable.params.bodies import MASS_BLOCK
 from vtable.runs.model import FORMAT_UNITS
+from vtable.tables.bodies import MASS_BLOCK
 from vtable.units import from_si, to_si
 from vtable.viz.recording import rrd_file
 

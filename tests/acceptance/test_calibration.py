@@ -134,7 +134,7 @@ def test_a_buildings_storey_masses_are_calibrated_each_with_its_frequencies_held
     from vtable.diagnose.calibration import base_params
     from vtable.models.physics import Physics, nominal_open_loop
     from vtable.params.specimen import ShearBuilding
-    from vtable.params.virtual import virtual_table
+    from vtable.tables.eerc import virtual_table
 
     kip, inch = 4448.2216, 0.0254
     b = ShearBuilding(weights=(25 * kip,) * 3, heights=(110 * inch, 160 * inch, 210 * inch),
@@ -248,7 +248,7 @@ def test_a_buildings_damping_is_calibrated_per_mode_within_its_bounds():
     from vtable.diagnose.calibration import base_params
     from vtable.models.physics import Physics, nominal_open_loop
     from vtable.params.specimen import specimen_from_dict
-    from vtable.params.virtual import virtual_table
+    from vtable.tables.eerc import virtual_table
 
     vt = virtual_table()
     geo = {"kind": "shear_building", "weights_kip": [25.0] * 3,

@@ -15,9 +15,9 @@ from truth.closed_loop import closed_loop, lnec_constants
 from vtable.models.physics import Physics
 from vtable.models.reduced import ReducedModel
 from vtable.params.specimen import NoSpecimen
-from vtable.params.virtual import virtual_table_for
 from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
+from vtable.tables.lab import virtual_table_for
 
 F = np.array([0.3, 1.0, 3.0, 6.0, 10.0, 15.0, 22.0, 30.0])
 KD = 129.93

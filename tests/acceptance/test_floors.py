@@ -6,7 +6,7 @@ The campaign comes from the independent truth simulator (tests/truth): the 3-sto
 building of the scorecard (3 x 25 kip at 110/160/210 in, storeys 120/100/80 kip/in,
 2.9/7.5/11.1 Hz, ξ = 2 % in every mode), band-limited random commands 0-25 Hz at two spans
 (all three modes excited), 200 Hz, 2 % sensor noise per channel. vtable damps the building
-as the truth does (`params.bodies.specimen_damping`: ξ in every mode); with the old
+as the truth does (`tables.bodies.specimen_damping`: ξ in every mode); with the old
 stiffness-proportional storey dampers (2.6 ξ and 3.9 ξ in modes 2 and 3) the fitted model
 missed these floors by 4-7.5 sigma, now by 0.96-1.03 sigma: its floor errors are the
 sensor noise.

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from vtable.cli import main
-from vtable.params.virtual import virtual_table_for
 from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
+from vtable.tables.lab import virtual_table_for
 
 # the LNEC ST1D published model, as given in issue 11 (SI)
 M, A, V, BETA = 1975.1, 0.012456, 0.002659, 193.7e6

@@ -21,9 +21,9 @@ from vtable.controllers import kinds
 from vtable.models.physics import Physics
 from vtable.models.reduced import ReducedModel
 from vtable.params.specimen import NoSpecimen
-from vtable.params.virtual import virtual_table_for
 from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
+from vtable.tables.lab import virtual_table_for
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "leaky_pi_controller.py"
 F = np.array([0.05, 0.3, 1.0, 3.0, 6.0, 10.0, 15.0, 22.0, 30.0])

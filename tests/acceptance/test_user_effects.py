@@ -274,7 +274,7 @@ def test_a_missing_stiffness_is_worked_out_from_the_law(verb):
     from vtable.errors import VtableError
     from vtable.models.reduced import ReducedAssembly
     from vtable.models.stiffness import needed_stiffness
-    from vtable.params.virtual import virtual_table
+    from vtable.tables.eerc import virtual_table
 
     k = 4e10
     gap_k = {"gap": 0.001, "k": k, "c": 0.0}

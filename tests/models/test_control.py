@@ -2,13 +2,13 @@ import numpy as np
 import pytest
 
 from vtable.analytic import TwoDirectionalTable
-from vtable.params import presets
+from vtable.analytic.pitch import two_directional
 
 control = pytest.importorskip("control")
 
 
 def test_to_control_same_frequency_response():
-    model = TwoDirectionalTable(presets.two_directional(21.0))
+    model = TwoDirectionalTable(two_directional(21.0))
     sys = model.to_control()
     f = np.geomspace(0.1, 50, 512)
     resp = control.frequency_response(sys, 2 * np.pi * f)

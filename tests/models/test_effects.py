@@ -174,9 +174,9 @@ def test_every_catalog_effect_applies_on_a_table_with_its_own_valve_lag():
     from vtable.models.physics import Physics
     from vtable.models.reduced import ReducedModel
     from vtable.params.specimen import NoSpecimen
-    from vtable.params.virtual import virtual_table_for
     from vtable.runs.lab import lab_table
     from vtable.runs.table import table_from_dict
+    from vtable.tables.lab import virtual_table_for
 
     t = lab_table(table_from_dict({"preset": "lnec-st1d"}))
     vt = virtual_table_for(t)

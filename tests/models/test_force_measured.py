@@ -16,10 +16,11 @@ from vtable.hydraulics.element import PISTON_AREA
 from vtable.models.physics import Physics, nominal_open_loop
 from vtable.models.reduced import ReducedModel
 from vtable.params import presets
-from vtable.params.virtual import virtual_table, virtual_table_for
 from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
 from vtable.sim import simulate
+from vtable.tables.eerc import virtual_table
+from vtable.tables.lab import virtual_table_for
 from vtable.units import KIP
 
 FRICTION_KIP = 3.0  # total over the three horizontal actuators

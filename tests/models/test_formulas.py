@@ -12,6 +12,7 @@ import scipy.signal
 
 from vtable.analytic import TwoDirectionalTable
 from vtable.analytic.closed_forms import combined_rocking, feedback_spring, stabilizer_rocking
+from vtable.analytic.pitch import two_directional
 from vtable.analytic.servo import (
     ServoLoop,
     loop_row,
@@ -19,7 +20,7 @@ from vtable.analytic.servo import (
     servo_from_open_loop,
 )
 from vtable.params import OpenLoop, presets
-from vtable.params.virtual import split_rocking, virtual_table
+from vtable.tables.eerc import split_rocking, virtual_table
 
 SRC = Path(__file__).resolve().parents[2] / "src" / "vtable"
 
@@ -39,7 +40,7 @@ def test_loop_row_is_the_denominator_of_eq_6_15b():
 
 
 def test_every_model_carries_the_same_loop_row():
-    p = presets.two_directional(21.0)
+    p = two_directional(21.0)
     model = TwoDirectionalTable(p)
     x = {n: i for i, n in enumerate(model.states)}
     for ol, (q, v, f), inp, scale in ((p.open_loop, ("x_t", "v_t", "x_f"), 0, 1.0),
@@ -91,7 +92,7 @@ def test_vertical_servo_realises_the_pitch_loop():
 
 
 def test_k_theta_split_inverts_combined_rocking():
-    p = presets.two_directional(21.0)
+    p = two_directional(21.0)
     inertia = presets.eerc_table().geometry.pitch_inertia
     rock = presets.hybrid_rocking()
     f_c = presets.pitch_springs().f_coupled
@@ -113,7 +114,7 @@ def test_k_theta_split_inverts_combined_rocking():
 
 
 def test_k_theta_weaker_than_the_pitch_loop_is_refused():
-    p = presets.two_directional(21.0)
+    p = two_directional(21.0)
     inertia = presets.eerc_table().geometry.pitch_inertia
     k_v, c_v = feedback_spring(inertia, p.pitch_loop, 2.58)
     with pytest.raises(Exception, match="pitch loop alone"):
@@ -121,7 +122,7 @@ def test_k_theta_weaker_than_the_pitch_loop_is_refused():
 
 
 def test_freqresp_agrees_with_a_direct_solve_to_1e_9():
-    model = TwoDirectionalTable(presets.two_directional(21.0))
+    model = TwoDirectionalTable(two_directional(21.0))
     f = np.geomspace(0.1, 50.0, 512)
     s = 2j * np.pi * f
     direct = model.C @ np.linalg.solve(s[:, None, None] * np.eye(8) - model.A,

@@ -24,9 +24,9 @@ from vtable.errors import VtableError
 from vtable.mjcf import build
 from vtable.models.linear_table import mechanics
 from vtable.params import presets
-from vtable.params.bodies import specimen_damping
 from vtable.params.specimen import specimen_from_dict
-from vtable.params.virtual import virtual_table
+from vtable.tables.bodies import specimen_damping
+from vtable.tables.eerc import virtual_table
 
 KIP, INCH, G = 4448.2216152605, 0.0254, 9.80665
 FREQS = [3.0, 8.0, 12.0]

@@ -18,9 +18,9 @@ from vtable.errors import VtableError
 from vtable.opensees.model import load_model
 from vtable.opensees.stepper import OpenSeesStepper
 from vtable.params.specimen import ShearBuilding, specimen_from_dict
-from vtable.params.virtual import virtual_table
 from vtable.signals.command import make_command
 from vtable.sim.experiment import load_specimen, run_experiment
+from vtable.tables.eerc import virtual_table
 from vtable.units import G
 
 HERE = Path(__file__).parents[1] / "opensees"

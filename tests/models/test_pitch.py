@@ -8,6 +8,7 @@ from vtable import units
 from vtable.analytic import HybridModel, MDOFHybrid, MechanicalModel, TwoDirectionalTable
 from vtable.analytic.closed_forms import combined_rocking, feedback_spring, pitch_loop_from_springs
 from vtable.analytic.mechanical import a13_matrices
+from vtable.analytic.pitch import two_directional
 from vtable.errors import VtableError
 from vtable.params import HybridParams, RockingSpring, ShearBuilding, presets
 
@@ -70,7 +71,7 @@ def test_hybrid_outputs_are_consistent():
 def test_two_directional_equals_hybrid_with_springs_at_that_frequency():
     # Eqs 8.25-8.30: with θ_c = 0 the pitch loop *is* the spring k_v(ω) + iω c_v(ω); so at
     # every frequency eq 8.16 equals eq 8.37 built with k_θ = k_p + k_v(ω), c_θ = c_p + c_v(ω)
-    p2 = presets.two_directional(21.0)
+    p2 = two_directional(21.0)
     two = TwoDirectionalTable(p2)
     inertia = presets.eerc_table().geometry.pitch_inertia
     w_p = 2 * np.pi * p2.f_p
@@ -85,7 +86,7 @@ def test_two_directional_equals_hybrid_with_springs_at_that_frequency():
 
 
 def test_two_directional_at_coupled_frequency_reproduces_table_8_1():
-    p2 = presets.two_directional(13.0)
+    p2 = two_directional(13.0)
     inertia = presets.eerc_table().geometry.pitch_inertia
     w_p = 2 * np.pi * p2.f_p
     r = combined_rocking(inertia * w_p**2, 2 * p2.xi_p * w_p * inertia, inertia,
@@ -94,7 +95,7 @@ def test_two_directional_at_coupled_frequency_reproduces_table_8_1():
     assert units.from_si(r["c_theta"], "lb-in-s/rad") == pytest.approx(3.70e8, rel=1e-9)
     # and the coupled modes agree with the hybrid model (Figs 8.4-8.5: "virtually the same")
     for f_r in (13.0, 21.0):
-        first = TwoDirectionalTable(presets.two_directional(f_r)).modes().first
+        first = TwoDirectionalTable(two_directional(f_r)).modes().first
         ref = HybridModel(presets.hybrid("table8.1")).modes().first
         assert first.f_hz == pytest.approx(ref.f_hz, rel=0.002)
         assert first.damping == pytest.approx(ref.damping, rel=0.01)

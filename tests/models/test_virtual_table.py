@@ -20,9 +20,9 @@ from vtable.mjcf import build
 from vtable.mjcf.export import DEFAULTS, export_mjcf
 from vtable.models.linear_table import VirtualTableModel
 from vtable.params import OpenLoop, StructureRatios, TwoDirectionalParams, presets
-from vtable.params.bodies import slab_body
 from vtable.sim.experiment import load_specimen
 from vtable.sim.linearize import linearize
+from vtable.tables.bodies import slab_body
 
 ROOT = Path(__file__).resolve().parents[2]
 IN = units.to_si(1.0, "in")
@@ -236,7 +236,7 @@ def test_a_buildings_damping_is_xi_in_every_fixed_base_mode(vt):
     from vtable.analytic.structure import building_matrices
     from vtable.models.linear_table import mechanics
     from vtable.params import ShearBuilding
-    from vtable.params.bodies import specimen_bodies, specimen_damping
+    from vtable.tables.bodies import specimen_bodies, specimen_damping
 
     b = ShearBuilding.from_dict(BUILDING_3)
     M, K, C, _, names, _, _ = mechanics(vt, b)
@@ -270,7 +270,7 @@ def test_the_mujoco_building_is_damped_by_the_same_matrix(vt):
     the SDOF keeps its joint damping, and the linearized closed loop's modes carry the
     analytic model's damping ratios."""
     from vtable.params import ShearBuilding
-    from vtable.params.bodies import specimen_damping
+    from vtable.tables.bodies import specimen_damping
 
     b = ShearBuilding.from_dict(BUILDING_3)
     built = build(vt, b, with_meshes=False)

@@ -2,7 +2,7 @@
 vtable's `ShearBuilding` (test_opensees.py): rigid floors (vertical and rotational DOFs
 fixed: they move with the platen, as the multibody table's storey bodies do) on columns
 fixed against rotation, each storey's lateral stiffness 12 E I / L³ = k; the floors'
-rotational masses those of vtable's storey boxes (`params.bodies.MASS_BLOCK`); Rayleigh
+rotational masses those of vtable's storey boxes (`tables.bodies.MASS_BLOCK`); Rayleigh
 damping C = a0 M + a1 K."""
 
 K = (4.0e6, 3.5e6, 3.0e6)        # storey stiffnesses, N/m

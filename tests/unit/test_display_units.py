@@ -85,9 +85,9 @@ def test_simulate_on_a_metric_table_writes_its_run_in_mm_g_kn(tmp_path, capsys):
 
 def test_a_metric_run_reads_back_to_the_same_si_values(tmp_path):
     from vtable.params.specimen import NoSpecimen
-    from vtable.params.virtual import virtual_table_for
     from vtable.signals import make_command
     from vtable.sim.experiment import load_table, run_experiment
+    from vtable.tables.lab import virtual_table_for
 
     lab = load_table("lnec-st1d")
     exp = run_experiment(NoSpecimen(), make_command("random", duration=1.0, peak_in=0.04),

@@ -230,7 +230,7 @@ def test_no_module_over_500_lines():
 #: packages of its own layer or below. Top-level modules count as packages of their own.
 LAYERS = (("vtable", "errors", "units", "fileio", "userfile", "jsonable", "interpolate",
            "_numba", "display"),
-          ("params",), ("hydraulics",), ("analytic",), ("opensees",), ("controllers",),
+          ("params",), ("hydraulics",), ("analytic",), ("tables",), ("opensees",), ("controllers",),
           ("runs",), ("signals",), ("ident",), ("effects",), ("mjcf",), ("models",), ("sim",),
           ("studies",), ("diagnose",), ("drive",), ("viz",), ("results",), ("verbs",),
           ("cli_args", "cli", "__main__"))
@@ -241,8 +241,6 @@ UPWARD = {
                          "renderer when called",
     ("drive", "viz"): "the plotting hook: a drive's .report()/.figure() load their renderer "
                       "when called",
-    ("params", "analytic"): "presets and the virtual table's description derive numbers "
-                            "with the report's formulas (issue 34, one table)",
 }
 
 

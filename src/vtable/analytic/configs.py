@@ -33,7 +33,7 @@ import numpy as np
 from vtable.analytic.base import LinearModel
 from vtable.analytic.mdof import MDOFHybrid
 from vtable.analytic.mechanical import MechanicalModel
-from vtable.analytic.pitch import HybridModel, TwoDirectionalTable
+from vtable.analytic.pitch import HybridModel, TwoDirectionalTable, two_directional
 from vtable.analytic.rcfilter import RCFilterServo
 from vtable.analytic.sdof import TableSDOF
 from vtable.analytic.servo import ServoLoop
@@ -68,8 +68,8 @@ def _named() -> dict[str, Callable[[], LinearModel]]:
         "table9.3": lambda: MechanicalModel(presets.mechanical("table9.3"), height=SDOF_HEIGHT),
         "table5.1": lambda: MechanicalModel(presets.mechanical("table5.1"),
                                             height=presets.specimen("table5_1").height),
-        "two-directional": lambda: TwoDirectionalTable(presets.two_directional(21.0)),
-        "two-directional-13hz": lambda: TwoDirectionalTable(presets.two_directional(13.0)),
+        "two-directional": lambda: TwoDirectionalTable(two_directional(21.0)),
+        "two-directional-13hz": lambda: TwoDirectionalTable(two_directional(13.0)),
         "table-b.5": lambda: RCFilterServo(presets.eerc_table().servo,
                                            title="bare table with RC filter (Table B.5)"),
         "bare-physical": lambda: ServoLoop.from_servo(presets.eerc_table().servo),

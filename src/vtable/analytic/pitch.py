@@ -6,8 +6,17 @@ from __future__ import annotations
 import numpy as np
 
 from vtable.analytic.base import LinearModel
+from vtable.analytic.closed_forms import pitch_loop_from_springs, stabilizer_rocking
 from vtable.analytic.servo import loop_row
-from vtable.params.loops import HybridParams, StructureRatios, TwoDirectionalParams
+from vtable.params import presets
+from vtable.params.loops import (
+    HybridParams,
+    OpenLoop,
+    RockingSpring,
+    StructureRatios,
+    TwoDirectionalParams,
+    spring_frequency,
+)
 
 TWO_PI = 2 * np.pi
 
@@ -85,3 +94,33 @@ class TwoDirectionalTable(LinearModel):
         outputs["x_m"] = (np.eye(8)[7], None)
         super().__init__(**self._build(A, B, self.STATES, ("x_c", "theta_c"), outputs,
                                        title=title or p.title or "two-directional table (8.16)"))
+
+
+def pitch_loop(f_r: float, inertia: float) -> OpenLoop:
+    """The §8.6.2 pitch loop of open-loop frequency `f_r` (Hz) on a slab of pitch inertia
+    `inertia` whose spring and dashpot at the coupled frequency are `presets.pitch_springs()`
+    (eqs 8.28-8.29 inverted)."""
+    sp = presets.pitch_springs()
+    return pitch_loop_from_springs(sp.k_v, sp.c_v, sp.f_coupled, f_r, inertia)
+
+
+def two_directional(f_r: float = 21.0) -> TwoDirectionalParams:
+    """Eq 8.16 consistent with Table 8.1 at the coupled frequency (§8.6.2).
+
+    The pitch loop (open-loop frequency `f_r` Hz, 13 or 21 in the report) is chosen so
+    its spring and dashpot at 2.58 Hz are the vertical actuators' k_v, c_v (eqs 8.28-8.29
+    inverted); the passive stabilizers carry k_p = k_θ - k_v and c_p = c_θ - c_v
+    (eqs 8.32-8.33, `stabilizer_rocking`).
+    """
+    spec, m_t, inertia, part = presets.physical("table8_1")
+    rock = part("rocking", RockingSpring)
+    pitch = pitch_loop(f_r, inertia)
+    k_p, c_p = stabilizer_rocking(rock.k_theta, rock.c_theta, inertia, pitch,
+                                  presets.pitch_springs().f_coupled)
+    f_p, xi_p = spring_frequency(k_p, c_p, inertia)
+    return TwoDirectionalParams(
+        open_loop=part("open_loop", OpenLoop), pitch_loop=pitch,
+        structure=StructureRatios.from_physical(spec, m_t, inertia),
+        f_p=f_p, xi_p=xi_p, height=spec.height,
+        title=f"two-directional table, pitch loop f_r = {f_r:g} Hz (§8.6.2)",
+        source="§8.6.2, Table 8.1")

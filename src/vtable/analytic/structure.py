@@ -123,7 +123,7 @@ def building_matrices(b: ShearBuilding) -> tuple[np.ndarray, np.ndarray, np.ndar
     """M, K and the classical damping matrix C = M Φ diag(2 ξ_i ω_i) Φᵀ M, each fixed-base
     mode i at its own ratio ξ_i (`ShearBuilding.damping_ratios`: one ratio, one per mode, or
     Rayleigh's, for which C = α M + β K exactly), in the storeys' displacements relative to
-    the base (`params.bodies.specimen_damping` gives C on the storey drifts the multibody
+    the base (`tables.bodies.specimen_damping` gives C on the storey drifts the multibody
     chain uses)."""
     M = np.diag(b.masses)
     K = stiffness_matrix(building_stiffnesses(b))

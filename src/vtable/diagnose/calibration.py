@@ -40,7 +40,6 @@ from dataclasses import dataclass
 from vtable.analytic.structure import modal_damping, specimen_frequencies
 from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
-from vtable.params.bodies import slab_body
 from vtable.params.specimen import (
     NoSpecimen,
     RigidBlock,
@@ -48,6 +47,7 @@ from vtable.params.specimen import (
     ShearBuilding,
 )
 from vtable.params.virtual import VirtualTable
+from vtable.tables.bodies import slab_body
 from vtable.units import G
 
 #: the servo loop's bounds: name -> (JSON key, unit, lower, upper)

@@ -24,10 +24,10 @@ from vtable.diagnose.sensors import sensor_check
 from vtable.diagnose.stationarity import stationarity_check
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
-from vtable.params.virtual import virtual_table_for
 from vtable.runs.lab import run_table
 from vtable.runs.model import Run
 from vtable.runs.read import check_configuration
+from vtable.tables.lab import virtual_table_for
 
 REQUIRED = ("h_span",)
 

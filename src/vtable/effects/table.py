@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from functools import cache
 
 from vtable import units
-from vtable.params.virtual import virtual_table
+from vtable.tables.eerc import virtual_table
 
 
 @dataclass(frozen=True)

@@ -61,7 +61,7 @@ from vtable.ident.fits import (
 from vtable.ident.resonator import dip, is_resonance
 from vtable.ident.tf import TransferFunction
 from vtable.params.loops import OpenLoop
-from vtable.params.virtual import virtual_table_for
+from vtable.tables.lab import virtual_table_for
 
 TWO_PI = 2 * np.pi
 #: the smallest relative random error a line is credited with (model error, bias of a

@@ -9,7 +9,7 @@ and stroke; forces come from the Python controllers. The pit air pressure is a
 world-vertical force at the centre of the slab's bottom face balancing the total weight
 (§2.2). Specimens hang off the slab: a welded rigid block, a SDOF top mass on a slide
 joint with stiffness k_s and damping c_s, or a chain of storeys, each on a slide (its
-drift) with the storey's spring, damped by `params.bodies.specimen_damping` (see
+drift) with the storey's spring, damped by `tables.bodies.specimen_damping` (see
 `_add_specimen_damping`).
 """
 
@@ -24,13 +24,6 @@ from vtable import units
 from vtable.errors import VtableError
 from vtable.mjcf import meshes
 from vtable.opensees.model import load_model
-from vtable.params.bodies import (
-    MASS_BLOCK,
-    slab_body,
-    slab_frame_positions,
-    specimen_bodies,
-    specimen_damping,
-)
 from vtable.params.specimen import (
     NoSpecimen,
     OpenSeesSpecimen,
@@ -40,6 +33,13 @@ from vtable.params.specimen import (
     Specimen,
 )
 from vtable.params.virtual import VirtualTable
+from vtable.tables.bodies import (
+    MASS_BLOCK,
+    slab_body,
+    slab_frame_positions,
+    specimen_bodies,
+    specimen_damping,
+)
 from vtable.units import G
 
 SLAB_JOINTS = ("x", "z", "roll", "pitch", "twist")
@@ -290,7 +290,7 @@ DAMPING_TENDON = "storey_damping"
 
 
 def _add_specimen_damping(s, spec: Specimen, joints: list[str]) -> None:
-    """Realise the specimen's slide damping matrix C_d (`params.bodies.specimen_damping`)
+    """Realise the specimen's slide damping matrix C_d (`tables.bodies.specimen_damping`)
     with MuJoCo's passive elements.
 
     A single slide (SDOF frame): joint damping c_s. Several (a shear building, whose modal

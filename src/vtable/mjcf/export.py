@@ -7,7 +7,8 @@ from pathlib import Path
 from vtable.fileio import write_bytes, write_text
 from vtable.mjcf.builder import build
 from vtable.params.specimen import Specimen
-from vtable.params.virtual import VirtualTable, virtual_table
+from vtable.params.virtual import VirtualTable
+from vtable.tables.eerc import virtual_table
 
 #: the default configurations checked in under assets/mjcf/
 DEFAULTS = {"bare": "none", "concrete_blocks": "concrete_blocks", "sdof_frame": "sdof_frame"}

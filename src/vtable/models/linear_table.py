@@ -21,14 +21,14 @@ import numpy as np
 
 from vtable.analytic.base import LinearModel
 from vtable.controllers import DOFS, LinearController, standard_controllers
-from vtable.params.bodies import (
+from vtable.params.specimen import NoSpecimen, Specimen
+from vtable.params.virtual import VirtualTable
+from vtable.tables.bodies import (
     slab_body,
     slab_frame_positions,
     specimen_bodies,
     specimen_damping,
 )
-from vtable.params.specimen import NoSpecimen, Specimen
-from vtable.params.virtual import VirtualTable
 from vtable.units import G
 
 SLAB_DOFS = ("x", "z", "roll", "pitch", "twist")
@@ -53,7 +53,7 @@ def mechanics(vt: VirtualTable, specimen: Specimen, *, gravity: bool = True,
     """Small-motion mass, stiffness and damping matrices of the slab (x, z, φ, θ, ψ) and
     the specimen's slides, and the actuators' extension Jacobian; also used by the reduced
     model of the diagnosis. The slide block of C is the specimen's full damping matrix
-    (`params.bodies.specimen_damping`: a building's modal damping couples its storeys).
+    (`tables.bodies.specimen_damping`: a building's modal damping couples its storeys).
     Returns (M, K, C, Ja, coordinate names, slide bodies, slab-frame positions)."""
     bodies = specimen_bodies(specimen)
     sb = slab_body(vt)

@@ -15,7 +15,8 @@ from vtable.errors import VtableError
 from vtable.params.loops import OpenLoop
 from vtable.params.specimen import OpenSeesSpecimen, Specimen
 from vtable.params.table import ServoConstants
-from vtable.params.virtual import VirtualTable, virtual_table
+from vtable.params.virtual import VirtualTable
+from vtable.tables.eerc import virtual_table
 from vtable.units import G
 
 

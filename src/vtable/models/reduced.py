@@ -43,8 +43,9 @@ from vtable.models.reduced_kernel import (
     simulate_reduced_python,
 )
 from vtable.models.stiffness import needed_stiffness
-from vtable.params.virtual import VirtualTable, split_rocking, virtual_table
+from vtable.params.virtual import VirtualTable
 from vtable.runs.model import Run
+from vtable.tables.eerc import split_rocking, virtual_table
 
 SIM_DT = 0.0025  # s: the largest integration step (a run step is divided until below it)
 LINEAR_PATH = True  # step linear models exactly (False: RK4 for every model; for tests)
@@ -454,7 +455,7 @@ class ReducedModel(ModalOutputs):
             out["acc_n_ne"] = Qdd[:, x] + self.h_top * th_a + drift_a
             out["pot_n_sw"] = Q[:, x] + self.h_top * th + drift
         # every floor K (an SDOF frame's floor 1 is its top mass): the slides chain
-        # (`params.bodies.specimen_bodies`), so floor K moves by x + h_K θ + Σ_{i≤K} x_s,i
+        # (`tables.bodies.specimen_bodies`), so floor K moves by x + h_K θ + Σ_{i≤K} x_s,i
         for k, h_k in enumerate(self.assembly.h_floors, 1):
             below = slides[:k]
             if k == len(slides):  # the top floor is the top-mass instruments' quantity

@@ -34,7 +34,8 @@ from vtable.models import physics as phys
 from vtable.models.stiffness import needed_stiffness
 from vtable.opensees.controller import OpenSeesController
 from vtable.opensees.model import load_model
-from vtable.params.virtual import VirtualTable, with_rocking
+from vtable.params.virtual import VirtualTable
+from vtable.tables.eerc import with_rocking
 
 MAX_STEP = 1e-3  # s: the virtual table's largest MuJoCo/control step
 

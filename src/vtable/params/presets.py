@@ -13,7 +13,6 @@ from importlib import resources
 from typing import Any
 
 from vtable import units
-from vtable.analytic.closed_forms import pitch_loop_from_springs, stabilizer_rocking
 from vtable.errors import VtableError, did_you_mean
 from vtable.params.base import read_toml
 from vtable.params.loops import (
@@ -22,10 +21,7 @@ from vtable.params.loops import (
     MechanicalParams,
     OpenLoop,
     RockingSpring,
-    StructureRatios,
     TableSDOFParams,
-    TwoDirectionalParams,
-    spring_frequency,
 )
 from vtable.params.specimen import SDOFSpecimen, Specimen, specimen_from_dict
 from vtable.params.table import EERCTable
@@ -67,14 +63,6 @@ def pitch_springs() -> PitchSprings:
     return PitchSprings(units.to_si(d["k_v_lb_in_per_rad"], "lb-in/rad"),
                         units.to_si(d["c_v_lb_in_s_per_rad"], "lb-in-s/rad"),
                         float(d["f_coupled_hz"]))
-
-
-def pitch_loop(f_r: float, inertia: float) -> OpenLoop:
-    """The §8.6.2 pitch loop of open-loop frequency `f_r` (Hz) on a slab of pitch inertia
-    `inertia` whose spring and dashpot at the coupled frequency are `pitch_springs()`
-    (eqs 8.28-8.29 inverted)."""
-    sp = pitch_springs()
-    return pitch_loop_from_springs(sp.k_v, sp.c_v, sp.f_coupled, f_r, inertia)
 
 
 def specimen(name: str) -> Specimen:
@@ -130,7 +118,7 @@ def model_part(key: str, name: str, cls: type) -> Any:
     return cls.from_dict(data("models")[key][name], f"models.toml [{key}.{name}]")
 
 
-def _physical(key: str) -> tuple[SDOFSpecimen, float, float, Callable[[str, type], Any]]:
+def physical(key: str) -> tuple[SDOFSpecimen, float, float, Callable[[str, type], Any]]:
     """For the physical sets (Tables 8.1, 5.1): the structure (specimens.toml [key]), the
     table mass and inertia (eerc.toml), and part(name, cls) reading models.toml [key.name]."""
     spec = specimen(key)
@@ -144,7 +132,7 @@ def hybrid(name: str = "table9.1") -> HybridParams:
     if name == "table9.1":
         return HybridParams.from_dict(data("models")["table9_1"], "models.toml [table9_1]")
     if name == "table8.1":
-        spec, m_t, inertia, part = _physical("table8_1")
+        spec, m_t, inertia, part = physical("table8_1")
         return HybridParams.from_physical(spec, m_t, inertia, part("open_loop", OpenLoop),
                                           part("rocking", RockingSpring),
                                           title="hybrid model, Table 8.1", source="Table 8.1")
@@ -156,7 +144,7 @@ def mechanical(name: str = "table9.3") -> MechanicalParams:
     if name == "table9.3":
         return MechanicalParams.from_dict(data("models")["table9_3"], "models.toml [table9_3]")
     if name == "table5.1":
-        spec, m_t, inertia, part = _physical("table5_1")
+        spec, m_t, inertia, part = physical("table5_1")
         return MechanicalParams.from_physical(spec, m_t, inertia,
                                               part("horizontal", HorizontalSpring),
                                               part("rocking", RockingSpring),
@@ -165,28 +153,6 @@ def mechanical(name: str = "table9.3") -> MechanicalParams:
     raise VtableError(f"unknown mechanical preset {name!r}; expected table9.3 or table5.1")
 
 
-def two_directional(f_r: float = 21.0) -> TwoDirectionalParams:
-    """Eq 8.16 consistent with Table 8.1 at the coupled frequency (§8.6.2).
-
-    The pitch loop (open-loop frequency `f_r` Hz, 13 or 21 in the report) is chosen so
-    its spring and dashpot at 2.58 Hz are the vertical actuators' k_v, c_v (eqs 8.28-8.29
-    inverted); the passive stabilizers carry k_p = k_θ - k_v and c_p = c_θ - c_v
-    (eqs 8.32-8.33, `stabilizer_rocking`).
-    """
-    spec, m_t, inertia, part = _physical("table8_1")
-    rock = part("rocking", RockingSpring)
-    pitch = pitch_loop(f_r, inertia)
-    k_p, c_p = stabilizer_rocking(rock.k_theta, rock.c_theta, inertia, pitch,
-                                  pitch_springs().f_coupled)
-    f_p, xi_p = spring_frequency(k_p, c_p, inertia)
-    return TwoDirectionalParams(
-        open_loop=part("open_loop", OpenLoop), pitch_loop=pitch,
-        structure=StructureRatios.from_physical(spec, m_t, inertia),
-        f_p=f_p, xi_p=xi_p, height=spec.height,
-        title=f"two-directional table, pitch loop f_r = {f_r:g} Hz (§8.6.2)",
-        source="§8.6.2, Table 8.1")
-
-
 def hybrid_rocking() -> RockingSpring:
     """Table 8.1's rocking spring and dashpot k_θ, c_θ."""
-    return _physical("table8_1")[3]("rocking", RockingSpring)
+    return physical("table8_1")[3]("rocking", RockingSpring)

@@ -22,8 +22,8 @@ from vtable.controllers import kinds
 from vtable.errors import VtableError
 from vtable.params.loops import OpenLoop
 from vtable.params.table import ServoConstants
-from vtable.params.virtual import virtual_table
 from vtable.runs.table import table_from_dict
+from vtable.tables.eerc import virtual_table
 
 
 @dataclass(frozen=True)

@@ -19,13 +19,14 @@ from vtable.opensees.model import load_model
 from vtable.params import presets
 from vtable.params.base import read_toml
 from vtable.params.specimen import NoSpecimen, OpenSeesSpecimen, Specimen, specimen_from_dict
-from vtable.params.virtual import VirtualTable, virtual_table
+from vtable.params.virtual import VirtualTable
 from vtable.runs import write_run
 from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
 from vtable.signals.command import Command
 from vtable.sim.run import SimulatedRun, simulate, simulation_step, standard_physics
 from vtable.sim.simulator import SimResult
+from vtable.tables.eerc import virtual_table
 
 
 def check_playable(command: Command, vt: VirtualTable, control_dt: float,

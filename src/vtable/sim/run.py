@@ -23,12 +23,13 @@ from vtable.models import physics as phys
 from vtable.models.virtual import MAX_STEP, VirtualAssembly
 from vtable.opensees.equivalent import realised
 from vtable.params.specimen import OpenSeesSpecimen, Specimen
-from vtable.params.virtual import VirtualTable, virtual_table
+from vtable.params.virtual import VirtualTable
 from vtable.runs import specimen_table
 from vtable.runs.model import COMMAND_CHANNELS, Run, with_noise
 from vtable.signals.command import Command
 from vtable.sim.channels import result_run
 from vtable.sim.simulator import SimResult, Simulator
+from vtable.tables.eerc import virtual_table
 
 #: Hz: the rate of the runs the diagnosis tests are made of
 OUTPUT_FS = 200.0

@@ -19,13 +19,13 @@ from vtable.display import table_family
 from vtable.effects.registry import parse_spec
 from vtable.errors import VtableError
 from vtable.mjcf.export import export_mjcf as export
-from vtable.params.virtual import virtual_table_for
 from vtable.results import Demo, DemoSimulation, SimulationSummary, Written
 from vtable.runs import write_run
 from vtable.runs.model import with_noise
 from vtable.signals import make_command
 from vtable.signals.spectra import response_spectrum
 from vtable.sim.experiment import load_specimen, load_table, run_experiment
+from vtable.tables.lab import virtual_table_for
 from vtable.units import to_si
 from vtable.verbs.analytic import margins_dict, modes_dict
 from vtable.viz.rerun_scene import log_run
