@@ -23,6 +23,10 @@ STYLE = ("body{font-family:sans-serif;max-width:60em;margin:auto}"
          "td:first-child,th:first-child{text-align:left}")
 
 
+def _band(hz: float | None) -> str:
+    return "not declared" if hz is None else f"{hz:g} Hz"
+
+
 def _pct(v: float | None) -> str:
     return "—" if v is None else f"{100 * v:.2f} %"
 
@@ -52,7 +56,7 @@ def write_report(r: Any, path: str | Path, psa) -> Path:
              f"<p>Objective: the {e(obj)} at the specimen (h = {r.h / 0.0254:.1f} in), "
              f"{r.target.t[-1]:.1f} s at {r.fs:g} Hz. Regularisation λ {st['regularisation']:g}"
              f", cap {st['cap']:g}, corrected up to {st['correction_band_hz']:g} Hz (the "
-             f"table's band: {st['table_band_hz']:g} Hz). {len(r.history) - 1} iterations on "
+             f"table's band: {_band(st['table_band_hz'])}). {len(r.history) - 1} iterations on "
              "the model, predicted NRMS " + e(" → ".join(_pct(v) for v in r.history)) + ".</p>",
              "<h2>The drive and the baselines (predicted by the calibrated model)</h2><table>",
              _row(["", "NRMS", "peak error", "PSA worst error", "at Hz", "specimen peak / "

@@ -17,7 +17,7 @@ from vtable.models.reduced import ReducedModel
 from vtable.params.specimen import NoSpecimen
 from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
-from vtable.tables.lab import virtual_table_for
+from vtable.tables.lab import bare_loop
 
 F = np.array([0.3, 1.0, 3.0, 6.0, 10.0, 15.0, 22.0, 30.0])
 KD = 129.93
@@ -73,7 +73,7 @@ def lab(case: str):
 def reduced_response(case: str, f: np.ndarray) -> np.ndarray:
     """x_t/x_c of vtable's reduced model: its exact linear system's frequency response."""
     t = lab(case)
-    m = ReducedModel(Physics(t.open_loop(), NoSpecimen()), virtual_table_for(t))
+    m = ReducedModel(Physics(bare_loop(t), NoSpecimen()), t)
     A, B = m._linear[0], m._linear[1]
     nq = m.M.shape[0]
     c = np.zeros(A.shape[0])
@@ -133,7 +133,7 @@ def test_identify_fits_the_declared_controllers_loop(tmp_path, capsys, controlle
     d = json.loads((tmp_path / "id.json").read_text())["runs"][0]
     ls = d["loop_structure"]
     assert ls["fits_eq_6_15"] and ls["best"] == "declared", ls["why"]
-    ref = run_table(read_run(path)).open_loop()  # eq 6.16 of the declared table
+    ref = bare_loop(run_table(read_run(path)))  # eq 6.16 of the declared table
     p = d["open_loop"]["params"]
     assert p["f_o"] == pytest.approx(ref.f_o, rel=0.03)
     assert p["xi_o"] == pytest.approx(ref.xi_o, rel=0.03)
@@ -151,7 +151,7 @@ def _virtual_vs_reduced(t) -> dict[str, float]:
     from vtable.signals import Command, band_limited_random
     from vtable.sim import simulate, standard_physics
 
-    vt = virtual_table_for(t)
+    vt = t
     tt, x = band_limited_random(10.0, 0.001, (0, 40), rms=0.0003, seed=3)
     cmd = Command("random 0-40 Hz", tt, x, {"kind": "random", "band_hz": [0.0, 40.0]})
     run = simulate(standard_physics(NoSpecimen(), vt=vt), cmd, 200.0, vt=vt)

@@ -33,6 +33,7 @@ from vtable.ident.result import Identification
 from vtable.runs import read_run
 from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
+from vtable.tables.lab import bare_loop
 
 FS = 200.0
 LOST = 37  # samples the acquisition lost: the drive leads by 37/200 s
@@ -92,7 +93,7 @@ def test_lnec_identify_recovers_eq_6_16_and_the_valve_lag(capsys, tmp_path):
                           str(tmp_path / "id.json"))
     assert code == 0, err
     d = json.loads((tmp_path / "id.json").read_text())["runs"]
-    ref = lab_table(table_from_dict({"preset": "lnec-st1d"}, "preset")).open_loop()
+    ref = bare_loop(lab_table(table_from_dict({"preset": "lnec-st1d"}, "preset")))
     o = d[0]["open_loop"]
     assert o["model"] == "eq 6.15 with a first-order valve lag" and o["flags"] == []
     p = o["params"]

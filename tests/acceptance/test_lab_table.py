@@ -11,10 +11,12 @@ import math
 import numpy as np
 import pytest
 
+from vtable import units
 from vtable.cli import main
+from vtable.errors import VtableError
 from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
-from vtable.tables.lab import virtual_table_for
+from vtable.tables.lab import bare_loop
 
 # the LNEC ST1D published model, as given in issue 11 (SI)
 M, A, V, BETA = 1975.1, 0.012456, 0.002659, 193.7e6
@@ -32,7 +34,7 @@ def test_lnec_preset_open_loop_is_eq_6_16_with_the_platen_damping():
     den = [M * V / (4 * BETA * A), (M * LEAK + C * V / (4 * BETA)) / A, C * LEAK / A + A, kt]
     a3, a2, a1, a0 = den
     w = math.sqrt(a1 / a3)
-    ol = lnec().open_loop()
+    ol = bare_loop(lnec())
     assert ol.f_o == pytest.approx(w / (2 * math.pi), rel=1e-9)
     assert ol.k_o == pytest.approx(a0 / a1, rel=1e-9)
     assert ol.xi_o == pytest.approx(a2 / a1 * w / 2, rel=1e-9)
@@ -40,12 +42,12 @@ def test_lnec_preset_open_loop_is_eq_6_16_with_the_platen_damping():
     # add 0.3 %)
     assert ol.f_o == pytest.approx(24.0, rel=0.01)
     t = lnec()
-    assert t.uniaxial and t.n_actuators == 1 and t.valve_time_constant == TAU
+    assert t.uniaxial and t.n_actuators == 1 and t.valve_lag == TAU
     assert t.platen_mass == M and t.controller == "pid"
 
 
 def test_eerc_preset_is_table_b5_through_eq_6_16():
-    ol = lab_table(None).open_loop()
+    ol = bare_loop(lab_table(None))
     assert (ol.f_o, ol.xi_o, ol.k_o) == pytest.approx((14.972, 0.7099, 26.102), rel=1e-3)
 
 
@@ -55,7 +57,7 @@ def lnec_random_run():
     from vtable.signals import Command, band_limited_random
     from vtable.sim import simulate, standard_physics
 
-    vt = virtual_table_for(lnec())
+    vt = lnec()
     t, x = band_limited_random(82.0, 0.001, (0, 40), rms=0.0002, seed=3)
     cmd = Command("random 0-40 Hz", t, x, {"kind": "random", "band_hz": [0.0, 40.0]})
     return simulate(standard_physics(NoSpecimen(), vt=vt), cmd, 200.0, vt=vt).result
@@ -132,7 +134,7 @@ def lnec_campaign():
     from vtable.sim import simulate
 
     declared = {"preset": "lnec-st1d", "horizontal": {"valve_time_constant_s": 0.0}}
-    vt = virtual_table_for(lab_table(table_from_dict(declared)))
+    vt = lab_table(table_from_dict(declared))
     truth = Physics(nominal_open_loop(vt), NoSpecimen(), {"valve_dynamics": {"tau": TAU}})
     cmds = [make_command("random", duration=11.0, band=(0.0, 40.0), peak_in=0.04, seed=1),
             make_command("random", duration=11.0, band=(0.0, 40.0), peak_in=0.1, seed=2),
@@ -172,17 +174,20 @@ def test_readme_table_description_is_the_lnec_preset():
     preset = lnec()
     assert dataclasses_equal(described, preset)
     assert d["command"]["drive_offset_s"] == "auto"
-    ol = described.open_loop()
+    ol = bare_loop(described)
     assert (ol.f_o, ol.xi_o, ol.k_o) == pytest.approx((24.15, 0.170, 20.05), rel=3e-3)
 
 
 def dataclasses_equal(a, b) -> bool:
+    """Two tables declare the same (every declared quantity equal, the servo constants to
+    rounding); their names may differ."""
     import dataclasses
 
-    skip = {"name", "servo"}
-    same = all(getattr(a, f.name) == getattr(b, f.name) for f in dataclasses.fields(a)
-               if f.name not in skip)
-    sa, sb = a.servo, b.servo
+    declared = ("dofs", "platen_mass", "pitch_inertia", "com_height", "n_actuators",
+                "valve_lag", "controller", "control", "stroke", "velocity", "acceleration",
+                "payload", "band", "force_measured", "declared", "knobs")
+    same = all(getattr(a, k) == getattr(b, k) for k in declared)
+    sa, sb = a.horizontal_servo, b.horizontal_servo
     return same and all(getattr(sa, f.name) == pytest.approx(getattr(sb, f.name), rel=1e-12)
                         for f in dataclasses.fields(sa)
                         if isinstance(getattr(sa, f.name), float))
@@ -206,9 +211,9 @@ def test_a_limit_the_table_does_not_declare_is_absent_not_a_big_number():
 
     d = tomllib.loads(files("vtable.params").joinpath("data/lnec_st1d.toml").read_text())
     d.pop("source")
-    declared = virtual_table_for(lab_table(table_from_dict(d)))
+    declared = lab_table(table_from_dict(d))
     d.pop("limits")
-    vt = virtual_table_for(lab_table(table_from_dict(d)))
+    vt = lab_table(table_from_dict(d))
     sp = vt.table.specs
     assert (sp.stroke_h, sp.velocity_h, sp.acceleration_h, sp.overhead_clearance,
             sp.overturning_capacity) == (None, None, None, None, None)
@@ -224,3 +229,49 @@ def test_a_limit_the_table_does_not_declare_is_absent_not_a_big_number():
     assert v_max.default_on(TableView.of(declared)) == pytest.approx(0.4 / 0.0254)
     with pytest.raises(Exception, match="stroke"):
         check_motion(declared, t, 0.2 * np.sin(2 * np.pi * t))
+
+
+def _lnec_without(*keys: str) -> dict:
+    """LNEC's preset as a description, with the limits `keys` not declared."""
+    from vtable.runs.table import TABLE_PRESETS
+
+    d = TABLE_PRESETS["lnec-st1d"]()
+    d = {**d, "limits": {k: v for k, v in d["limits"].items() if k not in keys}}
+    return {k: v for k, v in d.items() if k != "preset"}
+
+
+def test_a_limit_a_table_does_not_declare_is_absent_and_nothing_is_checked_against_it():
+    """One table: what a lab leaves out is None on the table every model reads (was the
+    platen's mass as payload and 100 Hz as band), so a specimen heavier than the platen
+    mounts and a sine above 100 Hz is refused only by the recorded rate's Nyquist."""
+    from vtable.mjcf.builder import check_specimen
+    from vtable.params.specimen import RigidBlock
+    from vtable.signals import make_command
+    from vtable.sim.experiment import check_playable
+
+    t = lab_table(table_from_dict(_lnec_without("payload_kg", "band_hz"), "lab [table]"))
+    assert t.payload is None and t.band is None
+    assert t.table.specs.weight_capacity is None and t.table.specs.bandwidth is None
+    assert t.stroke == pytest.approx(0.100) and t.velocity == pytest.approx(0.40)
+    heavy = RigidBlock(weight=3 * M * units.G, height=0.5)  # three platens' worth
+    check_specimen(t, heavy)  # no capacity declared: nothing to exceed
+    with pytest.raises(VtableError, match="capacity"):
+        check_specimen(lnec(), RigidBlock(weight=1.2 * 5000.0 * units.G, height=0.5))
+    sine = make_command("sine", duration=2.0, frequency=150.0, peak_in=0.001)
+    assert check_playable(sine, t, 1e-4, 1e-3) == []  # 150 Hz < 500 Hz Nyquist
+    with pytest.raises(VtableError, match="above the table's 0-25 Hz band"):
+        check_playable(sine, lnec(), 1e-4, 1e-3)
+
+
+def test_limits_a_description_of_the_eerc_table_changes_reach_every_model():
+    """The EERC table described with a shorter stroke and a payload: the table the models
+    read carries them (the multibody table kept Table 2.2's before), the rest is Table
+    2.2's; the declared platen mass is kept exactly."""
+    d = {"preset": "eerc", "platen_mass_kg": 40000.0,
+         "limits": {"stroke_m": 0.05, "payload_kg": 20000.0}}
+    t = lab_table(table_from_dict(d, "lab [table]"))
+    eerc = lab_table(None)
+    assert t.stroke == 0.05 and t.table.specs.stroke_h == 0.05
+    assert t.payload == pytest.approx(20000.0, rel=1e-12)
+    assert t.velocity == eerc.velocity and t.band == eerc.band == (0.0, 20.0)
+    assert t.platen_mass == 40000.0 and t.pitches and t.n_actuators == 3

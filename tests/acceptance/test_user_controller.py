@@ -23,7 +23,7 @@ from vtable.models.reduced import ReducedModel
 from vtable.params.specimen import NoSpecimen
 from vtable.runs.lab import lab_table
 from vtable.runs.table import table_from_dict
-from vtable.tables.lab import virtual_table_for
+from vtable.tables.lab import bare_loop
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "leaky_pi_controller.py"
 F = np.array([0.05, 0.3, 1.0, 3.0, 6.0, 10.0, 15.0, 22.0, 30.0])
@@ -45,7 +45,7 @@ def hand(f: np.ndarray) -> np.ndarray:
 
 
 def test_the_lab_kind_is_the_hand_derivation_in_the_reduced_model(table):
-    m = ReducedModel(Physics(table.open_loop(), NoSpecimen()), virtual_table_for(table))
+    m = ReducedModel(Physics(bare_loop(table), NoSpecimen()), table)
     A, B = m._linear[0], m._linear[1]
     c = np.zeros(A.shape[0])
     c[:m.M.shape[0]] = m.ax
@@ -58,8 +58,8 @@ def test_the_lab_kind_is_the_hand_derivation_in_the_reduced_model(table):
 
 
 def test_the_lab_kind_in_the_declared_closed_loop(table):
-    vt = virtual_table_for(table)
-    ol = table.open_loop()
+    vt = table
+    ol = bare_loop(table)
     h = declared_loop(vt)(F, ol.f_o, ol.xi_o, ol.k_o, 0.0246)
     assert np.abs(h / hand(F) - 1).max() < 0.01
 

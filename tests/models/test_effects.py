@@ -176,15 +176,15 @@ def test_every_catalog_effect_applies_on_a_table_with_its_own_valve_lag():
     from vtable.params.specimen import NoSpecimen
     from vtable.runs.lab import lab_table
     from vtable.runs.table import table_from_dict
-    from vtable.tables.lab import virtual_table_for
+    from vtable.tables.lab import bare_loop
 
     t = lab_table(table_from_dict({"preset": "lnec-st1d"}))
-    vt = virtual_table_for(t)
+    vt = t
     from vtable.errors import VtableError
     built = []
     for name in BUILT_IN:
         try:
-            ReducedModel(Physics(t.open_loop(), NoSpecimen(), {name: {}}), vt)
+            ReducedModel(Physics(bare_loop(t), NoSpecimen(), {name: {}}), vt)
             built.append(name)
         except VtableError as e:  # a physical refusal (no pitch on this table, no storey
             # on a bare one), said
@@ -193,7 +193,7 @@ def test_every_catalog_effect_applies_on_a_table_with_its_own_valve_lag():
     assert "valve_dynamics" in built and len(built) == len(BUILT_IN) - 3
 
     def phase_10hz(effects):
-        m = ReducedModel(Physics(t.open_loop(), NoSpecimen(), effects), vt)
+        m = ReducedModel(Physics(bare_loop(t), NoSpecimen(), effects), vt)
         A, B = m._linear[0], m._linear[1]
         c = np.zeros(A.shape[0])
         c[:m.M.shape[0]] = m.ax

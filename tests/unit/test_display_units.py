@@ -87,11 +87,10 @@ def test_a_metric_run_reads_back_to_the_same_si_values(tmp_path):
     from vtable.params.specimen import NoSpecimen
     from vtable.signals import make_command
     from vtable.sim.experiment import load_table, run_experiment
-    from vtable.tables.lab import virtual_table_for
 
     lab = load_table("lnec-st1d")
     exp = run_experiment(NoSpecimen(), make_command("random", duration=1.0, peak_in=0.04),
-                         vt=virtual_table_for(lab))
+                         vt=lab)
     run = exp.run
     run.units = display.file_units(run.units, display.table_family(lab))
     assert run.units["avg_hdisp"] == "mm" and run.units["h1_force"] == "kN"

@@ -37,7 +37,7 @@ def declared_loop(vt: VirtualTable):
     Parameters
     ----------
     vt
-        The run's table (`vtable.tables.lab.virtual_table_for`).
+        The run's table (`vtable.runs.lab.run_table`).
 
     Returns
     -------

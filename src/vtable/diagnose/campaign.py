@@ -27,7 +27,6 @@ from vtable.errors import VtableError
 from vtable.runs.lab import run_table
 from vtable.runs.model import Run
 from vtable.runs.read import check_configuration
-from vtable.tables.lab import virtual_table_for
 
 REQUIRED = ("h_span",)
 
@@ -196,7 +195,7 @@ class Campaign:
     def table(self):
         """The runs' table as the models read it (`vtable.params.virtual.VirtualTable`)."""
         if not hasattr(self, "_vt"):
-            self._vt = virtual_table_for(run_table(self.runs[0]))
+            self._vt = run_table(self.runs[0])
         return self._vt
 
     @property

@@ -311,13 +311,14 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
     # the model's |H| from the drive to the objective where the table's band and the
     # correction band end: the drive's content above the band is the target's over it
     response = {k: float(np.interp(v, f, np.abs(H)))
-                for k, v in (("table_band", bw), ("correction_band", band[1]))}
+                for k, v in (("table_band", bw), ("correction_band", band[1])) if v is not None}
     played = _played("drive", d, out, target, model, fs)
     played.metrics["amplification"] = amp
-    notes = [above_band_note({"drive": played.metrics["above_band_share"],
-                              "target": share_above(T, fs, bw),
-                              "motion": played.metrics["motion_above_band_share"]},
-                             response, bw, model.vt.limits_source, band[1], BAND_HZ[1],
+    shares = {"drive": played.metrics["above_band_share"],
+              "target": _share_above(T, fs, bw),
+              "motion": played.metrics["motion_above_band_share"]}
+    notes = [None if bw is None else  # a table that declares no band: no figure above it
+             above_band_note(shares, response, bw, model.vt.limits_source, band[1], BAND_HZ[1],
                              "x_t + θh" if objective == "effective" else "x_t")]
     if plant.state is not None:
         notes.append(f"the model holds several specimen states: the drive is for "
@@ -394,6 +395,11 @@ def _baselines(plant: DrivePlant, model: TableModel, target: Target, h: float,
     return [*out, _elongated(plant, target, model, fs)]
 
 
+def _share_above(x: np.ndarray, fs: float, bw: float | None) -> float | None:
+    """`share_above` the table's band `bw`; None for a table that declares no band."""
+    return None if bw is None else share_above(x, fs, bw)
+
+
 def _played(name: str, d: np.ndarray, out: dict[str, np.ndarray], target: Target,
             model: TableModel, fs: float, compare_to_target: bool = True) -> Played:
     """The metrics of one drive: the effective motion against the target (NRMS, peak
@@ -404,8 +410,8 @@ def _played(name: str, d: np.ndarray, out: dict[str, np.ndarray], target: Target
         "drive_peak_in": float(np.max(np.abs(d)) / 0.0254),
         "drive_peak_velocity_in_s": float(np.max(np.abs(np.gradient(d, 1 / fs))) / 0.0254),
         "limit_use": limit_use(model.vt, d, fs, out.get("h1_force")),
-        "above_band_share": share_above(d, fs, model.vt.table.specs.bandwidth),
-        "motion_above_band_share": share_above(y, fs, model.vt.table.specs.bandwidth)}
+        "above_band_share": _share_above(d, fs, model.vt.table.specs.bandwidth),
+        "motion_above_band_share": _share_above(y, fs, model.vt.table.specs.bandwidth)}
     if compare_to_target:
         m["nrms"] = nrms(y - T, T)
         m["peak_error"] = float(np.max(np.abs(y - T)) / np.max(np.abs(T)))

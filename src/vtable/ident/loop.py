@@ -61,7 +61,7 @@ from vtable.ident.fits import (
 from vtable.ident.resonator import dip, is_resonance
 from vtable.ident.tf import TransferFunction
 from vtable.params.loops import OpenLoop
-from vtable.tables.lab import virtual_table_for
+from vtable.tables.lab import bare_loop
 
 TWO_PI = 2 * np.pi
 #: the smallest relative random error a line is credited with (model error, bias of a
@@ -144,12 +144,12 @@ def declared_structure(vt) -> Structure:
 
 
 def prior_of(table) -> Prior:
-    """What a run's table (`vtable.runs.lab.LabTable`) predicts of its loop: eq 6.16,
+    """What a run's table (`vtable.runs.lab.run_table`) predicts of its loop: eq 6.16,
     its valve time constant and its declared controller's structure."""
-    declared = declared_structure(virtual_table_for(table)) if table.control is not None \
+    declared = declared_structure(table) if table.control is not None \
         else None
     u_max = table.payload / table.platen_mass if table.payload else None
-    return Prior(table.open_loop(), table.valve_time_constant, table.name, declared, u_max)
+    return Prior(bare_loop(table), table.valve_lag, table.name, declared, u_max)
 
 
 @dataclass(frozen=True)

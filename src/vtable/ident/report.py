@@ -50,9 +50,11 @@ from vtable.ident.tf import TransferFunction, transfer_function
 from vtable.ident.validity import Flag, flags_json, inherit, loop_flags, settled
 from vtable.params.loops import OpenLoop
 from vtable.params.specimen import NoSpecimen, RigidBlock, SDOFSpecimen, ShearBuilding
+from vtable.params.virtual import VirtualTable
 from vtable.runs.channels import FORMAT_UNITS
-from vtable.runs.lab import LabTable, run_table
+from vtable.runs.lab import run_table
 from vtable.runs.model import Run
+from vtable.tables.lab import bare_loop
 from vtable.units import to_si
 
 #: the servo-loop fits use this band (the report's 0-25 Hz random tests), widened to 1.5
@@ -60,10 +62,10 @@ from vtable.units import to_si
 SERVO_BAND = (0.2, 25.0)
 
 
-def servo_band(run: Run, table: LabTable) -> tuple[float, float]:
+def servo_band(run: Run, table: VirtualTable) -> tuple[float, float]:
     """The band of the servo-loop fits: `SERVO_BAND`, its top raised to 1.5 f_o of the
     table's described loop (eq 6.16) and kept below 0.45 fs."""
-    hi = max(SERVO_BAND[1], 1.5 * table.open_loop().f_o)
+    hi = max(SERVO_BAND[1], 1.5 * bare_loop(table).f_o)
     return SERVO_BAND[0], min(hi, 0.45 * run.fs)
 
 
@@ -71,7 +73,7 @@ def _fit_dict(fit: Fit | None) -> dict[str, Any] | None:
     return None if fit is None else fit.to_json()
 
 
-def _no_pitch(table: LabTable) -> str:
+def _no_pitch(table: VirtualTable) -> str:
     return f"the {table.name} table does not pitch (its DOFs: {', '.join(table.dofs)})"
 
 
@@ -122,7 +124,7 @@ def identify_run(run: Run) -> Identification:
     out.table = {"name": table.name, "dofs": list(table.dofs),
                  "platen_mass_kg": table.platen_mass,
                  "horizontal_actuators": table.n_actuators,
-                 "valve_time_constant_s": table.valve_time_constant}
+                 "valve_time_constant_s": table.valve_lag}
     if run.declared.table is None:
         notes.append("no [table]: the EERC table assumed (the format's default)")
     notes.extend(_unusable_channels(run))
@@ -211,7 +213,7 @@ _TERMS = (("i", "i_per_s"), ("d", "d_s"), ("t_v", "feedforward_velocity_s"),
           ("ref", "reference generator"))
 
 
-def _controller_terms(table: LabTable) -> list[str]:
+def _controller_terms(table: VirtualTable) -> list[str]:
     """The declared controller's terms beyond the P law (eqs 6.1-6.4) that are on."""
     if table.control is None:
         return []
@@ -222,14 +224,14 @@ def _controller_terms(table: LabTable) -> list[str]:
     return on
 
 
-def _servo_loop(run: Run, spec, m_t: float, table: LabTable, out: Identification) -> None:
+def _servo_loop(run: Run, spec, m_t: float, table: VirtualTable, out: Identification) -> None:
     """x_t/x_c: eq 6.15 (bare table, rigid mass; x a first-order valve lag when the
     table has a valve time constant), checked against the other loop structures first,
     or eq 7.9 (a SDOF structure, the valve lag held)."""
     x_c, x_t = channels.require(run, "h_span", "avg_hdisp", purpose="the servo-loop fit x_t/x_c")
     n_samples = len(run.time)
     band = servo_band(run, table)
-    tau = table.valve_time_constant
+    tau = table.valve_lag
     if isinstance(spec, NoSpecimen | RigidBlock):
         # a broad loop resonance (ξ_o ~ 0.5): frames for averages, the report's 2048 at most
         n = frame_for_averages(n_samples, MIN_AVERAGES, longest=2048) or \

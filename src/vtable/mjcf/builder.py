@@ -330,7 +330,7 @@ def check_specimen(vt: VirtualTable, spec: Specimen) -> None:
         return
     weight = (load_model(spec.model).mass if isinstance(spec, OpenSeesSpecimen) else
               spec.mass) * G
-    if weight > specs.weight_capacity:
+    if specs.weight_capacity is not None and weight > specs.weight_capacity:
         raise VtableError(f"specimen weighs {units.from_si(weight, 'kip'):.1f} kips, above the "
                           f"table's capacity of {units.from_si(specs.weight_capacity, 'kip'):g} "
                           f"kips ({vt.limits_source})")

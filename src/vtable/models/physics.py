@@ -17,7 +17,6 @@ from vtable.params.specimen import OpenSeesSpecimen, Specimen
 from vtable.params.table import ServoConstants
 from vtable.params.virtual import VirtualTable
 from vtable.tables.eerc import virtual_table
-from vtable.units import G
 
 
 @dataclass(frozen=True)
@@ -84,7 +83,7 @@ class Physics:
             vt = dataclasses.replace(vt, control=vt.control._replace(
                 params={**vt.control.params, **ctl}))
         g = vt.table.geometry
-        g = dataclasses.replace(g, weight=t.get("platen_mass", g.mass) * G,
+        g = dataclasses.replace(g, mass=t.get("platen_mass", g.mass),
                                 pitch_inertia=t.get("pitch_inertia", g.pitch_inertia))
         return dataclasses.replace(vt, table=dataclasses.replace(vt.table, geometry=g),
                                    com_height=t.get("com_height", vt.com_height))

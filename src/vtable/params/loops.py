@@ -9,10 +9,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 from vtable.errors import VtableError
 from vtable.params.base import Params, plain, quantity
 from vtable.params.specimen import SDOFSpecimen
+
+#: the names `vtable.params` gives (the package's public ones)
+__all__ = [
+    "HorizontalSpring", "HybridParams", "MechanicalParams", "OpenLoop", "RockingSpring",
+    "StructureRatios", "TableSDOFParams", "TwoDirectionalParams"
+]
 
 TWO_PI = 2 * math.pi
 
@@ -83,8 +90,26 @@ class StructureRatios(Params):
                    v=m * specimen.height**2 / table_inertia)
 
 
+class ModelParams(Params):
+    """A model's parameter set whose sub-tables are parameter objects of their own
+    (`NESTED`: (key, class) pairs), each read with its own checks and its key in messages."""
+
+    NESTED: ClassVar[tuple[tuple[str, type], ...]] = ()
+
+    @classmethod
+    def from_dict(cls, d, where=""):
+        where = where or cls.__name__
+        if not isinstance(d, dict):
+            raise VtableError(f"{where}: expected a table")
+        d = dict(d)
+        for key, sub_cls in cls.NESTED:
+            if key in d:
+                d[key] = sub_cls.from_dict(d[key], f"{where}.{key}")
+        return Params.from_dict.__func__(cls, d, where)
+
+
 @dataclass(frozen=True)
-class TableSDOFParams(Params):
+class TableSDOFParams(ModelParams):
     """Uni-directional table + SDOF structure (eq 7.7; rows of Tables 7.1 and 7.2)."""
 
     open_loop: OpenLoop = plain()
@@ -92,13 +117,11 @@ class TableSDOFParams(Params):
     title: str = plain(default="")
     source: str = plain(default="")
 
-    @classmethod
-    def from_dict(cls, d, where=""):
-        return _nested(cls, d, where, open_loop=OpenLoop, structure=StructureRatios)
+    NESTED = (("open_loop", OpenLoop), ("structure", StructureRatios))
 
 
 @dataclass(frozen=True)
-class HybridParams(Params):
+class HybridParams(ModelParams):
     """Hybrid model (eq 8.37, Table 9.1): horizontal servo loop, rocking spring-dashpot
     as ω_θ² = k_θ/I (8.35), ξ_θ = c_θ/(2ω_θ I) (8.36)."""
 
@@ -109,9 +132,7 @@ class HybridParams(Params):
     title: str = plain(default="")
     source: str = plain(default="")
 
-    @classmethod
-    def from_dict(cls, d, where=""):
-        return _nested(cls, d, where, open_loop=OpenLoop, structure=StructureRatios)
+    NESTED = (("open_loop", OpenLoop), ("structure", StructureRatios))
 
     @classmethod
     def from_physical(cls, specimen: SDOFSpecimen, table_mass: float, table_inertia: float,
@@ -124,7 +145,7 @@ class HybridParams(Params):
 
 
 @dataclass(frozen=True)
-class MechanicalParams(Params):
+class MechanicalParams(ModelParams):
     """Mechanical model (eq A.13, Table 9.3): horizontal and rocking springs/dashpots."""
 
     structure: StructureRatios = plain()
@@ -135,9 +156,7 @@ class MechanicalParams(Params):
     title: str = plain(default="")
     source: str = plain(default="")
 
-    @classmethod
-    def from_dict(cls, d, where=""):
-        return _nested(cls, d, where, structure=StructureRatios)
+    NESTED = (("structure", StructureRatios),)
 
     @classmethod
     def from_physical(cls, specimen: SDOFSpecimen, table_mass: float, table_inertia: float,
@@ -151,7 +170,7 @@ class MechanicalParams(Params):
 
 
 @dataclass(frozen=True)
-class TwoDirectionalParams(Params):
+class TwoDirectionalParams(ModelParams):
     """Two-directional table (eq 8.16): horizontal loop (f_o, ξ_o, k_o), pitch actuator
     loop (f_r, ξ_r, k_r, eq 8.2) and passive stabilizers ω_p² = k_p/I, ξ_p (eq 8.10)."""
 
@@ -164,18 +183,4 @@ class TwoDirectionalParams(Params):
     title: str = plain(default="")
     source: str = plain(default="")
 
-    @classmethod
-    def from_dict(cls, d, where=""):
-        return _nested(cls, d, where, open_loop=OpenLoop, pitch_loop=OpenLoop,
-                       structure=StructureRatios)
-
-
-def _nested(cls, d, where, **sub):
-    where = where or cls.__name__
-    if not isinstance(d, dict):
-        raise VtableError(f"{where}: expected a table")
-    d = dict(d)
-    for key, sub_cls in sub.items():
-        if key in d:
-            d[key] = sub_cls.from_dict(d[key], f"{where}.{key}")
-    return Params.from_dict.__func__(cls, d, where)
+    NESTED = (("open_loop", OpenLoop), ("pitch_loop", OpenLoop), ("structure", StructureRatios))

@@ -24,7 +24,7 @@ from vtable.params.loops import (
     TableSDOFParams,
 )
 from vtable.params.specimen import SDOFSpecimen, Specimen, specimen_from_dict
-from vtable.params.table import EERCTable
+from vtable.params.table import TableHardware
 
 
 @cache
@@ -37,9 +37,9 @@ def data(name: str) -> dict[str, Any]:
 
 
 @cache
-def eerc_table() -> EERCTable:
+def eerc_table() -> TableHardware:
     """The EERC table (data/eerc.toml)."""
-    return EERCTable.from_dict(data("eerc"), "eerc.toml")
+    return TableHardware.from_dict(data("eerc"), "eerc.toml")
 
 
 def anti_alias_hz() -> float:

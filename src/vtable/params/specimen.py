@@ -25,6 +25,12 @@ from vtable.params.base import Params, check_number, plain, quantity
 from vtable.params.hysteresis import Hysteresis, parse_hysteresis
 from vtable.units import G
 
+#: the names `vtable.params` gives (the package's public ones)
+__all__ = [
+    "NoSpecimen", "RigidBlock", "SDOFSpecimen", "ShearBuilding", "Specimen",
+    "specimen_from_dict"
+]
+
 KINDS = ("none", "rigid", "sdof", "shear_building", "opensees")
 #: the most storeys a shear building may have (eq 4.5 models; a lab specimen has a few)
 MAX_STOREYS = 50

@@ -11,8 +11,20 @@ from dataclasses import dataclass
 from typing import Any, Self
 
 from vtable.errors import VtableError, did_you_mean
-from vtable.params.base import Params, plain, quantity
+from vtable.params.base import Params, check_number, plain, quantity
 from vtable.units import G
+
+#: the names `vtable.params` gives (the package's public ones)
+__all__ = [
+    "ActuatorSpec",
+    "ControlSettings",
+    "DirectionSettings",
+    "KnobFactors",
+    "ServoConstants",
+    "TableGeometry",
+    "TableHardware",
+    "TableSpecs"
+]
 
 DIRECTIONS = ("horizontal", "pitch", "vertical", "roll", "twist")
 KNOBS = ("gain", "delta_p", "rate")
@@ -24,7 +36,9 @@ class TableGeometry(Params):
 
     plan_width: float = quantity("ft", "plan_width_ft", minimum=0, source="§2.2")
     thickness: float = quantity("ft", "thickness_ft", minimum=0, source="§2.2")
-    weight: float = quantity("kip", "weight_kip", minimum=0, source="§2.2, Table 8.1")
+    #: kg: the platen's mass (a preset gives its weight, `weight_kip`: §2.2, Table 8.1's
+    #: 100 kips; a lab's table its mass, kept as declared)
+    mass: float = quantity("kg", "mass_kg", minimum=0, source="§2.2, Table 8.1: weight / g")
     pitch_inertia: float = quantity("kip-in-s2", "pitch_inertia_kip_in_s2", minimum=0,
                                     source="Table 8.1")
     actuator_line_depth: float = quantity("in", "actuator_line_depth_in", minimum=0,
@@ -43,10 +57,19 @@ class TableGeometry(Params):
                                       source="§2.2")
     source: str = plain(default="")
 
+    @classmethod
+    def from_dict(cls, d: dict[str, Any], where: str = "") -> TableGeometry:
+        """As `Params.from_dict`; the platen given by its weight (`weight_kip`, as the report
+        gives it) has the mass that weighs that much (divided by standard gravity)."""
+        if isinstance(d, dict) and "weight_kip" in d and "mass_kg" not in d:
+            w = check_number(d["weight_kip"], f"{where or cls.__name__}.weight_kip", "kip")
+            d = {**{k: v for k, v in d.items() if k != "weight_kip"}, "mass_kg": w / G}
+        return super().from_dict(d, where)
+
     @property
-    def mass(self) -> float:
-        """Slab mass m_t (kg)."""
-        return self.weight / G
+    def weight(self) -> float:
+        """N: the platen's weight m_t g."""
+        return self.mass * G
 
 
 @dataclass(frozen=True)
@@ -55,7 +78,7 @@ class TableSpecs(Params):
     lab's uniaxial table that declares no stroke, no overhead clearance) is None: nothing
     is checked against it."""
 
-    weight_capacity: float = quantity("kip", "weight_capacity_kip", minimum=0)
+    weight_capacity: float | None = quantity("kip", "weight_capacity_kip", minimum=0)
     overhead_clearance: float | None = quantity("ft", "overhead_clearance_ft", minimum=0)
     overturning_capacity: float | None = quantity("kip-ft", "overturning_kip_ft", minimum=0,
                                                   exclusive=False)
@@ -65,7 +88,9 @@ class TableSpecs(Params):
     velocity_v: float = quantity("in/s", "velocity_v_in_per_s", minimum=0, exclusive=False)
     acceleration_h: float | None = quantity("g", "acceleration_h_g", minimum=0)
     acceleration_v: float = quantity("g", "acceleration_v_g", minimum=0, exclusive=False)
-    bandwidth: float = quantity("Hz", "bandwidth_hz", minimum=0)
+    bandwidth: float | None = quantity("Hz", "bandwidth_hz", minimum=0)
+    #: Hz: where the band starts (Table 2.2's is 0-50 Hz; a lab may declare another)
+    band_low: float = quantity("Hz", "band_low_hz", default=0.0, minimum=0, exclusive=False)
     source: str = plain(default="")
 
 
@@ -196,8 +221,12 @@ class KnobFactors:
 
 
 @dataclass(frozen=True)
-class EERCTable:
-    """Everything about the table itself, from one preset file."""
+class TableHardware:
+    """A table's hardware: the platen's geometry, its limits, its actuators, one horizontal
+    actuator's servo constants and the controller's knob settings and factors — the EERC
+    table's from its preset file (Tables 2.1, 2.2, 3.2, B.1-B.5), a lab's uniaxial
+    platen's from its declaration (`vtable.tables.lab`). Part of the one table description
+    the models read (`vtable.params.virtual.VirtualTable.table`)."""
 
     geometry: TableGeometry
     specs: TableSpecs
@@ -263,7 +292,7 @@ class EERCTable:
                                    k_v=s.k_v * ratio("rate"))
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any], where: str = "table") -> EERCTable:
+    def from_dict(cls, d: dict[str, Any], where: str = "table") -> TableHardware:
         need = ("geometry", "specs", "actuators", "servo", "control", "knob_factors")
         for k in need:
             if k not in d:

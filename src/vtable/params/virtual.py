@@ -1,4 +1,4 @@
-"""The multibody virtual table's description (SI): the platen's hardware (`EERCTable`),
+"""The multibody virtual table's description (SI): the platen's hardware (`TableHardware`),
 the layout assumptions, the actuators and stabilizers, the servo constants and control
 settings — one object the MJCF builder, the controllers and the analytic and reduced
 models read. Plain data: the tables vtable models are built from the presets with the
@@ -15,9 +15,10 @@ from vtable.params.base import Params, plain, quantity
 from vtable.params.loops import OpenLoop
 from vtable.params.table import (
     DirectionSettings,
-    EERCTable,
     ServoConstants,
+    TableHardware,
 )
+from vtable.units import G
 
 
 @dataclass(frozen=True)
@@ -77,7 +78,7 @@ class VirtualTable:
     """Everything the multibody table, its controllers and the consistent analytic model
     need, built once from the EERC preset (`virtual_table()`)."""
 
-    table: EERCTable
+    table: TableHardware
     layout: MultibodyLayout
     actuators: tuple[Actuator, ...]
     horizontal_servo: ServoConstants  # Table B.5, per horizontal actuator
@@ -91,13 +92,68 @@ class VirtualTable:
     #: the horizontal controller's control stage and its parameters (a digital
     #: controller's terms beyond eqs 6.1-6.4: `vtable.controllers.kinds`); None: none
     control: tuple | None = None
+    #: the horizontal controller's kind (`vtable.controllers.kinds`): the EERC table's
+    #: three-variable controller, a lab's PID, ...
+    controller: str = "three_variable"
     name: str = "eerc"
     com_height: float | None = None  # m: platen c.o.m. above the actuator line (None: shape's)
     #: what the horizontal force channels measure: "load_cell", the net force the rod
     #: transmits to the platen (after friction and any force stage); "delta_p", A·ΔP
     force_measured: str = "load_cell"
-    #: the run-format [table] the table was declared with (`LabTable.declared`)
+    #: the run-format [table] the table was declared with (a run made on it writes this
+    #: back); None: a preset, written as its name
     declared: dict | None = field(default=None, compare=False)
+
+    # -- what a lab declares of its table, read from the one description -----------------
+    @property
+    def platen_mass(self) -> float:
+        """kg: the platen's mass."""
+        return self.table.geometry.mass
+
+    @property
+    def pitch_inertia(self) -> float:
+        """kg m²: the platen's pitch inertia about the horizontal actuator line."""
+        return self.table.geometry.pitch_inertia
+
+    @property
+    def n_actuators(self) -> int:
+        """The horizontal actuators (lumped by the reduced model)."""
+        return len(self.group("horizontal"))
+
+    @property
+    def uniaxial(self) -> bool:
+        return tuple(self.dofs) == ("x",)
+
+    @property
+    def pitches(self) -> bool:
+        return "pitch" in self.dofs
+
+    @property
+    def stroke(self) -> float | None:
+        """m (± amplitude) of the horizontal actuators; None: not declared."""
+        return self.table.specs.stroke_h
+
+    @property
+    def velocity(self) -> float | None:
+        """m/s: the horizontal velocity limit; None: not declared."""
+        return self.table.specs.velocity_h
+
+    @property
+    def acceleration(self) -> float | None:
+        """m/s²: the horizontal acceleration limit; None: not declared."""
+        return self.table.specs.acceleration_h
+
+    @property
+    def payload(self) -> float | None:
+        """kg: the specimen mass the table carries; None: not declared."""
+        w = self.table.specs.weight_capacity
+        return None if w is None else w / G
+
+    @property
+    def band(self) -> tuple[float, float] | None:
+        """Hz: the table's operating band; None: not declared."""
+        s = self.table.specs
+        return None if s.bandwidth is None else (s.band_low, s.bandwidth)
 
     @property
     def limits_source(self) -> str:

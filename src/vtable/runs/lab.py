@@ -2,7 +2,8 @@
 horizontal actuators and their servo loop, the controller, the limits.
 
 `lab_table(desc)` turns a run's [table] (`vtable.runs.table.TableDescription`: a preset
-and/or a description, docs/run-format.md) into a `LabTable`; a run without
+and/or a description, docs/run-format.md) into the one table description every model
+reads (`vtable.params.virtual.VirtualTable`, `vtable.tables.lab.described_table`); a run without
 [table] is the EERC table (the format's default). The horizontal loop is described per
 actuator by the report's constants (`ServoConstants`, eqs 6.1-6.5): for the EERC table
 Table B.5's at the Table 3.2 knobs; for a table described physically, the flow gain per
@@ -14,82 +15,29 @@ shared by the actuators, and the servovalve's time constant as a spool lag.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import replace
 from functools import cache
 
-from vtable.analytic.servo import open_loop_from_servo
 from vtable.controllers import kinds
 from vtable.errors import VtableError
-from vtable.params.loops import OpenLoop
 from vtable.params.table import ServoConstants
+from vtable.params.virtual import VirtualTable
 from vtable.runs.table import table_from_dict
 from vtable.tables.eerc import virtual_table
+from vtable.tables.lab import described_table
 
 
-@dataclass(frozen=True)
-class LabTable:
-    """A shaking table (SI)."""
-
-    name: str
-    dofs: tuple[str, ...]
-    platen_mass: float              # kg
-    pitch_inertia: float | None     # kg m² about the horizontal actuator line
-    com_height: float | None        # m above the horizontal actuator line (None: not given)
-    n_actuators: int                # horizontal actuators (lumped by the reduced model)
-    servo: ServoConstants           # one actuator's loop (mass = platen mass per actuator)
-    valve_time_constant: float      # s (0: an instantaneous valve)
-    controller: str                 # its kind (`vtable.controllers.kinds`)
-    #: the kind's control stage and its parameters (None: the P law of eqs 6.1-6.4 only)
-    control: tuple | None = None
-    stroke: float | None = None     # m (± amplitude)
-    velocity: float | None = None   # m/s
-    acceleration: float | None = None  # m/s²
-    payload: float | None = None    # kg
-    band: tuple[float, float] | None = None  # Hz
-    force_measured: str = "load_cell"  # the force channels: "load_cell" or "delta_p" (A·ΔP)
-    #: the run-format [table] it was read from (a run made on it writes this back); None:
-    #: a preset, written as its name
-    declared: dict | None = dataclasses.field(default=None, compare=False)
-
-    @property
-    def uniaxial(self) -> bool:
-        return tuple(self.dofs) == ("x",)
-
-    @property
-    def pitches(self) -> bool:
-        return "pitch" in self.dofs
-
-    def open_loop(self) -> OpenLoop:
-        """(f_o, ξ_o, k_o) of the bare table's horizontal loop (eq 6.16, with the platen's
-        damping; the valve lag is not in eq 6.15)."""
-        return open_loop_from_servo(self.servo)
-
-
-def _eerc(desc) -> LabTable:
-    vt = virtual_table()
-    g, sp = vt.table.geometry, vt.table.specs
-    n = len(vt.group("horizontal"))
-    servo = dataclasses.replace(vt.horizontal_servo, mass=g.mass / n)
-    return LabTable("eerc", ("x", "z", "roll", "pitch", "twist"), g.mass, g.pitch_inertia,
-                    None, n, servo, 0.0, "three_variable", None,
-                    stroke=sp.stroke_h, velocity=sp.velocity_h, acceleration=sp.acceleration_h,
-                    payload=sp.weight_capacity / 9.80665, band=(0.0, sp.bandwidth))
-
-
-def lab_table(desc=None) -> LabTable:
-    """The table of a run's [table] description (None: the EERC table)."""
+def lab_table(desc=None) -> VirtualTable:
+    """The table of a run's [table] description (None: the EERC table), as every model
+    reads it."""
     if desc is None or (desc.preset == "eerc" and _only_preset(desc)):
         return _eerc_default()
-    if desc.preset == "eerc":
-        base = _eerc(desc)
-    else:
-        base = None
-    return _described(desc, base)
+    return _described(desc, _eerc_default() if desc.preset == "eerc" else None)
 
 
 @cache
-def _eerc_default() -> LabTable:
-    return _eerc(None)
+def _eerc_default() -> VirtualTable:
+    return virtual_table()
 
 
 def _only_preset(desc) -> bool:
@@ -103,7 +51,7 @@ def _same_as_preset(desc) -> bool:
     return desc == table_from_dict({"preset": desc.preset}, "preset")
 
 
-def _described(desc, base: LabTable | None) -> LabTable:
+def _described(desc, base: VirtualTable | None) -> VirtualTable:
     """A table from its description (over `base`, the preset's own model, when given)."""
     where = f"[table]{' preset ' + repr(desc.preset) if desc.preset else ''}"
     h = desc.horizontal
@@ -112,7 +60,8 @@ def _described(desc, base: LabTable | None) -> LabTable:
     if mass is None:
         raise VtableError(f"{where}: the platen mass is not given (platen_mass_kg)")
     n = (h.count if h and h.count else None) or (base.n_actuators if base else 1)
-    s0 = base.servo if base else None
+    s0 = replace(base.horizontal_servo, mass=base.platen_mass / base.n_actuators) \
+        if base else None
 
     def pick(attr, fallback):
         v = getattr(h, attr) if h is not None else None
@@ -129,7 +78,7 @@ def _described(desc, base: LabTable | None) -> LabTable:
     damping = (h.damping if h is not None and h.damping is not None else
                (s0.damping or 0.0) * n if s0 else 0.0)
     tau = h.valve_time_constant if h is not None and h.valve_time_constant is not None else \
-        (base.valve_time_constant if base else 0.0)
+        (base.valve_lag if base else 0.0)
     kind = (c.kind if c is not None and c.kind else None) or (base.controller if base
                                                               else "pid")
     kind_of = kinds.get(kind)
@@ -165,23 +114,23 @@ def _described(desc, base: LabTable | None) -> LabTable:
         servo = dataclasses.replace(s0, area=area, volume=volume, beta=beta, k_ct=leak,
                                     mass=mass / n, damping=damping / n or None)
     lim = desc.limits
-    return LabTable(
+
+    def limit(key: str):  # the declaration's, else the preset's, else absent
+        v = getattr(lim, key) if lim else None
+        return v if v else getattr(base, key) if base else None
+
+    return described_table(
         name=desc.preset or "described", dofs=desc.dofs or (base.dofs if base else ("x",)),
         platen_mass=mass, pitch_inertia=desc.pitch_inertia or (base.pitch_inertia if base
                                                                  else None),
         com_height=desc.com_height if desc.com_height is not None else
         (base.com_height if base else None),
-        n_actuators=n, servo=servo, valve_time_constant=tau, controller=kind, control=control,
-        stroke=(lim.stroke if lim and lim.stroke else base.stroke if base else None),
-        velocity=(lim.velocity if lim and lim.velocity else base.velocity if base else None),
-        acceleration=(lim.acceleration if lim and lim.acceleration else
-                      base.acceleration if base else None),
-        payload=(lim.payload if lim and lim.payload else base.payload if base else None),
-        band=(lim.band if lim and lim.band else base.band if base else None),
+        n_actuators=n, servo=servo, valve_lag=tau, controller=kind, control=control,
+        limits={k: limit(k) for k in ("stroke", "velocity", "acceleration", "payload", "band")},
         force_measured=(h.force_measured if h is not None and h.force_measured else
                         base.force_measured if base else "load_cell"))
 
 
-def run_table(run) -> LabTable:
+def run_table(run) -> VirtualTable:
     """The table a run was made on (its [table]; the EERC table when it has none)."""
     return lab_table(run.table())

@@ -42,7 +42,7 @@ def check_playable(command: Command, vt: VirtualTable, control_dt: float,
     notes = []
     if tab.get("kind") == "sine":
         f = float(tab["frequency_hz"])
-        if f > band:
+        if band is not None and f > band:
             raise VtableError(f"sine {f:g} Hz is above the table's 0-{band:g} Hz band "
                               f"({vt.limits_source}): the table cannot play it")
         if f >= nyq:
@@ -53,7 +53,7 @@ def check_playable(command: Command, vt: VirtualTable, control_dt: float,
         if hi >= nyq:
             raise VtableError(f"random band {lo:g}-{hi:g} Hz reaches the Nyquist frequency "
                               f"{nyq:g} Hz of the recorded channels: it would alias")
-        if hi > band:
+        if band is not None and hi > band:
             notes.append(f"the random band reaches {hi:g} Hz, beyond the table's 0-{band:g} "
                          f"Hz band ({vt.limits_source}): the table attenuates it")
     return notes
@@ -61,7 +61,7 @@ def check_playable(command: Command, vt: VirtualTable, control_dt: float,
 
 def load_table(name_or_path: str | None):
     """A table preset name (eerc, lnec-st1d) or a TOML file with a run-format [table]
-    table, as the models read it (`vtable.runs.lab.LabTable`)."""
+    table, as the models read it (`vtable.params.virtual.VirtualTable`)."""
     if name_or_path in (None, "", "eerc"):
         return lab_table(None)
     p = Path(name_or_path)

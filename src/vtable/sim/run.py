@@ -118,7 +118,7 @@ def simulate(physics: phys.Physics, command: Command, rate: float = OUTPUT_FS, *
         (`simulation_step`); every k-th sample is kept, after the effects' output filters,
         which act once, at the simulation rate.
     vt
-        The virtual table (the EERC table by default; `virtual_table_for` a lab's).
+        The virtual table (the EERC table by default; `vtable.runs.lab.lab_table` a lab's).
     noise, seed
         White sensor noise, as a fraction of each channel's RMS (command channels clean).
     name, title

@@ -25,16 +25,18 @@ from vtable.analytic.pitch import HybridModel
 from vtable.analytic.sdof import TableSDOF
 from vtable.analytic.structure import building_matrices, fixed_base_modes
 from vtable.errors import VtableError
-from vtable.params import presets
-from vtable.params.loops import (
+from vtable.params import (
     HorizontalSpring,
     HybridParams,
     MechanicalParams,
     OpenLoop,
     RockingSpring,
+    SDOFSpecimen,
+    ShearBuilding,
+    Specimen,
     TableSDOFParams,
+    presets,
 )
-from vtable.params.specimen import SDOFSpecimen, ShearBuilding, Specimen
 from vtable.units import G
 
 TWO_PI = 2 * np.pi

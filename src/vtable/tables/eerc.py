@@ -26,11 +26,11 @@ from vtable.analytic.pitch import pitch_loop
 from vtable.analytic.servo import servo_from_open_loop
 from vtable.params import presets
 from vtable.params.loops import OpenLoop
-from vtable.params.table import EERCTable, ServoConstants
+from vtable.params.table import ServoConstants, TableHardware
 from vtable.params.virtual import Actuator, MultibodyLayout, Stabilizers, VirtualTable
 
 
-def place_actuators(table: EERCTable, lay: MultibodyLayout) -> tuple[Actuator, ...]:
+def place_actuators(table: TableHardware, lay: MultibodyLayout) -> tuple[Actuator, ...]:
     g = table.geometry
     half = g.plan_width / 2
     line = -g.actuator_line_depth
@@ -99,7 +99,7 @@ def with_rocking(vt: VirtualTable, k_theta: float, c_theta: float) -> VirtualTab
     return replace(vt, stabilizers=_stabilizers(vt, k_theta, c_theta))
 
 
-def virtual_table(table: EERCTable | None = None,
+def virtual_table(table: TableHardware | None = None,
                   layout: MultibodyLayout | None = None) -> VirtualTable:
     """The EERC virtual table from the presets: the stabilizers carry Table 8.1's rocking
     spring less the pitch loop's (`with_rocking`)."""

@@ -25,7 +25,6 @@ from vtable.runs.model import with_noise
 from vtable.signals import make_command
 from vtable.signals.spectra import response_spectrum
 from vtable.sim.experiment import load_specimen, load_table, run_experiment
-from vtable.tables.lab import virtual_table_for
 from vtable.units import to_si
 from vtable.verbs.analytic import margins_dict, modes_dict
 from vtable.viz.rerun_scene import log_run
@@ -202,7 +201,7 @@ def simulate(specimen: str | None = None, kind: str = "random", *,
     eff = dict(parse_spec(e) for e in effects)
     lab = load_table(table)
     fam = table_family(lab)
-    vt = virtual_table_for(lab)
+    vt = lab
     chosen = []
     if specimen is None:
         specimen, why = default_specimen(lab, fam)
@@ -246,7 +245,7 @@ def export_mjcf(specimen: str, out: str, table: str | None = None) -> Written:
     """The virtual table `table` (a preset or a TOML file, as `simulate --table` takes it;
     the EERC table when None) with `specimen` written to the folder `out` as MJCF and
     meshes."""
-    vt = virtual_table_for(load_table(table))
+    vt = load_table(table)
     return Written([Path(f) for f in export(load_specimen(specimen), out, vt)])
 
 
