@@ -325,3 +325,18 @@ def test_every_package_is_installed():
     found = {".".join(p.parent.relative_to(root / "src").parts)
              for p in (root / "src" / "vtable").rglob("__init__.py")}
     assert found <= listed, sorted(found - listed)
+
+
+def test_no_class_name_is_defined_twice():
+    """One class per name across the package (src/, controllers/, viz/): a reader who meets
+    `Fit` or `Stage` finds one definition (issue 34)."""
+    where: dict[str, list[str]] = {}
+    for folder in ("src/vtable", "controllers", "viz"):
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            tree = ast.parse(path.read_text(), str(path))
+            for node in tree.body:
+                if isinstance(node, ast.ClassDef):
+                    where.setdefault(node.name, []).append(str(path.relative_to(ROOT)))
+    twice = {k: v for k, v in where.items() if len(v) > 1}
+    assert len(where) > 150  # every module read
+    assert not twice, twice

@@ -52,7 +52,7 @@ from vtable.diagnose.selection import LATE, failing, preferred, preferred_note
 from vtable.diagnose.states import split
 from vtable.diagnose.statistics import Comparison, held_out_gain
 from vtable.diagnose.verdict import State, diagnosis_of
-from vtable.diagnose.workers import Fit
+from vtable.diagnose.workers import CandidateFit
 from vtable.effects.registry import default_candidates
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
@@ -135,7 +135,7 @@ class Diagnoser:
             return None
         return wider, [b["parameter"] for b in lean]
 
-    def _widened(self, lean: tuple, fitted: Fit) -> tuple:
+    def _widened(self, lean: tuple, fitted: CandidateFit) -> tuple:
         """(wider calibration, the parameters, the refit's held-out predictions) from the
         starting model's refit with `lean`'s bounds (`_leaning`)."""
         wider, names = lean
@@ -357,7 +357,7 @@ class Diagnoser:
                                  c.physics, c.effect, self.table_view)
         return not c.failing() and not c.blocking and not c.stand_in
 
-    def _judged(self, st: State, name: str, fitted: Fit, spent: dict[str, float],
+    def _judged(self, st: State, name: str, fitted: CandidateFit, spent: dict[str, float],
                 unrefined: str = "") -> Candidate:
         """The candidate a fit makes (`judge.judged`); its CPU seconds counted in `spent`."""
         spent[name] = spent.get(name, 0.0) + fitted.cpu_s if unrefined else fitted.cpu_s
@@ -367,7 +367,7 @@ class Diagnoser:
     def _candidates(self, st: State, current: Physics, cost: float, todo: list[str],
                     backward: list[str], seeds: dict, spent: dict, lean: tuple | None,
                     progress, done: int, steps: int, k: int
-                    ) -> tuple[list[Candidate], dict[str, Fit], int]:
+                    ) -> tuple[list[Candidate], dict[str, CandidateFit], int]:
         """A round's candidates, and the backward step's refits beside them: (the ranking,
         unsorted; the refits without each effect of `backward`; the progress count).
 
@@ -409,8 +409,8 @@ class Diagnoser:
         if lean is not None:  # the starting model refitted with its leaning bounds widened
             jobs.insert(0, (("widened", ""), {"start": self.start, "calibration": lean[0]}))
         jobs += [(("screen", e), screened(e)) for e in todo]
-        left: dict[str, Fit] = {}
-        passed: dict[str, Fit] = {}
+        left: dict[str, CandidateFit] = {}
+        passed: dict[str, CandidateFit] = {}
         fitted_now: list[Candidate] = []
         for (kind, name), fitted in self.fits.dispatch(jobs):
             if kind == "without":
@@ -456,7 +456,7 @@ class Diagnoser:
             progress(done, steps, f"round {k}: tried {e}")
         return ranking, left, done
 
-    def _backward(self, st: State, names: list[str], fitted: dict[str, Fit],
+    def _backward(self, st: State, names: list[str], fitted: dict[str, CandidateFit],
                   progress, done: int, steps: int, k: int):
         """The backward step: the current model against each fit without one of `names`;
         the first effect whose keeping is not a gain `SELECTION` would count is removed

@@ -10,12 +10,12 @@ from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import compare
 from vtable.diagnose.result import Candidate
 from vtable.diagnose.statistics import held_out_gain
-from vtable.diagnose.workers import Fit
+from vtable.diagnose.workers import CandidateFit
 from vtable.effects.registry import get as effect
 from vtable.models.physics import Physics
 
 
-def judged(name: str, fit: Fit, current: dict, campaign: Campaign, floor: float,
+def judged(name: str, fit: CandidateFit, current: dict, campaign: Campaign, floor: float,
            table: Any, unrefined: str = "") -> Candidate:
     """The candidate `name` that `fit` makes, scored on the held-out segments against the
     current model's predictions `current`; `table` the campaign's `TableView`."""

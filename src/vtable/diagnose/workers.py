@@ -12,7 +12,7 @@ loaded, where spawned ones would import everything again; they ignore Ctrl-C (th
 disposition they are forked with), which the parent handles.
 
 A diagnosis scatters its campaign to every worker once (`Tasks.campaign`) and submits
-`_fit` tasks: each returns what `fitted` does (a `Fit`). User files (effects
+`_fit` tasks: each returns what `fitted` does (a `CandidateFit`). User files (effects
 and controller kinds registered with `--effects-from`, `--controller-from`) are sent to
 the workers as text and loaded there (`_load_files`), so a remote worker needs vtable
 installed, not the user's files. A stop (Ctrl-C) sets a Dask `Event` each fit polls
@@ -117,7 +117,7 @@ def _fit(campaign: Campaign, job: dict[str, Any], calibration: Calibration, stop
     return fitted(TableModel(**{"calibration": calibration, **job}, stop=stop), campaign)
 
 
-class Fit(NamedTuple):
+class CandidateFit(NamedTuple):
     """What a candidate's fit hands the diagnosis (`fitted`), from a worker or its own
     process."""
 
@@ -131,8 +131,8 @@ class Fit(NamedTuple):
     passed: Any  # where a screen that passed stopped (fitted scale), or None
 
 
-def fitted(model, campaign: Campaign) -> Fit:
-    """Fit `model` (a `TableModel`) on `campaign` (`Fit`: what the diagnosis reads)."""
+def fitted(model, campaign: Campaign) -> CandidateFit:
+    """Fit `model` (a `TableModel`) on `campaign` (`CandidateFit`: what the diagnosis reads)."""
     t0 = time.thread_time()
     m = model.fit(campaign)
     try:
@@ -143,7 +143,7 @@ def fitted(model, campaign: Campaign) -> Fit:
     if not isinstance(pred, Exception):  # an effect fitted beyond what the runs reach
         flags += [why for name, v in m.physics_.effects.items()
                   if (why := effect(name).unseen(v, pred))]
-    return Fit(m.physics_, m.train_error_, flags, m.cost_, m.screened_, pred,
+    return CandidateFit(m.physics_, m.train_error_, flags, m.cost_, m.screened_, pred,
                time.thread_time() - t0, m.passed_)
 
 
