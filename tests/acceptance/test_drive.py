@@ -306,3 +306,33 @@ def test_docs_name_every_key_the_drive_json_has():
         keys |= set(m) | set(m.get("spectrum", {}))
     missing = sorted(k for k in keys if f"`{k}`" not in doc)
     assert not missing, missing
+
+
+def test_a_table_that_declares_no_band_gets_a_drive_and_no_figure_above_a_band():
+    """One table: on a table without `band_hz` the drive is computed as on any other, its
+    share above a band and the model's |H| there are null (JSON), no above-band note is
+    made, and the report says the band is not declared."""
+    import dataclasses
+
+    from vtable.diagnose.model import TableModel
+    from vtable.drive import compensate, read_target
+    from vtable.ident.drive import align
+    from vtable.runs import campaign
+    from vtable.viz.drive_report import _band
+
+    _, paths = setup("sdof")
+    model = TableModel(["pitch_flexibility"]).fit([align(r) for r in campaign(paths)])
+    with_band = compensate(model, read_target("elcentro", peak=2.0), baselines=False)
+    vt = model.vt
+    model.vt = dataclasses.replace(vt, table=dataclasses.replace(
+        vt.table, specs=dataclasses.replace(vt.table.specs, bandwidth=None)))
+    r = compensate(model, read_target("elcentro", peak=2.0), baselines=False)
+    got = r.to_json()
+    assert got["settings"]["table_band_hz"] is None
+    assert got["table_response"]["table_band"] is None
+    assert got["table_response"]["correction_band"] == pytest.approx(
+        with_band.response["correction_band"], rel=1e-9)
+    assert got["drive"]["above_band_share"] is None
+    assert r.history == pytest.approx(with_band.history, rel=1e-9)  # the same drive
+    assert not any("band" in n for n in r.notes)
+    assert _band(None) == "not declared" and _band(20.0) == "20 Hz"

@@ -275,3 +275,43 @@ def test_limits_a_description_of_the_eerc_table_changes_reach_every_model():
     assert t.payload == pytest.approx(20000.0, rel=1e-12)
     assert t.velocity == eerc.velocity and t.band == eerc.band == (0.0, 20.0)
     assert t.platen_mass == 40000.0 and t.pitches and t.n_actuators == 3
+
+
+def test_an_undeclared_stroke_is_no_actuator_rating():
+    """Without stroke_m the actuators have no stroke (was ±1 m, checked as a rating); a
+    diverging simulation is still caught, at ten times the platen's own width; LNEC's
+    declared ±100 mm stays the rating."""
+    from vtable.sim.simulator import _far
+
+    t = lab_table(table_from_dict(_lnec_without("stroke_m"), "lab [table]"))
+    assert t.stroke is None and all(a.stroke is None for a in t.actuators)
+    assert _far(t) == pytest.approx(10 * t.table.geometry.plan_width) and _far(t) > 10.0
+    assert [a.stroke for a in lnec().actuators] == [pytest.approx(0.200)]
+    assert _far(lnec()) == pytest.approx(0.400)
+
+
+def test_a_description_of_the_eerc_table_is_read_whole_or_refused():
+    """What a description of the EERC table declares reaches the table the models read —
+    its pitch inertia and centre-of-mass height too (the models kept the preset's before),
+    its limits said to be the declared ones — and what the EERC model cannot be (other
+    DOFs, another number of horizontal actuators) is one error naming the key, not half
+    read (identification used to take them while the models did not)."""
+    t = lab_table(table_from_dict({"preset": "eerc", "pitch_inertia_kg_m2": 1.5e6,
+                                   "com_height_m": 0.5, "limits": {"stroke_m": 0.05}},
+                                  "lab [table]"))
+    assert t.pitch_inertia == 1.5e6 and t.com_height == 0.5
+    assert t.limits_source == "the eerc table's declared limits"
+    assert lab_table(None).limits_source == "Table 2.2"
+    assert lab_table(None).pitch_inertia == pytest.approx(
+        units.to_si(1251.0, "kip-in-s2"), rel=1e-12)  # Table 8.1
+    with pytest.raises(VtableError, match=r"dofs: vtable models the EERC table .* not DOFs "
+                                          r"x, z$"):
+        lab_table(table_from_dict({"preset": "eerc", "dofs": ["x", "z"]}, "lab [table]"))
+    with pytest.raises(VtableError, match=r"horizontal.count: the EERC table has 3 "):
+        lab_table(table_from_dict({"preset": "eerc", "horizontal": {"count": 2}},
+                                  "lab [table]"))
+    own = _lnec_without()
+    own["dofs"] = ["x", "pitch"]
+    with pytest.raises(VtableError, match=r"\.dofs: .* not DOFs x, pitch$"):
+        lab_table(table_from_dict(own, "lab [table]"))
+    assert lab_table(table_from_dict({"preset": "eerc", "dofs": ["x"]}, "t")).uniaxial

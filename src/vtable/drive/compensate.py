@@ -310,8 +310,8 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
     bw = model.vt.table.specs.bandwidth
     # the model's |H| from the drive to the objective where the table's band and the
     # correction band end: the drive's content above the band is the target's over it
-    response = {k: float(np.interp(v, f, np.abs(H)))
-                for k, v in (("table_band", bw), ("correction_band", band[1])) if v is not None}
+    response = {k: None if v is None else float(np.interp(v, f, np.abs(H)))
+                for k, v in (("table_band", bw), ("correction_band", band[1]))}
     played = _played("drive", d, out, target, model, fs)
     played.metrics["amplification"] = amp
     shares = {"drive": played.metrics["above_band_share"],

@@ -20,7 +20,7 @@ class TableView:
     foundation_mass: float  # kg: the reaction mass (§2.2)
     horizontal: tuple[str, ...]  # the horizontal actuators' names
     piston_area: float  # m²: one horizontal actuator of the model
-    stroke: float  # m: one horizontal actuator's stroke
+    stroke: float | None  # m: one horizontal actuator's stroke (None: not declared)
     capacity: float  # N: one horizontal actuator's force capacity
     rated_flow: float  # m³/s: one horizontal servovalve's rated flow (0: not given)
     velocity_limit: float | None  # m/s: the table's horizontal velocity limit (None: none)

@@ -62,7 +62,10 @@ class TableGeometry(Params):
         """As `Params.from_dict`; the platen given by its weight (`weight_kip`, as the report
         gives it) has the mass that weighs that much (divided by standard gravity)."""
         if isinstance(d, dict) and "weight_kip" in d and "mass_kg" not in d:
-            w = check_number(d["weight_kip"], f"{where or cls.__name__}.weight_kip", "kip")
+            key = f"{where or cls.__name__}.weight_kip"
+            w = check_number(d["weight_kip"], key, "kip")
+            if not w > 0:
+                raise VtableError(f"{key}: expected a weight > 0 kip, got {d['weight_kip']!r}")
             d = {**{k: v for k, v in d.items() if k != "weight_kip"}, "mass_kg": w / G}
         return super().from_dict(d, where)
 
@@ -101,7 +104,8 @@ class ActuatorSpec(Params):
     name: str = plain()
     model: str = plain()
     area: float = quantity("in2", "area_in2", minimum=0)
-    stroke: float = quantity("in", "stroke_in", minimum=0, doc="total stroke")
+    stroke: float | None = quantity("in", "stroke_in", minimum=0,
+                                    doc="total stroke (None: not declared)")
     capacity: float = quantity("kip", "capacity_kip", minimum=0)
     servovalve: str | None = plain(default=None)
     flow: float | None = quantity("gpm", "flow_gpm", default=None, minimum=0)

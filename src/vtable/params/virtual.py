@@ -20,6 +20,9 @@ from vtable.params.table import (
 )
 from vtable.units import G
 
+#: the source of the limits a description of a preset's table changed (`limits_source`)
+DECLARED = "declared"
+
 
 @dataclass(frozen=True)
 class MultibodyLayout(Params):
@@ -51,7 +54,7 @@ class Actuator:
     slab_point: tuple[float, float, float]
     foundation_point: tuple[float, float, float]
     area: float
-    stroke: float
+    stroke: float | None  # m, total (None: not declared)
     capacity: float
     flow: float | None
 
@@ -75,8 +78,10 @@ class Stabilizers:
 
 @dataclass(frozen=True)
 class VirtualTable:
-    """Everything the multibody table, its controllers and the consistent analytic model
-    need, built once from the EERC preset (`virtual_table()`)."""
+    """A shaking table as every model reads it (the multibody table, its controllers, the
+    reduced and analytic models, identification): built once by `vtable.tables` — the EERC
+    table from its preset (`virtual_table()`), a lab's declared table or a uniaxial platen
+    (`described_table`, what `vtable.runs.lab.lab_table` makes of a run's [table])."""
 
     table: TableHardware
     layout: MultibodyLayout
@@ -158,7 +163,10 @@ class VirtualTable:
     @property
     def limits_source(self) -> str:
         """Where the table's limits come from (for messages)."""
-        return "Table 2.2" if self.name == "eerc" else f"the {self.name} table's limits"
+        if self.name == "eerc" and self.table.specs.source != DECLARED:
+            return "Table 2.2"
+        return f"the {self.name} table's declared limits" if self.name == "eerc" else \
+            f"the {self.name} table's limits"
 
     @property
     def pivot_depth(self) -> float:

@@ -26,6 +26,9 @@ from vtable.runs.table import table_from_dict
 from vtable.tables.eerc import virtual_table
 from vtable.tables.lab import described_table
 
+#: the EERC table's DOFs (Table 3.2's five controllers)
+EERC_DOFS = ("x", "z", "roll", "pitch", "twist")
+
 
 def lab_table(desc=None) -> VirtualTable:
     """The table of a run's [table] description (None: the EERC table), as every model
@@ -51,6 +54,22 @@ def _same_as_preset(desc) -> bool:
     return desc == table_from_dict({"preset": desc.preset}, "preset")
 
 
+def _check_modelled(desc, base: VirtualTable | None, n: int, where: str) -> None:
+    """vtable models the EERC table (its five DOFs, its three horizontal actuators) and
+    uniaxial platens: a description asking for another table is refused, not half-read."""
+    dofs = desc.dofs or (base.dofs if base else ("x",))
+    if tuple(dofs) == ("x",):
+        return
+    if base is None or set(dofs) != set(base.dofs):
+        raise VtableError(f"{where}.dofs: vtable models the EERC table (DOFs "
+                          f"{', '.join(EERC_DOFS)}) or a uniaxial platen (dofs = [\"x\"]), "
+                          f"not DOFs {', '.join(dofs)}")
+    if n != base.n_actuators:
+        raise VtableError(f"{where}.horizontal.count: the EERC table has {base.n_actuators} "
+                          f"horizontal actuators (Table 2.1), not {n}; a table of another "
+                          "count is described without the preset")
+
+
 def _described(desc, base: VirtualTable | None) -> VirtualTable:
     """A table from its description (over `base`, the preset's own model, when given)."""
     where = f"[table]{' preset ' + repr(desc.preset) if desc.preset else ''}"
@@ -60,6 +79,7 @@ def _described(desc, base: VirtualTable | None) -> VirtualTable:
     if mass is None:
         raise VtableError(f"{where}: the platen mass is not given (platen_mass_kg)")
     n = (h.count if h and h.count else None) or (base.n_actuators if base else 1)
+    _check_modelled(desc, base, n, where)
     s0 = replace(base.horizontal_servo, mass=base.platen_mass / base.n_actuators) \
         if base else None
 

@@ -238,7 +238,7 @@ class Simulator:
         n_out = (n_steps - 1) // dec + 1
         rec = {"qpos": np.empty((n_out, m.nq)), "qvel": np.empty((n_out, m.nv)),
                "qacc": np.empty((n_out, m.nv)), "sensors": np.empty((n_out, m.nsensordata))}
-        limit_x = max_extension or 2 * max(a.stroke for a in self.built.vt.actuators)
+        limit_x = max_extension or _far(self.built.vt)
         sens = d.sensordata
         ctrl = d.ctrl
         other = self.other
@@ -328,7 +328,7 @@ class Simulator:
             name = self.built.force_actuators[i]
             raise SimulationDivergedError(
                 f"simulation diverged at t = {t:.3f} s: actuator {name} at "
-                f"{units.from_si(ext[i], 'in'):.3g} in, far beyond its stroke (unstable "
+                f"{units.from_si(ext[i], 'in'):.3g} in, far beyond any stroke it has (unstable "
                 "control settings?); nothing written")
         del m
 
@@ -344,7 +344,8 @@ def exceedances(built: BuiltModel, t: np.ndarray, ext_all: np.ndarray,
         if name not in known:  # internal actuators (structure dampers) have no ratings
             continue
         a = built.vt.actuator(name)
-        checks = [("stroke", ext_all[:, i], a.stroke / 2), ("force", forces[:, i], a.capacity)]
+        checks = [("stroke", ext_all[:, i], a.stroke / 2)] if a.stroke else []
+        checks.append(("force", forces[:, i], a.capacity))
         if a.flow:
             checks.append(("velocity", ext_all[:, n + i], a.flow / a.area))
         for what, x, lim in checks:
@@ -353,3 +354,11 @@ def exceedances(built: BuiltModel, t: np.ndarray, ext_all: np.ndarray,
                 out.append(Exceedance(name, what, float(t[np.argmax(over)]),
                                       float(np.max(np.abs(x))), lim))
     return out
+
+
+def _far(vt) -> float:
+    """m: an actuator extension that can only be a diverged simulation — twice the longest
+    declared stroke, or ten times the platen's own width when no stroke is declared (a
+    lab's table that gives none: any command is played)."""
+    strokes = [a.stroke for a in vt.actuators if a.stroke]
+    return 2 * max(strokes) if strokes else 10 * vt.table.geometry.plan_width

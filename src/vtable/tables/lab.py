@@ -22,7 +22,7 @@ from vtable.params.table import (
     TableHardware,
     TableSpecs,
 )
-from vtable.params.virtual import MultibodyLayout, Stabilizers, VirtualTable
+from vtable.params.virtual import DECLARED, MultibodyLayout, Stabilizers, VirtualTable
 from vtable.tables.eerc import place_actuators, virtual_table
 
 
@@ -42,8 +42,10 @@ def described_table(*, name: str, dofs: tuple[str, ...], platen_mass: float,
     """The table a lab's declaration describes (SI; `servo`: one actuator's loop, its mass
     the platen's per actuator; `limits`: stroke, velocity, acceleration, payload, band,
     None where not declared): the EERC table with what the declaration changes of it (its
-    mass, its loop constants, its limits) applied, or a uniaxial platen (`uniaxial_table`);
-    the controller's kind and its own terms (a control stage) go with it."""
+    mass, pitch inertia and centre-of-mass height, its loop constants, the table's limits —
+    its actuators keep Table 2.1's ratings) applied, or a uniaxial platen
+    (`uniaxial_table`); the controller's kind and its own terms (a control stage) go with
+    it."""
     if name == "eerc" and tuple(dofs) != ("x",):
         vt = virtual_table()
         if servo != replace(vt.horizontal_servo, mass=servo.mass) or \
@@ -51,11 +53,15 @@ def described_table(*, name: str, dofs: tuple[str, ...], platen_mass: float,
             g = replace(vt.table.geometry, mass=platen_mass)
             vt = replace(vt, table=replace(vt.table, geometry=g),
                          horizontal_servo=replace(servo, mass=vt.horizontal_servo.mass))
+        if pitch_inertia is not None and pitch_inertia != vt.pitch_inertia:
+            g = replace(vt.table.geometry, pitch_inertia=pitch_inertia)
+            vt = replace(vt, table=replace(vt.table, geometry=g))
         specs = _specs_changed(vt, limits)
         if specs is not None:
             vt = replace(vt, table=replace(vt.table, specs=specs))
         return replace(vt, valve_lag=valve_lag, force_measured=force_measured,
-                       control=control, controller=controller, declared=declared)
+                       control=control, controller=controller, declared=declared,
+                       com_height=com_height)
     if tuple(dofs) != ("x",):
         raise VtableError(f"table {name!r}: the virtual table models the EERC table or a "
                           f"uniaxial platen, not DOFs {', '.join(dofs)}")
@@ -71,7 +77,7 @@ def _specs_changed(vt: VirtualTable, limits: dict) -> TableSpecs | None:
            "payload": vt.payload, "band": vt.band}
     if all(limits.get(k) == v for k, v in now.items()):
         return None
-    return replace(vt.table.specs, **_spec_values(limits))
+    return replace(vt.table.specs, **_spec_values(limits), source=DECLARED)
 
 
 def _spec_values(limits: dict) -> dict:
@@ -111,9 +117,9 @@ def uniaxial_table(*, name: str, platen_mass: float, pitch_inertia: float | None
                       supply_pressure=supply, source=f"{name}: assumed plate")
     specs = TableSpecs(overhead_clearance=None, overturning_capacity=None, stroke_v=0.0,
                        velocity_v=0.0, acceleration_v=0.0, source=name, **_spec_values(limits))
-    velocity = limits.get("velocity")
+    velocity, stroke = limits.get("velocity"), limits.get("stroke")
     acts = tuple(ActuatorSpec(name=f"H{i}", model="described", area=s.area,
-                              stroke=2 * (limits.get("stroke") or 1.0), capacity=supply * s.area,
+                              stroke=2 * stroke if stroke else None, capacity=supply * s.area,
                               flow=(velocity * s.area if velocity else None))
                  for i in range(1, n + 1))
     none = DirectionSettings(gain=0.0, delta_p=0.0, rate=0.0)
