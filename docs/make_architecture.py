@@ -38,16 +38,26 @@ def positions(layers: Sequence[Sequence[str]]) -> dict[str, tuple[float, float]]
     return out
 
 
-def jobs(page: Path = HERE / "architecture.md") -> dict[int, str]:
-    """Each layer's one job, as the page's table says it (its first clause)."""
-    out = {}
+def layer_table(page: Path = HERE / "architecture.md") -> list[tuple[tuple[str, ...], str]]:
+    """The page's table of layers, bottom up: (the packages, the one job) of each row."""
+    rows = []
     for line in page.read_text().splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
         if len(cells) == 3 and cells[0].isdigit():
-            job = cells[2].replace("`", "")
-            for stop in (": ", "; ", " ("):
-                job = job.split(stop)[0]
-            out[int(cells[0])] = job
+            if int(cells[0]) != len(rows):
+                raise ValueError(f"{page}: layer {cells[0]} is row {len(rows)}")
+            rows.append((tuple(c.strip().strip("`") for c in cells[1].split(",")), cells[2]))
+    return rows
+
+
+def jobs(page: Path = HERE / "architecture.md") -> dict[int, str]:
+    """Each layer's one job, as the page's table says it (its first clause)."""
+    out = {}
+    for row, (_, job) in enumerate(layer_table(page)):
+        job = job.replace("`", "")
+        for stop in (": ", "; ", " ("):
+            job = job.split(stop)[0]
+        out[row] = job
     return out
 
 

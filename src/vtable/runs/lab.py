@@ -15,7 +15,6 @@ shared by the actuators, and the servovalve's time constant as a spool lag.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import replace
 from functools import cache
 
 from vtable.controllers import kinds
@@ -24,10 +23,7 @@ from vtable.params.table import ServoConstants
 from vtable.params.virtual import VirtualTable
 from vtable.runs.table import table_from_dict
 from vtable.tables.eerc import virtual_table
-from vtable.tables.lab import described_table
-
-#: the EERC table's DOFs (Table 3.2's five controllers)
-EERC_DOFS = ("x", "z", "roll", "pitch", "twist")
+from vtable.tables.lab import actuator_servo, described_table
 
 
 def lab_table(desc=None) -> VirtualTable:
@@ -61,9 +57,9 @@ def _check_modelled(desc, base: VirtualTable | None, n: int, where: str) -> None
     if tuple(dofs) == ("x",):
         return
     if base is None or set(dofs) != set(base.dofs):
-        raise VtableError(f"{where}.dofs: vtable models the EERC table (DOFs "
-                          f"{', '.join(EERC_DOFS)}) or a uniaxial platen (dofs = [\"x\"]), "
-                          f"not DOFs {', '.join(dofs)}")
+        eerc = ", ".join(_eerc_default().dofs)
+        raise VtableError(f"{where}.dofs: vtable models the EERC table (DOFs {eerc}) or a "
+                          f"uniaxial platen (dofs = [\"x\"]), not DOFs {', '.join(dofs)}")
     if n != base.n_actuators:
         raise VtableError(f"{where}.horizontal.count: the EERC table has {base.n_actuators} "
                           f"horizontal actuators (Table 2.1), not {n}; a table of another "
@@ -80,8 +76,7 @@ def _described(desc, base: VirtualTable | None) -> VirtualTable:
         raise VtableError(f"{where}: the platen mass is not given (platen_mass_kg)")
     n = (h.count if h and h.count else None) or (base.n_actuators if base else 1)
     _check_modelled(desc, base, n, where)
-    s0 = replace(base.horizontal_servo, mass=base.platen_mass / base.n_actuators) \
-        if base else None
+    s0 = actuator_servo(base) if base else None
 
     def pick(attr, fallback):
         v = getattr(h, attr) if h is not None else None

@@ -26,12 +26,16 @@ from vtable.params.virtual import DECLARED, MultibodyLayout, Stabilizers, Virtua
 from vtable.tables.eerc import place_actuators, virtual_table
 
 
+def actuator_servo(vt: VirtualTable) -> ServoConstants:
+    """One horizontal actuator's constants carrying the platen's mass per horizontal
+    actuator (the EERC table's Table B.5 keeps its own fitted mass in the model)."""
+    return replace(vt.horizontal_servo, mass=vt.platen_mass / vt.n_actuators)
+
+
 def bare_loop(vt: VirtualTable) -> OpenLoop:
     """(f_o, ξ_o, k_o) of the bare table's horizontal loop (eq 6.16, with the platen's
-    damping; the valve lag is not in eq 6.15): one actuator's constants carrying the
-    platen's mass per horizontal actuator."""
-    return open_loop_from_servo(replace(vt.horizontal_servo,
-                                        mass=vt.platen_mass / vt.n_actuators))
+    damping; the valve lag is not in eq 6.15): `actuator_servo`'s."""
+    return open_loop_from_servo(actuator_servo(vt))
 
 
 def described_table(*, name: str, dofs: tuple[str, ...], platen_mass: float,
