@@ -194,6 +194,54 @@ def test_a_pure_python_law_gives_the_same_prediction():
                                    atol=1e-9 * np.max(np.abs(quick[ch])))
 
 
+def test_a_law_that_allocates_runs_compiled_with_the_same_prediction():
+    """The integrators' loops are compiled without numba's reference counting, which a
+    law that makes an array cannot be compiled into: such a law gets the loops compiled
+    with it (`compose.counted`), not Python, and predicts what the catalog's law does."""
+    import math
+    import warnings
+
+    from vtable.effects import register
+    from vtable.effects.valve_flow_nonlinearity import ValveFlowNonlinearity
+    from vtable.hydraulics.stage import Stage
+    from vtable.models.reduced import ReducedModel
+
+    def allocating_orifice(q, P, p):
+        s = np.zeros(1)  # an array made on every call
+        s[0] = 1.0 - (P if q >= 0 else -P) / p.supply_pressure
+        return q * math.sqrt(s[0]) if s[0] > 0 else 0.0
+
+    stage = Stage("orifice_allocating", "flow", allocating_orifice, ("supply_pressure",),
+                  order=1.0)
+
+    class Made(ValveFlowNonlinearity):
+        name = "valve_flow_allocating"
+
+        def apply(self, m, p):
+            m.add_stage(stage, supply_pressure=p["supply_pressure"])
+
+    register(Made())
+    _, runs = backlash_campaign()
+    r = runs[0]
+    part = slice(0, 300)
+    spec = presets.specimen("sdof_frame")
+    made_ph = Physics(nominal_open_loop(), spec, {"valve_flow_allocating": {}})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # compiled: no "runs as Python"
+        model = ReducedModel(made_ph)
+        assert model.element.key.endswith("u")  # first the uncounted loops ...
+        made = model.simulate(r.time[part], r.channel("h_span")[part])
+    assert not model.python and model.element.key.endswith("c"), model.element.key  # ... then
+    catalog = ReducedModel(Physics(nominal_open_loop(), spec, {"valve_flow_nonlinearity": {}}))
+    assert catalog.element.key.endswith("u")  # the catalog's law: uncounted
+    quick = catalog.simulate(r.time[part], r.channel("h_span")[part])
+    assert np.max(np.abs(quick["avg_hdisp"])) > 0
+    for ch in ("avg_hdisp", "avg_hacc", "h1_force"):
+        np.testing.assert_array_equal(made[ch], quick[ch])
+    # a model built again on that law goes straight to the counted element
+    assert ReducedModel(made_ph).element is model.element
+
+
 def test_every_effect_calls_only_verbs_both_models_realise():
     """The catalog's and the examples' effects pass the check `register` makes."""
     from vtable.effects.verbs import called_verbs, check_verbs

@@ -8,6 +8,11 @@ then the text of the element's group kernels (`element.servo_rates`,
 returns it. Its kernels are ``njit(cache=True)``: a process that meets the same stage set
 again (a diagnosis's workers) loads them compiled from numba's cache instead of
 compiling them.
+
+The integrators' loops are compiled without numba's reference counting
+(``_nrt=False``, `vtable.models.reduced_kernel._steps`), which no law that allocates an
+array can be compiled into: `counted(comp)` is the same element with the counting kept,
+and once asked for, `composition` returns it for that stage set in this process.
 """
 
 from __future__ import annotations
@@ -20,7 +25,7 @@ import sys
 import tempfile
 import types
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numba
@@ -37,6 +42,9 @@ _MODULES: dict[str, Composition] = {}
 #: compositions by the identity of their stages and kernels (held, so ids stay theirs) and
 #: their element laws: hashing the laws' source is slower than building a reduced model
 _SEEN: dict[tuple, tuple[tuple, Composition]] = {}
+#: keys of the compositions whose laws need numba's reference counting (`counted`)
+_COUNTED: dict[str, Composition] = {}
+_UNCOUNTED = ", _nrt=False)"
 
 
 def laws_of(key: str) -> list[Callable]:
@@ -54,6 +62,9 @@ class Composition:
     module: types.ModuleType
     ns: int
     linear: bool
+    key: str = ""
+    #: how it was made (`counted` makes it again with numba's reference counting)
+    made: tuple = field(default=(), compare=False, repr=False)
 
     def vector(self, h: ServoConstants, values: Sequence[dict[str, float]]) -> np.ndarray:
         """The kernel's parameters: `h`'s linear constants, then each stage's named
@@ -110,12 +121,31 @@ def composition(stages: Sequence[Stage], extra: Sequence[Callable] = (),
     ident = (tuple(map(id, held)), elements)
     seen = _SEEN.get(ident)
     if seen is not None and seen[0] == held:  # a model built again
-        return seen[1]
+        return _COUNTED.get(seen[1].key, seen[1])
     key = _key(stages, templates, elements)
     hit = _MODULES.get(key)
     if hit is not None:
         _SEEN[ident] = (held, hit)
-        return hit
+        return _COUNTED.get(key, hit)
+    return _compiled(stages, templates, elements, key, held, ident)
+
+
+def counted(comp: Composition) -> Composition:
+    """`comp` with its integrators' loops compiled with numba's reference counting (a law
+    that allocates an array needs it; slower), and `composition` returning it from now on
+    for that stage set."""
+    if comp.key in _COUNTED or comp.key.endswith("c"):
+        return _COUNTED.get(comp.key, comp)
+    stages, templates, elements = comp.made
+    _COUNTED[comp.key] = _compiled(stages, templates, elements, comp.key[:-1] + "c", None,
+                                   None, counting=True)
+    return _COUNTED[comp.key]
+
+
+def _compiled(stages, templates, elements, key: str, held, ident, counting: bool = False
+              ) -> Composition:
+    """The module of composition `key` written (once: its file is named by the key) and
+    imported."""
     laws: list[Callable] = []
     for s in stages:
         laws += [s.law] + ([s.rate] if s.rate else [])
@@ -124,7 +154,8 @@ def composition(stages: Sequence[Stage], extra: Sequence[Callable] = (),
     path = _directory() / f"vtable_stages_{key}.py"
     if not path.exists():
         tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(_source(stages, templates, key, elements))
+        text = _source(stages, templates, key, elements)
+        tmp.write_text(text.replace(_UNCOUNTED, ")") if counting else text)
         os.replace(tmp, path)
     name = f"vtable_stages_{key}"
     spec = importlib.util.spec_from_file_location(name, path)
@@ -132,9 +163,10 @@ def composition(stages: Sequence[Stage], extra: Sequence[Callable] = (),
     sys.modules[name] = module
     spec.loader.exec_module(module)
     comp = Composition(stages, module, 1 + sum(s.states for s in stages),
-                       all(s.linear for s in stages))
-    _MODULES[key] = comp
-    _SEEN[ident] = (held, comp)
+                       all(s.linear for s in stages), key, (stages, templates, elements))
+    if not counting:
+        _MODULES[key] = comp
+        _SEEN[ident] = (held, comp)
     return comp
 
 
@@ -152,7 +184,7 @@ def _key(stages: tuple[Stage, ...], templates: list[Callable],
     for e in elements:
         h.update(f"element {e.states} {e.n_params} {e.names} {_law_name(e.law)}\n".encode())
         h.update(_law_source(e.law).encode())
-    return h.hexdigest()[:20]
+    return h.hexdigest()[:20] + "u"  # "u": the loops uncounted, "c": `counted`
 
 
 def _law_name(law: Callable) -> str:
@@ -190,7 +222,7 @@ def _directory() -> Path:
 def _elements_source(elements: tuple[ElementLaw, ...], first_law: int) -> tuple[list, list]:
     """(module-level lines, the `elements` kernel) calling each element law in turn on the
     relative motion of coordinates ia[k], ib[k] (ib −1: the ground)."""
-    head, body = [], ["", "", "@njit(cache=True)",
+    head, body = [], ["", "", '@njit(cache=True, inline="always")',
                       "def elements(q, qd, z, p, f, dz, ia, ib):"]
     s = o = 0
     for k, e in enumerate(elements):
@@ -252,11 +284,12 @@ def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str,
               "    u = dof_error(qc, q, p, qd, 1.0, kp, kv)", *calls["control"],
               "    return g * u"] if calls["control"] else
              ["    return dof_error(qc, q, p, qd, g, kp, kv)"])
-    body = ["", "", "@njit(cache=True)",
+    inline = '@njit(cache=True, inline="always")'  # into `reduced_kernel._steps`'s loops
+    body = ["", "", inline,
             "def dof_drive(qc, q, p, qd, g, kp, kv, z, o, sp, dz, ctl):",
-            *drive, "", "", "@njit(cache=True)", "def fed_back(z, o, sp):",
+            *drive, "", "", inline, "def fed_back(z, o, sp):",
             *(calls["feedback"] or ["    return z[o]"]),
-            "", "", "@njit(cache=True)", "def actuator_rates(z, o, drive, v, sp, dz):",
+            "", "", inline, "def actuator_rates(z, o, drive, v, sp, dz):",
             "    P = z[o]", "    q = commanded_flow(drive, sp)", *calls["valve"],
             *calls["flow"], "    beta = bulk_modulus(sp)", *calls["pressure"],
             "    dP = oil_column(q, P, v, beta, sp)", "    dz[o] = dP",

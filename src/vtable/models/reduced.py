@@ -19,6 +19,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
+import numba
 import numpy as np
 
 from vtable.analytic.hold import first_order_hold
@@ -27,7 +28,7 @@ from vtable.controllers.force_law import law_params, named
 from vtable.effects.table import TableView
 from vtable.errors import VtableError, interrupted
 from vtable.hydraulics import group_law
-from vtable.hydraulics.compose import ElementLaw
+from vtable.hydraulics.compose import ElementLaw, counted
 from vtable.hydraulics.element import PISTON_AREA
 from vtable.hydraulics.stage import Stage, add_stage
 from vtable.hydraulics.table_stages import table_stages
@@ -398,15 +399,30 @@ class ReducedModel(ModalOutputs):
         if self.linear:
             Phi, G0, G1 = self._hold(h)
             Q, Qd, Qdd, F, PL = simulate_linear(xc, nq, *self._linear, Phi, G0, G1)
-        elif self.elem is None:
-            Q, Qd, Qdd, F, PL = self.element.module.simulate_reduced(*args)
         elif self.python:
             Q, Qd, Qdd, F, PL = simulate_reduced_python(self.element.module, *args, self.elem,
                                                         self.ne, self.pe)
         else:
-            Q, Qd, Qdd, F, PL = self.element.module.simulate_elements(
-                *args, self.pe, self.ia, self.ib, self.ne)
+            Q, Qd, Qdd, F, PL = self._integrated(args)
         return Histories(h, up, xc, Q, Qd, Qdd, F, PL)
+
+    def _integrated(self, args: tuple):
+        """The compiled integrator on `args` (`simulate_reduced`, or `simulate_elements`
+        with force elements); a law that needs numba's reference counting (it allocates)
+        gets the element compiled with it (`compose.counted`) and the same call again."""
+        module = self.element.module
+        try:
+            if self.elem is None:
+                return module.simulate_reduced(*args)
+            return module.simulate_elements(*args, self.pe, self.ia, self.ib, self.ne)
+        except numba.core.errors.NumbaError as e:
+            again = counted(self.element)
+            if again is self.element or interrupted(e):
+                raise
+            self.element = again
+            if self.elem is not None:
+                self.elem = again.module.elements
+            return self._integrated(args)
 
     def simulate(self, t: np.ndarray, x_c: np.ndarray) -> Channels:
         """The run's channels (`Channels`, SI) on the uniform time grid `t` of a command x_c

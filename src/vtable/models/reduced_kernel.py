@@ -33,7 +33,7 @@ def work_size(nq: int) -> int:
     return nq
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, fe, dy,
            ws):
     """Rates of the main state y = [q, q̇, servo (NS), w] with extra generalized forces fe;
@@ -76,7 +76,7 @@ def _rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, 
     return force
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _record(k, y, k1, nq, Q, Qd, Qdd, PL):
     """Sample k of the histories: q, q̇, q̈ (from the rates k1) and P_L."""
     PL[k] = y[2 * nq]
@@ -86,14 +86,14 @@ def _record(k, y, k1, nq, Q, Qd, Qdd, PL):
         Qdd[k, i] = k1[nq + i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _trial(yt, y, kx, c):
     """RK4's trial state yt = y + c kx."""
     for i in range(y.shape[0]):
         yt[i] = y[i] + c * kx[i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _advance(y, k1, k2, k3, k4, dt, k, Q, Qd, Qdd, F, PL):
     """RK4's step y += dt/6 (k1 + 2 k2 + 2 k3 + k4); a state that blows up ends the
     histories with NaN from sample k + 1 on (returns False)."""
@@ -110,35 +110,54 @@ def _advance(y, k1, k2, k3, k4, dt, k, Q, Qd, Qdd, F, PL):
 def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw):
     """RK4 at step dt (the command linear between samples); returns q, q̇, q̈ (n_t x nq),
     the actuator force (n_t) and its load pressure P_L (n_t). A state that blows up ends
-    the run with NaN."""
+    the run with NaN. Allocates the histories and the scratch, then `_steps`."""
     n = xc.shape[0]
     ny = 2 * nq + NS + Aw.shape[0]
-    fe = np.zeros(nq)
-    ws = np.zeros(nq)  # work_size(nq)
-    y = np.zeros(ny)
-    yt = np.empty(ny)
     Q, Qd, Qdd, F = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq)), np.empty(n)
     PL = np.empty(n)
-    k1, k2, k3, k4 = np.empty(ny), np.empty(ny), np.empty(ny), np.empty(ny)
-    for k in range(n):
-        F[k] = _rates(y, xc[k], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
-                      Fw, fe, k1, ws)
-        _record(k, y, k1, nq, Q, Qd, Qdd, PL)
-        if k == n - 1:
-            break
-        xm = 0.5 * (xc[k] + xc[k + 1])
-        _trial(yt, y, k1, 0.5 * dt)
-        _rates(yt, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, fe, k2,
-               ws)
-        _trial(yt, y, k2, 0.5 * dt)
-        _rates(yt, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, fe, k3,
-               ws)
-        _trial(yt, y, k3, dt)
-        _rates(yt, xc[k + 1], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
-               fe, k4, ws)
-        if not _advance(y, k1, k2, k3, k4, dt, k, Q, Qd, Qdd, F, PL):
-            break
+    _steps(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
+           np.zeros(ny), np.empty(ny), np.empty((4, ny)), np.zeros(nq), np.zeros(nq), Q, Qd,
+           Qdd, F, PL)  # ws: work_size(nq)
     return Q, Qd, Qdd, F, PL
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def _steps(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, y, yt,
+           kk, fe, ws, Q, Qd, Qdd, F, PL):
+    """`simulate_reduced`'s loop on its arrays (state y from zero, scratch yt, the stages'
+    rates kk (4 x ny), fe, ws). Compiled without numba's reference counting and with the
+    step's functions inlined (`inline="always"`): an array handed to a function in the loop
+    cost two atomic counts each time, most of the step's time. The four RK4 stages are
+    one loop, so the rates are compiled once. No allocation."""
+    n = xc.shape[0]
+    for k in range(n):
+        xm = 0.5 * (xc[k] + xc[min(k + 1, n - 1)])
+        for s in range(4):
+            xs = _stage(yt, y, kk, s, dt, xc[k], xm, xc[min(k + 1, n - 1)])
+            f = _rates(yt, xs, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
+                       Fw, fe, kk[s], ws)
+            if s == 0:
+                F[k] = f
+                _record(k, y, kk[0], nq, Q, Qd, Qdd, PL)
+                if k == n - 1:
+                    return
+        if not _advance(y, kk[0], kk[1], kk[2], kk[3], dt, k, Q, Qd, Qdd, F, PL):
+            return
+
+
+@njit(cache=True, inline="always")
+def _stage(yt, y, kk, s, dt, x0, xm, x1):
+    """RK4 stage s's trial state into yt (y itself, then y + dt/2 k1, y + dt/2 k2,
+    y + dt k3) and returns its command (x at the step's start, middle, middle, end)."""
+    if s == 0:
+        for i in range(y.shape[0]):
+            yt[i] = y[i]
+        return x0
+    if s == 3:
+        _trial(yt, y, kk[2], dt)
+        return x1
+    _trial(yt, y, kk[s - 1], 0.5 * dt)
+    return xm
 
 
 def _element_rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
@@ -192,7 +211,7 @@ def elements(q, qd, z, p, f, dz, ia, ib):
     return
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rates_with_elements(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
                          Wv, Fw, pe, ia, ib, ne, dy, fe, ws):
     """Rates of y = [main state, element states]: the elements' forces into fe (their state
@@ -209,41 +228,41 @@ def _rates_with_elements(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv
 def simulate_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
                       Fw, pe, ia, ib, ne):
     """`simulate_reduced` with force elements (`elements` of the stage set's module, on
-    coordinates ia, ib given at run time): RK4 at step dt, no allocation in the loop."""
+    coordinates ia, ib given at run time): RK4 at step dt (the loop: `_steps_elements`)."""
     n = xc.shape[0]
     ny = 2 * nq + NS + Aw.shape[0] + ne
-    y = np.zeros(ny)
-    yt = np.empty(ny)
-    fe = np.zeros(nq)
-    ws = np.zeros(nq)
     Q, Qd, Qdd, F = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq)), np.empty(n)
     PL = np.empty(n)
-    k1, k2, k3, k4 = np.empty(ny), np.empty(ny), np.empty(ny), np.empty(ny)
-    for k in range(n):
-        F[k] = _rates_with_elements(y, xc[k], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp,
-                                    kv, Aw, Wq, Wv, Fw, pe, ia, ib, ne, k1, fe, ws)
-        _record(k, y, k1, nq, Q, Qd, Qdd, PL)
-        if k == n - 1:
-            break
-        xm = 0.5 * (xc[k] + xc[k + 1])
-        _trial(yt, y, k1, 0.5 * dt)
-        _rates_with_elements(yt, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
-                             Wv, Fw, pe, ia, ib, ne, k2, fe, ws)
-        _trial(yt, y, k2, 0.5 * dt)
-        _rates_with_elements(yt, xm, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
-                             Wv, Fw, pe, ia, ib, ne, k3, fe, ws)
-        _trial(yt, y, k3, dt)
-        _rates_with_elements(yt, xc[k + 1], nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv,
-                             Aw, Wq, Wv, Fw, pe, ia, ib, ne, k4, fe, ws)
-        if not _advance(y, k1, k2, k3, k4, dt, k, Q, Qd, Qdd, F, PL):
-            break
+    _steps_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
+                    pe, ia, ib, ne, np.zeros(ny), np.empty(ny), np.empty((4, ny)), np.zeros(nq),
+                    np.zeros(nq), Q, Qd, Qdd, F, PL)
     return Q, Qd, Qdd, F, PL
 
 
+@njit(cache=True, nogil=True, _nrt=False)
+def _steps_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
+                    pe, ia, ib, ne, y, yt, kk, fe, ws, Q, Qd, Qdd, F, PL):
+    """`simulate_elements`'s loop on its arrays, compiled as `_steps` is."""
+    n = xc.shape[0]
+    for k in range(n):
+        xm = 0.5 * (xc[k] + xc[min(k + 1, n - 1)])
+        for s in range(4):
+            xs = _stage(yt, y, kk, s, dt, xc[k], xm, xc[min(k + 1, n - 1)])
+            f = _rates_with_elements(yt, xs, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv,
+                                     Aw, Wq, Wv, Fw, pe, ia, ib, ne, kk[s], fe, ws)
+            if s == 0:
+                F[k] = f
+                _record(k, y, kk[0], nq, Q, Qd, Qdd, PL)
+                if k == n - 1:
+                    return
+        if not _advance(y, kk[0], kk[1], kk[2], kk[3], dt, k, Q, Qd, Qdd, F, PL):
+            return
+
+
 #: the kernels a stage set's compiled element carries (`vtable.hydraulics.compose`) ...
-KERNELS = (_rates, _record, _trial, _advance, simulate_reduced)
+KERNELS = (_rates, _record, _trial, _stage, _advance, _steps, simulate_reduced)
 #: ... and those it carries when the model has force elements (their laws written in too)
-ELEMENT_KERNELS = (*KERNELS, _rates_with_elements, simulate_elements)
+ELEMENT_KERNELS = (*KERNELS, _rates_with_elements, _steps_elements, simulate_elements)
 
 
 def simulate_reduced_python(module, *args):
