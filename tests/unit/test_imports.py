@@ -36,6 +36,9 @@ LATE_IMPORTS = {
         "optional dependency (vtable[opensees]), loaded after its bundled BLAS/LAPACK",
     ("vtable.results", "vtable.viz.figures"):
         "start-up: matplotlib (~0.9 s) for every verb's result, `vtable presets` too",
+    ("vtable.diagnose.resolution", "vtable.sim"):
+        "start-up of every diagnosis and its workers: the multibody table (mujoco, trimesh, "
+        "~0.3 s) only when the resolution is measured again",
     ("vtable.diagnose.result", "vtable.viz.diagnosis_rerun"):
         "start-up of every spawned diagnosis worker (vtable.diagnose imports the result)",
     ("vtable.diagnose.result", "vtable.viz.diagnosis_report"):

@@ -49,7 +49,6 @@ from vtable.models.physics import Physics, nominal_open_loop
 from vtable.models.reduced import ReducedModel
 from vtable.params import presets
 from vtable.signals import make_command
-from vtable.sim import simulate
 
 #: the shipped figures (`python -m vtable.diagnose.resolution` writes it)
 DATA = Path(__file__).with_name("resolution.toml")
@@ -77,6 +76,8 @@ def agreement(effects: Mapping[str, Mapping[str, float]]) -> tuple[float, str, f
     ({name: parameters}; {} each for the default dose): (r, the worst channel group, its
     NRMS on the run where it is worst). Noise-free; r as `ERROR_DEFINITION` (see the module
     docstring)."""
+    from vtable.sim import simulate  # the multibody table: only when measuring, not on import
+
     ph = Physics(nominal_open_loop(), presets.specimen(SPECIMEN),
                  {k: dict(v) for k, v in effects.items()})
     e2, worst = [], (BASE, 0.0)
