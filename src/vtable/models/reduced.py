@@ -41,6 +41,7 @@ from vtable.models.reduced_kernel import (
     KERNELS,
     linear_system,
     simulate_linear,
+    simulate_reduced,
     simulate_reduced_python,
 )
 from vtable.models.stiffness import needed_stiffness
@@ -407,14 +408,14 @@ class ReducedModel(ModalOutputs):
         return Histories(h, up, xc, Q, Qd, Qdd, F, PL)
 
     def _integrated(self, args: tuple):
-        """The compiled integrator on `args` (`simulate_reduced`, or `simulate_elements`
-        with force elements); a law that needs numba's reference counting (it allocates)
+        """The compiled integrator on `args` (`reduced_kernel.simulate_reduced`, with the
+        force elements when there are); a law that needs numba's reference counting (it allocates)
         gets the element compiled with it (`compose.counted`) and the same call again."""
         module = self.element.module
         try:
             if self.elem is None:
-                return module.simulate_reduced(*args)
-            return module.simulate_elements(*args, self.pe, self.ia, self.ib, self.ne)
+                return simulate_reduced(module, *args)
+            return simulate_reduced(module, *args, self.pe, self.ia, self.ib, self.ne)
         except numba.core.errors.NumbaError as e:
             again = counted(self.element)
             if again is self.element or interrupted(e):

@@ -5,10 +5,13 @@ groups' `servo_rates` applies too), auxiliary linear states w (other control loo
 ẇ = Aw w + Wq q + Wv q̇, generalized force Fw w), quadratic dampers c₂|q̇|q̇, and force
 elements with states z (`elem(q, q̇, z, p, f, ż)` adds generalized forces to f).
 
-`simulate_reduced` integrates a model without force elements; `simulate_elements` one
-with them, calling the `elements` its stage set's generated module defines (the laws
-written into it, the coordinates given at run time: `vtable.hydraulics.compose`). Both are
-cached on disk with that module, so every process loads them compiled.
+`simulate_reduced` integrates a model: the stage set's generated module's `_steps`, or
+`_steps_elements` with force elements, calling the `elements` it defines (the laws written
+into it, the coordinates given at run time: `vtable.hydraulics.compose`). Both are cached
+on disk with that module, so every process loads them compiled. They are compiled without
+numba's reference counting, the step's functions inlined into them: an array handed to a
+function in the loop cost two atomic counts each time, most of the step's time (2.7 ms a
+call → 1.0 ms on the README campaign's training runs).
 `simulate_reduced_python` runs the element code as Python for a law numba cannot compile.
 
 A linear model (no force element, no quadratic damper, a linear hydraulic loop) is the
@@ -106,29 +109,14 @@ def _advance(y, k1, k2, k3, k4, dt, k, Q, Qd, Qdd, F, PL):
     return True
 
 
-@njit(cache=True, nogil=True)
-def simulate_reduced(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw):
-    """RK4 at step dt (the command linear between samples); returns q, q̇, q̈ (n_t x nq),
-    the actuator force (n_t) and its load pressure P_L (n_t). A state that blows up ends
-    the run with NaN. Allocates the histories and the scratch, then `_steps`."""
-    n = xc.shape[0]
-    ny = 2 * nq + NS + Aw.shape[0]
-    Q, Qd, Qdd, F = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq)), np.empty(n)
-    PL = np.empty(n)
-    _steps(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
-           np.zeros(ny), np.empty(ny), np.empty((4, ny)), np.zeros(nq), np.zeros(nq), Q, Qd,
-           Qdd, F, PL)  # ws: work_size(nq)
-    return Q, Qd, Qdd, F, PL
-
-
 @njit(cache=True, nogil=True, _nrt=False)
 def _steps(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, y, yt,
            kk, fe, ws, Q, Qd, Qdd, F, PL):
-    """`simulate_reduced`'s loop on its arrays (state y from zero, scratch yt, the stages'
-    rates kk (4 x ny), fe, ws). Compiled without numba's reference counting and with the
-    step's functions inlined (`inline="always"`): an array handed to a function in the loop
-    cost two atomic counts each time, most of the step's time. The four RK4 stages are
-    one loop, so the rates are compiled once. No allocation."""
+    """RK4 at step dt (the command linear between samples) into the histories q, q̇, q̈
+    (Q, Qd, Qdd: n_t x nq), the actuator force F and its load pressure P_L (n_t), from the
+    state y at zero (scratch yt, the stages' rates kk (4 x ny), fe, ws: `simulate_reduced`
+    makes them). A state that blows up ends the histories with NaN. The four RK4 stages
+    are one loop, so the rates are compiled (inlined) once. No allocation."""
     n = xc.shape[0]
     for k in range(n):
         xm = 0.5 * (xc[k] + xc[min(k + 1, n - 1)])
@@ -224,25 +212,11 @@ def _rates_with_elements(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv
                   fe, dy[:m], ws)
 
 
-@njit(cache=True, nogil=True)
-def simulate_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
-                      Fw, pe, ia, ib, ne):
-    """`simulate_reduced` with force elements (`elements` of the stage set's module, on
-    coordinates ia, ib given at run time): RK4 at step dt (the loop: `_steps_elements`)."""
-    n = xc.shape[0]
-    ny = 2 * nq + NS + Aw.shape[0] + ne
-    Q, Qd, Qdd, F = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq)), np.empty(n)
-    PL = np.empty(n)
-    _steps_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
-                    pe, ia, ib, ne, np.zeros(ny), np.empty(ny), np.empty((4, ny)), np.zeros(nq),
-                    np.zeros(nq), Q, Qd, Qdd, F, PL)
-    return Q, Qd, Qdd, F, PL
-
-
 @njit(cache=True, nogil=True, _nrt=False)
 def _steps_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
                     pe, ia, ib, ne, y, yt, kk, fe, ws, Q, Qd, Qdd, F, PL):
-    """`simulate_elements`'s loop on its arrays, compiled as `_steps` is."""
+    """`_steps` with force elements (`elements` of the stage set's module, on coordinates
+    ia, ib given at run time; their ne states at the end of y)."""
     n = xc.shape[0]
     for k in range(n):
         xm = 0.5 * (xc[k] + xc[min(k + 1, n - 1)])
@@ -260,9 +234,29 @@ def _steps_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw
 
 
 #: the kernels a stage set's compiled element carries (`vtable.hydraulics.compose`) ...
-KERNELS = (_rates, _record, _trial, _stage, _advance, _steps, simulate_reduced)
+KERNELS = (_rates, _record, _trial, _stage, _advance, _steps)
 #: ... and those it carries when the model has force elements (their laws written in too)
-ELEMENT_KERNELS = (*KERNELS, _rates_with_elements, _steps_elements, simulate_elements)
+ELEMENT_KERNELS = (*KERNELS, _rates_with_elements, _steps_elements)
+
+
+def simulate_reduced(module, xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
+                     Wv, Fw, pe=None, ia=None, ib=None, ne=0):
+    """RK4 at step dt of a stage set's compiled element (`module`: its `_steps`, or
+    `_steps_elements` when force elements `pe`, `ia`, `ib`, `ne` are given); returns q, q̇,
+    q̈ (n_t x nq), the actuator force (n_t) and its load pressure P_L (n_t). The arrays are
+    made here, so the compiled loop is the one function compiled per stage set."""
+    n = xc.shape[0]
+    ny = 2 * nq + module.NS + Aw.shape[0] + ne
+    Q, Qd, Qdd = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq))
+    F, PL = np.empty(n), np.empty(n)
+    scratch = (np.zeros(ny), np.empty(ny), np.empty((4, ny)), np.zeros(nq), np.zeros(nq))
+    if pe is None:
+        module._steps(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
+                      *scratch, Q, Qd, Qdd, F, PL)
+    else:
+        module._steps_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw,
+                               Wq, Wv, Fw, pe, ia, ib, ne, *scratch, Q, Qd, Qdd, F, PL)
+    return Q, Qd, Qdd, F, PL
 
 
 def simulate_reduced_python(module, *args):
