@@ -242,6 +242,59 @@ def test_a_law_that_allocates_runs_compiled_with_the_same_prediction():
     assert ReducedModel(made_ph).element is model.element
 
 
+def test_a_force_law_that_allocates_runs_compiled_with_the_same_prediction():
+    """A force law that makes an array is compiled too (with the reference counting, in its
+    own function or in the counted loops), not run as Python, and predicts what the
+    example's law does."""
+    import warnings
+
+    from numba import njit
+
+    from vtable.effects import register
+    from vtable.models.reduced import ReducedModel
+
+    truth, runs = backlash_campaign()
+    r = runs[0]
+    example = get("swivel_backlash")
+
+    class Allocating:
+        def __init__(self, m):
+            self.m = m
+
+        def __getattr__(self, name):
+            return getattr(self.m, name)
+
+        def insert_at_actuators(self, name, mass, law, params, states=0, stiffness=0.0):
+            inner = njit(law)
+
+            def allocating_law(d, v, z, p, dz):
+                f = np.zeros(1)  # an array made on every call
+                f[0] = inner(d, v, z, p, dz)
+                return f[0]
+
+            self.m.insert_at_actuators(name, mass, allocating_law, params, states, stiffness)
+
+    class Made(type(example)):
+        name = "swivel_backlash_allocating"
+
+        def apply(self, m, p):
+            example.apply(Allocating(m), p)
+
+    register(Made())
+    ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
+                 {"swivel_backlash_allocating": {"gap": GAP_IN}})
+    part = slice(0, 300)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # compiled: no "runs as Python"
+        model = ReducedModel(ph)
+        made = model.simulate(r.time[part], r.channel("h_span")[part])
+    assert not model.python and model.elem is not None
+    quick = ReducedModel(truth).simulate(r.time[part], r.channel("h_span")[part])
+    assert np.max(np.abs(quick["avg_hdisp"])) > 0
+    for ch in ("avg_hdisp", "avg_hacc", "acc_n_ne"):
+        np.testing.assert_array_equal(made[ch], quick[ch])
+
+
 def test_every_effect_calls_only_verbs_both_models_realise():
     """The catalog's and the examples' effects pass the check `register` makes."""
     from vtable.effects.verbs import called_verbs, check_verbs

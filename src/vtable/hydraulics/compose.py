@@ -55,16 +55,18 @@ def laws_of(key: str) -> list[Callable]:
 @dataclass(frozen=True)
 class Composition:
     """The element of one stage set: its generated `module` (`fed_back`, `actuator_rates`,
-    `servo_rates`, `servo_step`, the `extra` kernels), states per actuator `ns`, and
-    whether every stage is linear."""
+    `servo_rates`, `servo_step`, the `extra` kernels), states per actuator `ns`, whether
+    every stage is linear, and `key`, which names the module's file (a hash of the stages'
+    laws and the kernels' text, then "u": the loops compiled without reference counting,
+    or "c": with it, `counted`)."""
 
     stages: tuple[Stage, ...]
     module: types.ModuleType
     ns: int
     linear: bool
-    key: str = ""
-    #: how it was made (`counted` makes it again with numba's reference counting)
-    made: tuple = field(default=(), compare=False, repr=False)
+    key: str
+    #: how it was made: (stages, templates, elements), for `counted` to make it again
+    made: tuple = field(compare=False, repr=False)
 
     def vector(self, h: ServoConstants, values: Sequence[dict[str, float]]) -> np.ndarray:
         """The kernel's parameters: `h`'s linear constants, then each stage's named
@@ -134,8 +136,10 @@ def counted(comp: Composition) -> Composition:
     """`comp` with its integrators' loops compiled with numba's reference counting (a law
     that allocates an array needs it; slower), and `composition` returning it from now on
     for that stage set."""
-    if comp.key in _COUNTED or comp.key.endswith("c"):
+    if comp.key in _COUNTED or not comp.key.endswith("u"):
         return _COUNTED.get(comp.key, comp)
+    # (the rule that removes `_UNCOUNTED` lives in this module, whose text names numba's
+    # cache folder, the generated files' too: a change to it cannot reuse an old file)
     stages, templates, elements = comp.made
     _COUNTED[comp.key] = _compiled(stages, templates, elements, comp.key[:-1] + "c", None,
                                    None, counting=True)

@@ -409,16 +409,19 @@ class ReducedModel(ModalOutputs):
 
     def _integrated(self, args: tuple):
         """The compiled integrator on `args` (`reduced_kernel.simulate_reduced`, with the
-        force elements when there are); a law that needs numba's reference counting (it allocates)
-        gets the element compiled with it (`compose.counted`) and the same call again."""
+        force elements when there are); a law that needs numba's reference counting (it
+        allocates) gets the element compiled with it (`compose.counted`) and the same call
+        again. Ctrl-C while numba compiles is an interrupt, not such a law."""
         module = self.element.module
         try:
             if self.elem is None:
                 return simulate_reduced(module, *args)
             return simulate_reduced(module, *args, self.pe, self.ia, self.ib, self.ne)
         except numba.core.errors.NumbaError as e:
+            if interrupted(e):
+                raise KeyboardInterrupt from e
             again = counted(self.element)
-            if again is self.element or interrupted(e):
+            if again is self.element:  # counted already: the law's own error
                 raise
             self.element = again
             if self.elem is not None:

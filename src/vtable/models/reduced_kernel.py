@@ -135,8 +135,10 @@ def _steps(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
 
 @njit(cache=True, inline="always")
 def _stage(yt, y, kk, s, dt, x0, xm, x1):
-    """RK4 stage s's trial state into yt (y itself, then y + dt/2 k1, y + dt/2 k2,
-    y + dt k3) and returns its command (x at the step's start, middle, middle, end)."""
+    """RK4 stage s's trial state into yt (a copy of y, then y + dt/2 k1, y + dt/2 k2,
+    y + dt k3) and returns its command (x at the step's start, middle, middle, end). The
+    rates are evaluated on yt at every stage: a law writes its states' rates into dz, never
+    its states z."""
     if s == 0:
         for i in range(y.shape[0]):
             yt[i] = y[i]
@@ -164,7 +166,8 @@ def _element_rates(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, 
 
 def _element_integrate(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
                        Fw, elem, ne, pe):
-    """`simulate_reduced` with force elements (see `_element_rates`)."""
+    """`_steps_elements` as plain Python (see `_element_rates`), for a force law numba
+    cannot compile (`simulate_reduced_python`)."""
     n = xc.shape[0]
     ny = 2 * nq + NS + Aw.shape[0] + ne
     y = np.zeros(ny)
