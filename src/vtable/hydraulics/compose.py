@@ -299,9 +299,8 @@ def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str,
             "    dP = oil_column(q, P, v, beta, sp)", "    dz[o] = dP",
             *([rate] if rate else []), "    F = piston_force(P, sp)", *calls["force"],
             "    return F", ""]
-    if elements:
-        eh, eb = _elements_source(elements, li)
-        head += eh
-        body += eb
+    eh, eb = _elements_source(elements, li)  # none: `elements` does nothing
+    head += eh
+    body += eb
     kernels = ["\n" + inspect.getsource(getattr(f, "py_func", f)) for f in templates]
     return "\n".join(head + body) + "\n".join(kernels)

@@ -37,7 +37,6 @@ from vtable.models import physics as phys
 from vtable.models.linear_table import mechanics
 from vtable.models.modal import ModalOutputs
 from vtable.models.reduced_kernel import (
-    ELEMENT_KERNELS,
     KERNELS,
     linear_system,
     simulate_linear,
@@ -354,7 +353,7 @@ class ReducedModel(ModalOutputs):
                            dtype=np.int64)
         laws = tuple(ElementLaw(e.law, e.states, len(e.params), e.names) for e in elements)
         try:  # compile now: a law numba cannot type runs as Python instead (slower)
-            self.element = law.composition(ELEMENT_KERNELS, elements=laws)
+            self.element = law.composition(KERNELS, elements=laws)
             n = len(self.ix)
             self.element.module.elements(np.zeros(n), np.zeros(n), np.zeros(self.ne), self.pe,
                                          np.zeros(n), np.zeros(self.ne), self.ia, self.ib)

@@ -5,13 +5,13 @@ groups' `servo_rates` applies too), auxiliary linear states w (other control loo
 ẇ = Aw w + Wq q + Wv q̇, generalized force Fw w), quadratic dampers c₂|q̇|q̇, and force
 elements with states z (`elem(q, q̇, z, p, f, ż)` adds generalized forces to f).
 
-`simulate_reduced` integrates a model: the stage set's generated module's `_steps`, or
-`_steps_elements` with force elements, calling the `elements` it defines (the laws written
-into it, the coordinates given at run time: `vtable.hydraulics.compose`). Both are cached
-on disk with that module, so every process loads them compiled. They are compiled without
-numba's reference counting, the step's functions inlined into them: an array handed to a
-function in the loop cost two atomic counts each time, most of the step's time (2.7 ms a
-call → 1.0 ms on the README campaign's training runs).
+`simulate_reduced` integrates a model: the stage set's generated module's `_steps`,
+calling the `elements` it defines (the force laws written into it, none in a module
+without them; the coordinates given at run time: `vtable.hydraulics.compose`). It is
+cached on disk with that module, so every process loads it compiled; it is compiled
+without numba's reference counting, the step's functions inlined into it: an array handed
+to a function in the loop cost two atomic counts each time, most of the step's time
+(2.7 ms a call → 1.0 ms on the README campaign's training runs).
 `simulate_reduced_python` runs the element code as Python for a law numba cannot compile.
 
 A linear model (no force element, no quadratic damper, a linear hydraulic loop) is the
@@ -109,30 +109,6 @@ def _advance(y, k1, k2, k3, k4, dt, k, Q, Qd, Qdd, F, PL):
     return True
 
 
-@njit(cache=True, nogil=True, _nrt=False)
-def _steps(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, y, yt,
-           kk, fe, ws, Q, Qd, Qdd, F, PL):
-    """RK4 at step dt (the command linear between samples) into the histories q, q̇, q̈
-    (Q, Qd, Qdd: n_t x nq), the actuator force F and its load pressure P_L (n_t), from the
-    state y at zero (scratch yt, the stages' rates kk (4 x ny), fe, ws: `simulate_reduced`
-    makes them). A state that blows up ends the histories with NaN. The four RK4 stages
-    are one loop, so the rates are compiled (inlined) once. No allocation."""
-    n = xc.shape[0]
-    for k in range(n):
-        xm = 0.5 * (xc[k] + xc[min(k + 1, n - 1)])
-        for s in range(4):
-            xs = _stage(yt, y, kk, s, dt, xc[k], xm, xc[min(k + 1, n - 1)])
-            f = _rates(yt, xs, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
-                       Fw, fe, kk[s], ws)
-            if s == 0:
-                F[k] = f
-                _record(k, y, kk[0], nq, Q, Qd, Qdd, PL)
-                if k == n - 1:
-                    return
-        if not _advance(y, kk[0], kk[1], kk[2], kk[3], dt, k, Q, Qd, Qdd, F, PL):
-            return
-
-
 @njit(cache=True, inline="always")
 def _stage(yt, y, kk, s, dt, x0, xm, x1):
     """RK4 stage s's trial state into yt (a copy of y, then y + dt/2 k1, y + dt/2 k2,
@@ -216,10 +192,15 @@ def _rates_with_elements(y, xc, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def _steps_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
-                    pe, ia, ib, ne, y, yt, kk, fe, ws, Q, Qd, Qdd, F, PL):
-    """`_steps` with force elements (`elements` of the stage set's module, on coordinates
-    ia, ib given at run time; their ne states at the end of y)."""
+def _steps(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, pe, ia,
+           ib, ne, y, yt, kk, fe, ws, Q, Qd, Qdd, F, PL):
+    """RK4 at step dt (the command linear between samples) into the histories q, q̇, q̈
+    (Q, Qd, Qdd: n_t x nq), the actuator force F and its load pressure P_L (n_t), from the
+    state y at zero (scratch yt, the stages' rates kk (4 x ny), fe, ws: `simulate_reduced`
+    makes them); the force elements (`elements` of the stage set's module, none in a
+    module without force laws) on coordinates ia, ib given at run time, their ne states at
+    the end of y. A state that blows up ends the histories with NaN. The four RK4 stages
+    are one loop, so the rates are compiled (inlined) once. No allocation."""
     n = xc.shape[0]
     for k in range(n):
         xm = 0.5 * (xc[k] + xc[min(k + 1, n - 1)])
@@ -236,29 +217,26 @@ def _steps_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw
             return
 
 
-#: the kernels a stage set's compiled element carries (`vtable.hydraulics.compose`) ...
-KERNELS = (_rates, _record, _trial, _stage, _advance, _steps)
-#: ... and those it carries when the model has force elements (their laws written in too)
-ELEMENT_KERNELS = (*KERNELS, _rates_with_elements, _steps_elements)
+#: no force element: their parameters, and their coordinates (`simulate_reduced`)
+NO_ELEMENTS = (np.zeros(0), np.zeros(0, dtype=np.int64))
+#: the kernels a stage set's compiled element carries (`vtable.hydraulics.compose`; its
+#: force laws, if any, written into its `elements`)
+KERNELS = (_rates, _record, _trial, _stage, _advance, _rates_with_elements, _steps)
 
 
 def simulate_reduced(module, xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq,
-                     Wv, Fw, pe=None, ia=None, ib=None, ne=0):
-    """RK4 at step dt of a stage set's compiled element (`module`: its `_steps`, or
-    `_steps_elements` when force elements `pe`, `ia`, `ib`, `ne` are given); returns q, q̇,
-    q̈ (n_t x nq), the actuator force (n_t) and its load pressure P_L (n_t). The arrays are
-    made here, so the compiled loop is the one function compiled per stage set."""
+                     Wv, Fw, pe=NO_ELEMENTS[0], ia=NO_ELEMENTS[1], ib=NO_ELEMENTS[1], ne=0):
+    """RK4 at step dt of a stage set's compiled element (`module`: its `_steps`, with the
+    force elements `pe`, `ia`, `ib`, `ne` when there are); returns q, q̇, q̈ (n_t x nq),
+    the actuator force (n_t) and its load pressure P_L (n_t). The arrays are made here,
+    so the compiled loop is the one function compiled per stage set."""
     n = xc.shape[0]
     ny = 2 * nq + module.NS + Aw.shape[0] + ne
     Q, Qd, Qdd = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq))
     F, PL = np.empty(n), np.empty(n)
-    scratch = (np.zeros(ny), np.empty(ny), np.empty((4, ny)), np.zeros(nq), np.zeros(nq))
-    if pe is None:
-        module._steps(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
-                      *scratch, Q, Qd, Qdd, F, PL)
-    else:
-        module._steps_elements(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw,
-                               Wq, Wv, Fw, pe, ia, ib, ne, *scratch, Q, Qd, Qdd, F, PL)
+    module._steps(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, pe,
+                  ia, ib, ne, np.zeros(ny), np.empty(ny), np.empty((4, ny)), np.zeros(nq),
+                  np.zeros(nq), Q, Qd, Qdd, F, PL)
     return Q, Qd, Qdd, F, PL
 
 
