@@ -147,6 +147,29 @@ def test_with_the_file_it_ranks_first_and_closes_the_gap():
     assert j["rounds"][0]["ranking"][0]["params"]["gap"] == pytest.approx(GAP_IN, rel=0.2)
 
 
+def _example_with_law(name: str, make_law):
+    """The README's example effect (loaded: `backlash_campaign`) under another `name`, its
+    force law replaced by `make_law(its law)`; the rest of the assembly as it is."""
+    example = get("swivel_backlash")
+
+    class Wrapped:
+        def __init__(self, m):
+            self.m = m
+
+        def __getattr__(self, attr):  # the rest of the assembly (m.table, ...) as it is
+            return getattr(self.m, attr)
+
+        def insert_at_actuators(self, part, mass, law, params, states=0, stiffness=0.0):
+            self.m.insert_at_actuators(part, mass, make_law(law), params, states, stiffness)
+
+    class Made(type(example)):
+        def apply(self, m, p):
+            example.apply(Wrapped(m), p)
+
+    Made.name = name
+    return Made()
+
+
 def test_a_pure_python_law_gives_the_same_prediction():
     """numba is an option: a law numba cannot compile runs as Python, same numbers."""
     from vtable.effects import register
@@ -154,30 +177,14 @@ def test_a_pure_python_law_gives_the_same_prediction():
 
     truth, runs = backlash_campaign()
     r = runs[0]
-    example = get("swivel_backlash")
 
-    class PythonOnly:
-        """The example's effect, its law wrapped in Python numba cannot type."""
+    def python_only(law):  # the example's law wrapped in Python numba cannot type
+        def python_law(d, v, z, p, dz):
+            return {"f": law(d, v, z, p, dz)}["f"]
 
-        def __init__(self, m):
-            self.m = m
+        return python_law
 
-        def __getattr__(self, name):  # the rest of the assembly (m.table, ...) as it is
-            return getattr(self.m, name)
-
-        def insert_at_actuators(self, name, mass, law, params, states=0, stiffness=0.0):
-            def python_law(d, v, z, p, dz):
-                return {"f": law(d, v, z, p, dz)}["f"]
-
-            self.m.insert_at_actuators(name, mass, python_law, params, states, stiffness)
-
-    class Slow(type(example)):
-        name = "swivel_backlash_python"
-
-        def apply(self, m, p):
-            example.apply(PythonOnly(m), p)
-
-    register(Slow())
+    register(_example_with_law("swivel_backlash_python", python_only))
     ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                  {"swivel_backlash_python": {"gap": GAP_IN}})
     with pytest.warns(RuntimeWarning, match="runs as Python") as caught:
@@ -263,26 +270,7 @@ def test_a_force_law_that_allocates_runs_compiled_with_the_same_prediction():
 
     truth, runs = backlash_campaign()
     r = runs[0]
-    example = get("swivel_backlash")
-
-    class Allocating:
-        def __init__(self, m):
-            self.m = m
-
-        def __getattr__(self, name):
-            return getattr(self.m, name)
-
-        def insert_at_actuators(self, name, mass, law, params, states=0, stiffness=0.0):
-            self.m.insert_at_actuators(name, mass, _allocating_dead_band, params, states,
-                                       stiffness)
-
-    class Made(type(example)):
-        name = "swivel_backlash_allocating"
-
-        def apply(self, m, p):
-            example.apply(Allocating(m), p)
-
-    register(Made())
+    register(_example_with_law("swivel_backlash_allocating", lambda law: _allocating_dead_band))
     ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                  {"swivel_backlash_allocating": {"gap": GAP_IN}})
     part = slice(0, 300)
