@@ -1,0 +1,50 @@
+"""A model that blows up ends its histories with NaN from the step its table displacement
+leaves the physical range (or stops being finite), in both integrators: the exact linear
+stepping (`reduced_kernel.simulate_linear`) and the RK4 loop of a nonlinear stage set
+(`_steps`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vtable.models.physics import Physics, nominal_open_loop
+from vtable.models.reduced import ReducedModel
+from vtable.models.reduced_kernel import linear_system
+from vtable.params import presets
+
+
+def _unstable(effects: dict) -> ReducedModel:
+    """The SDOF frame on the table with every spring's stiffness negated (a mechanical
+    system that diverges whatever the servo does)."""
+    m = ReducedModel(Physics(nominal_open_loop(), presets.specimen("sdof_frame"), effects))
+    m.K = -m.K
+    if m.linear:  # its state-space matrices are made at build: again with -K
+        m._linear = linear_system(m.element.module, m.M.shape[0], m.Minv, m.K, m.C, m.c2,
+                                  m.bF, m.ax, m.sp, m.T, m.Tp, m.g, m.kp, m.kv, m.Aw, m.Wq,
+                                  m.Wv, m.Fw)
+        m._holds = {}
+    return m
+
+
+@pytest.mark.parametrize("effects", [{}, {"valve_flow_nonlinearity": {}}])
+def test_a_model_that_blows_up_ends_in_nan_from_there(effects):
+    t = np.arange(4000) / 200.0
+    x_c = 0.001 * np.sin(2 * np.pi * 1.0 * t)
+    stable = ReducedModel(Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
+                                  effects))
+    h = stable.histories(t, x_c)
+    assert np.all(np.isfinite(h.q)) and np.all(np.isfinite(h.force))
+    model = _unstable(effects)
+    assert model.linear == (not effects)  # each integrator once
+    h = model.histories(t, x_c)
+    bad = np.flatnonzero(~np.isfinite(h.q[:, 0]))
+    assert len(bad) > 0, "the negative springs did not blow up in 20 s"
+    first = bad[0]
+    assert 0 < first < len(t) - 1
+    for a in (h.q, h.qd, h.qdd, h.force, h.p_l):  # every history NaN from there to the end
+        assert np.all(np.isnan(a[first:])), a[first:]
+        assert np.all(np.isfinite(a[:first]))  # and finite before
+    # it ended where the table displacement left ±10 m (or overflowed)
+    x = h.q[first - 1, 0]
+    assert abs(x) > 10.0 or abs(h.q[first - 2, 0]) > 1e-3
