@@ -48,3 +48,47 @@ def test_a_model_that_blows_up_ends_in_nan_from_there(effects):
     # it ended where the table displacement left ±10 m (or overflowed)
     x = h.q[first - 1, 0]
     assert abs(x) > 10.0 or abs(h.q[first - 2, 0]) > 1e-3
+
+
+def test_a_structure_only_model_agrees_with_the_built_one_and_compiles_nothing(monkeypatch):
+    """`ReducedModel(..., kernels=False)` (what a diagnosis asks of every candidate: can it
+    be built, is it linear) says what the full build says, for every catalog effect alone
+    and beside friction, without the integrators' element or the linear system (nothing
+    compiled or loaded); it refuses to simulate in one line."""
+    from vtable.effects.registry import default_candidates
+    from vtable.errors import VtableError
+    from vtable.hydraulics import compose
+    from vtable.models import reduced
+
+    real = compose.composition
+    integrators = []
+
+    def recorded(stages, extra=(), elements=()):
+        if extra:
+            integrators.append(extra)
+        return real(stages, extra, elements)
+
+    def refused(*a, **k):
+        raise AssertionError("a structure-only model made its linear system")
+
+    start = Physics(nominal_open_loop(), presets.specimen("sdof_frame"), {})
+    seen = {True: 0, False: 0}
+    for e in default_candidates():
+        others = [] if e == "actuator_friction" else \
+            [start.with_effect("actuator_friction").with_effect(e)]
+        for ph in [start.with_effect(e), *others]:
+            with monkeypatch.context() as mp:
+                mp.setattr(compose, "composition", recorded)
+                mp.setattr(reduced, "linear_system", refused)
+                try:
+                    quick = ReducedModel(ph, kernels=False)
+                except VtableError as err:
+                    with pytest.raises(VtableError, match=str(err)[:30]):
+                        ReducedModel(ph)
+                    continue
+            assert not integrators, e
+            assert quick.linear == ReducedModel(ph).linear, e
+            seen[quick.linear] += 1
+            with pytest.raises(RuntimeError, match="structure-only"):
+                quick.simulate(np.arange(10) / 200.0, np.zeros(10))
+    assert seen[True] >= 3 and seen[False] >= 8, seen  # both kinds were compared

@@ -154,14 +154,14 @@ class Diagnoser:
         """Why a model cannot be built for this campaign's table (an effect needing a
         motion the platen has not, say), or ''."""
         try:
-            ReducedModel(ph, self.vt)
+            ReducedModel(ph, self.vt, kernels=False)
         except VtableError as e:
             return str(e)
         return ""
 
     def _linear(self, ph: Physics) -> bool:
         try:
-            return ReducedModel(ph, self.vt).linear
+            return ReducedModel(ph, self.vt, kernels=False).linear
         except VtableError:
             return False
 

@@ -257,7 +257,7 @@ class TableModel(Layout):
                 ph = dataclasses.replace(ph, effects={**ph.effects,
                                                       name: {**ph.effects[name], pname: v}})
             try:
-                ReducedModel(ph, self.vt)
+                ReducedModel(ph, self.vt, kernels=False)
             except VtableError:  # e.g. a storey the specimen does not have
                 continue
             sub = copy.copy(self)

@@ -110,13 +110,7 @@ def composition(stages: Sequence[Stage], extra: Sequence[Callable] = (),
     `elements`: force-element laws, called by the module's `elements(q, q̇, z, p, f, ż,
     ia, ib)` on the relative motion of coordinates ia[k] and ib[k] (−1: none), given at run
     time (one compiled module serves every coordinate, every storey)."""
-    stages = ordered(stages)
-    for kind in ("control", "feedback"):
-        if sum(s.kind == kind for s in stages) > 1:
-            raise VtableError(f"the element takes one {kind} stage: "
-                              f"{', '.join(s.name for s in stages if s.kind == kind)}")
-    if len({s.name for s in stages}) < len(stages):
-        raise VtableError(f"a stage appears twice: {', '.join(s.name for s in stages)}")
+    stages = checked(stages)
     templates = [element.servo_rates, element.servo_step, *extra]
     held = (*stages, *templates)
     elements = tuple(elements)  # frozen, compared by value: each model builds its own
@@ -130,6 +124,20 @@ def composition(stages: Sequence[Stage], extra: Sequence[Callable] = (),
         _SEEN[ident] = (held, hit)
         return _COUNTED.get(key, hit)
     return _compiled(stages, templates, elements, key, held, ident)
+
+
+def checked(stages: Sequence[Stage]) -> tuple[Stage, ...]:
+    """`stages` in the element's order (`ordered`), or a one-line error where they cannot
+    make one element (two control or feedback stages, a stage twice); nothing written or
+    imported."""
+    stages = ordered(stages)
+    for kind in ("control", "feedback"):
+        if sum(s.kind == kind for s in stages) > 1:
+            raise VtableError(f"the element takes one {kind} stage: "
+                              f"{', '.join(s.name for s in stages if s.kind == kind)}")
+    if len({s.name for s in stages}) < len(stages):
+        raise VtableError(f"a stage appears twice: {', '.join(s.name for s in stages)}")
+    return stages
 
 
 def counted(comp: Composition) -> Composition:

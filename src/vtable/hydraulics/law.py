@@ -28,7 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from vtable.errors import VtableError
-from vtable.hydraulics.compose import Composition, composition
+from vtable.hydraulics.compose import Composition, checked, composition
 from vtable.hydraulics.stage import Stage
 from vtable.params.table import ServoConstants
 
@@ -81,6 +81,11 @@ class ServoLaw:
         """The compiled element of this law's stages (`compose.composition`), with force
         elements' laws (`compose.ElementLaw`) when given."""
         return composition([s for s, _ in self.stages], extra, elements)
+
+    def check(self) -> None:
+        """A one-line error where this law's stages cannot make one element
+        (`compose.checked`); nothing compiled, written or imported."""
+        checked([s for s, _ in self.stages])
 
     def vector(self, comp: Composition) -> np.ndarray:
         """The element's parameters for `comp` (this law's composition)."""

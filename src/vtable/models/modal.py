@@ -26,7 +26,8 @@ from vtable.models.reduced_kernel import simulate_modal
 
 class ModalOutputs:
     """`ReducedModel`'s fast outputs (the module docstring); it provides `simulate`,
-    `linear`, `_linear` (A, B, f_y, f_u), `M`, `max_step`, `assembly`, `_channels`,
+    `linear`, `_linear` (A, B, f_y, f_u), `element` (None: structure only, `simulate`
+    says so), `M`, `max_step`, `assembly`, `_channels`,
     `_aliased`."""
 
     def outputs(self, t: np.ndarray, x_c: np.ndarray, names: Sequence[str],
@@ -35,7 +36,7 @@ class ModalOutputs:
         (the same values as `simulate`'s, to rounding). A linear model computes only these
         (`reduced_kernel.simulate_modal`: the modal coordinates stepped exactly, the output
         rows of `_output_map`); any other is simulated whole and sampled."""
-        fast = self._modal() if self.linear else None
+        fast = self._modal() if self.linear and self.element is not None else None
         if fast is None:
             full = self.simulate(t, x_c)
             once: dict[int, np.ndarray] = {}  # a lumped quantity once, as the fast path

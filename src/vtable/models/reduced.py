@@ -290,7 +290,12 @@ def _combined(elements: list[ForceElement], ix: dict[str, int]):
 class ReducedModel(ModalOutputs):
     """Predicts a run's channels from its command for a given `Physics`."""
 
-    def __init__(self, physics: phys.Physics, vt: VirtualTable | None = None) -> None:
+    def __init__(self, physics: phys.Physics, vt: VirtualTable | None = None, *,
+                 kernels: bool = True) -> None:
+        """`kernels=False`: the model's structure only (its matrices, its stages checked,
+        `linear`), no element generated, compiled or loaded: whether `physics` can be built
+        on `vt` and whether it is linear (a diagnosis asks that of every candidate, most of
+        which it never simulates in this process). It cannot simulate."""
         m = ReducedAssembly(physics, vt or virtual_table())
         self.physics, self.vt = physics, m.vt
         physics.apply(m, "reduced")
@@ -320,10 +325,10 @@ class ReducedModel(ModalOutputs):
         self.storeys, self.h_top, self.specimen = m.storeys, m.h_top, m.specimen
         self.max_step = m.max_step
         self._law = law
-        self._element(m.elements)  # the stage set's compiled element (`element`, `sp`)
+        self._element(m.elements, kernels)  # the stage set's element (`element`, `sp`)
         #: a linear model is stepped exactly (`reduced_kernel.simulate_linear`)
-        self.linear = (self.elem is None and not np.any(c2) and law.linear and LINEAR_PATH)
-        if self.linear:
+        self.linear = (not m.elements and not np.any(c2) and law.linear and LINEAR_PATH)
+        if self.linear and kernels:
             self._linear = linear_system(self.element.module, n, self.Minv, K, C, c2, self.bF,
                                          ax, self.sp, self.T, self.Tp, self.g, self.kp,
                                          self.kv, Aw, Wq, Wv, Fw)
@@ -334,12 +339,18 @@ class ReducedModel(ModalOutputs):
             self._holds[h] = first_order_hold(self._linear[0], self._linear[1], h)
         return self._holds[h]
 
-    def _element(self, elements: list[ForceElement]) -> None:
+    def _element(self, elements: list[ForceElement], compile_now: bool = True) -> None:
         """The stage set's compiled element (`element`), with the force elements' laws
         written into it (`compose.ElementLaw`: cached on disk like the stages, one module
         for every coordinate they act on), their parameters `pe` and coordinates `ia`,
-        `ib`; a law numba cannot compile runs as Python instead (slower, said)."""
+        `ib`; a law numba cannot compile runs as Python instead (slower, said).
+        `compile_now=False`: a structure-only model's (no element: its stages checked)."""
         law = self._law
+        if not compile_now:
+            law.check()
+            self.element = self.sp = self.elem = None
+            self.python, self.ne = False, sum(e.states for e in elements)
+            return
         self.python = False
         self.ne, self.pe = sum(e.states for e in elements), np.zeros(0)
         self.elem = None
@@ -384,6 +395,8 @@ class ReducedModel(ModalOutputs):
         by the smallest integer that brings it to `SIM_DT` (or a stiff element's step) or
         below (any sample rate); the command is interpolated band-limited
         (`resample_poly`) in between."""
+        if self.element is None:
+            raise RuntimeError("a structure-only reduced model (kernels=False) cannot simulate")
         t = np.asarray(t, dtype=float)
         if len(t) < 2:
             raise VtableError("the model needs a command of at least two samples")
