@@ -19,6 +19,7 @@ import copy
 import dataclasses
 import math
 import threading
+from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -65,6 +66,9 @@ DECLARED_STEPS = 10
 #: 4 % air took f_o 43 % down, an RC filter ξ_o 22 %): closer, it has absorbed nothing
 #: worth the steps
 FAR = 0.1
+#: residual vectors a fit keeps, so that a point asked again is not simulated again
+#: (`TableModel._cost`)
+COSTS_KEPT = 16
 
 
 class StopRequestedError(Exception):
@@ -133,6 +137,8 @@ class TableModel(Layout):
         self.baseline = baseline
         self._last = None  # (start, layout, x, physics) last unpacked
         self._commands: dict = {}  # (run, samples) -> the command the model is driven by
+        #: the last residual vectors `_cost` made: (start, layout, campaign, x, residuals)
+        self._costs: deque = deque(maxlen=COSTS_KEPT)
         self.screened_ = False
         self.physics_: Physics | None = None
         self.vt = None  # the campaign's table, known when fitting
@@ -207,8 +213,19 @@ class TableModel(Layout):
         return out
 
     def _cost(self, x, start, lay, campaign) -> np.ndarray:
-        return np.concatenate([self._residuals(self._unpack_fast(x, start, lay), campaign),
-                               self._priors(x, lay, campaign)])
+        """The residual vector (training data rows, then the calibration's priors) at the
+        packed parameters `x`. The same point asked again within a fit (a least-squares
+        run starting where the last ended, a screen's start confirmed and then fitted from)
+        is not simulated again: the last `COSTS_KEPT` vectors are kept (8 % of a README
+        campaign's evaluations)."""
+        key = np.asarray(x, dtype=float).tobytes()
+        for s, lo, c, k, f in self._costs:
+            if k == key and s is start and lo is lay and c is campaign:
+                return f.copy()
+        f = np.concatenate([self._residuals(self._unpack_fast(x, start, lay), campaign),
+                            self._priors(x, lay, campaign)])
+        self._costs.append((start, lay, campaign, key, f.copy()))
+        return f
 
     # -- the estimator -----------------------------------------------------------------
     def fit(self, runs: Sequence[Run] | Campaign) -> TableModel:
@@ -261,7 +278,7 @@ class TableModel(Layout):
             except VtableError:  # e.g. a storey the specimen does not have
                 continue
             sub = copy.copy(self)
-            sub._last, sub._commands = None, {}
+            sub._last, sub._commands, sub._costs = None, {}, deque(maxlen=COSTS_KEPT)
             sub._fit_from(campaign, ph)
             costs[tuple(combo.values())] = sub.cost_
             if best is None or sub.cost_ < best.cost_:
