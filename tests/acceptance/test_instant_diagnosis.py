@@ -126,6 +126,46 @@ def test_secant_jacobian():
     assert s.evals == n + 3
 
 
+def test_a_point_asked_again_is_not_simulated_again(monkeypatch):
+    """`TableModel._cost` keeps its last `COSTS_KEPT` residual vectors: the same point on
+    the same start, layout and campaign costs no simulation and gives the same vector (a
+    copy: changing it changes nothing kept); another point, start or layout does."""
+    from vtable.diagnose.model import COSTS_KEPT
+
+    runs = truth_campaign(*PITCH)
+    c = Campaign.of(runs)
+    m = TableModel()
+    m.vt, m.declared, m.campaign_ = c.table, c.specimen, c
+    start = Physics(nominal_open_loop(c.table), c.specimen, {"pitch_flexibility": {}})
+    c = c.training_for(start)
+    lay = m._layout(start)
+    x = m._pack(start, lay)
+    sims = []
+    real = TableModel._residuals
+    monkeypatch.setattr(TableModel, "_residuals",
+                        lambda self, ph, camp: sims.append(1) or real(self, ph, camp))
+    f = m._cost(x, start, lay, c)
+    assert len(sims) == 1 and len(f) > c.n_target > 1000
+    f[:] = 0.0  # the caller's copy
+    again = m._cost(x.copy(), start, lay, c)
+    assert len(sims) == 1 and np.any(again != 0.0)
+    np.testing.assert_array_equal(again, real(m, m._unpack(x, start, lay), c).tolist() +
+                                  list(m._priors(x, lay, c)))
+    y = x.copy()
+    y[0] += 1e-3
+    m._cost(y, start, lay, c)
+    assert len(sims) == 2  # another point
+    m._cost(x, start.with_effect("force_feedback_filter"), lay, c)
+    assert len(sims) == 3  # another start (the same layout object: not the same model)
+    for k in range(COSTS_KEPT):  # the oldest forgotten
+        z = x.copy()
+        z[1] += 1e-4 * (k + 1)
+        m._cost(z, start, lay, c)
+    n = len(sims)
+    m._cost(x, start, lay, c)
+    assert len(sims) == n + 1
+
+
 def test_the_amplitude_screen_tells_friction_from_a_missing_linear_effect():
     """On the starting model's residual: the table's pitch missing (linear) leaves the same
     residual H1 in every run, z below `Z_SCREEN` (measured 9.1: the random runs against the
