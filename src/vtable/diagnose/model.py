@@ -69,6 +69,7 @@ FAR = 0.1
 #: residual vectors a fit keeps, so that a point asked again is not simulated again
 #: (`TableModel._cost`)
 COSTS_KEPT = 16
+FINAL_FTOL = 1e-4
 
 
 class StopRequestedError(Exception):
@@ -379,12 +380,12 @@ class TableModel(Layout):
         else:
             rivals = []
 
-        def solve(x, nfev, refresh=REFRESH):
+        def solve(x, nfev, refresh=REFRESH, ftol=1e-8):
             x = np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
             secant = Secant(lambda x: self._cost(x, start, lay, campaign), lo, hi,
                             refresh=refresh)
             sol = scipy.optimize.least_squares(secant.fun, x, jac=secant.jac,
-                                               bounds=(lo, hi), xtol=1e-6, ftol=1e-8,
+                                               bounds=(lo, hi), xtol=1e-6, ftol=ftol,
                                                max_nfev=nfev)
             sol.secant = secant
             return sol
@@ -411,7 +412,7 @@ class TableModel(Layout):
         # the best start goes on with forward-difference Jacobians (Broyden's may stop
         # short of the minimum: a pitch fit ten times the cost it can reach), the last of
         # them the covariance the flags read
-        sol = solve(x0, 40, refresh=1)
+        sol = solve(x0, 40, refresh=1, ftol=FINAL_FTOL)
         return self._done(campaign, start, lay, sol.x, sol.fun, sol.secant.at_end(sol.x))
 
     def _refine(self, x: np.ndarray, eff: np.ndarray, lo: np.ndarray, hi: np.ndarray,
