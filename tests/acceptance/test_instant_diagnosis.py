@@ -166,6 +166,33 @@ def test_a_point_asked_again_is_not_simulated_again(monkeypatch):
     assert len(sims) == n + 1
 
 
+def test_the_screen_runs_on_the_first_half_of_each_training_segment():
+    """`Campaign.screening`: the same targets cut at half of each run's training segment
+    (every other sample, so the first half of each target vector), each normalised by its
+    own norm; the models simulate half the samples; the whole-training variant keeps the
+    share; built once."""
+    from vtable.diagnose.sampling import SCREEN_SHARE, segments
+
+    c = Campaign.of(truth_campaign(*PITCH))
+    s = c.screening()
+    assert SCREEN_SHARE == 0.5 and s.share == SCREEN_SHARE and c.share == 1.0
+    assert s is c.screening() and s.screening() is s
+    assert len(s.targets) == len(c.targets)
+    for (r, g, y, _), (r2, g2, y2, norm2) in zip(c.targets, s.targets, strict=True):
+        assert (r.name, g) == (r2.name, g2)
+        n = segments(r)[0].stop
+        assert c.train_stop(r) == n and s.train_stop(r) == round(n / 2)
+        assert len(y2) == (round(n / 2) + 1) // 2  # every other sample of the first half
+        np.testing.assert_array_equal(y2, y[:len(y2)])
+        assert norm2 == pytest.approx(np.linalg.norm(y2))
+    assert 0.45 < s.n_target / c.n_target < 0.55
+    w = s.whole_training()
+    assert w.whole and w.share == SCREEN_SHARE
+    for r in s.runs:
+        assert w.train_stop(r) == round(segments(r, True)[0].stop / 2)
+    assert c.whole_training().screening().train_stop(s.runs[0]) == w.train_stop(s.runs[0])
+
+
 def test_the_amplitude_screen_tells_friction_from_a_missing_linear_effect():
     """On the starting model's residual: the table's pitch missing (linear) leaves the same
     residual H1 in every run, z below `Z_SCREEN` (measured 9.1: the random runs against the

@@ -20,6 +20,7 @@ from vtable.diagnose.compare import (
     run_groups,
     segments,
 )
+from vtable.diagnose.sampling import SCREEN_SHARE
 from vtable.diagnose.sensors import sensor_check
 from vtable.diagnose.stationarity import stationarity_check
 from vtable.effects.registry import get as effect
@@ -66,12 +67,13 @@ def check_campaign(runs: Sequence[Run]) -> list[Run]:
     return out
 
 
-def _targets(runs: Sequence[Run], whole: bool) -> list[tuple[Run, str, np.ndarray, float]]:
+def _targets(runs: Sequence[Run], whole: bool, share: float = 1.0
+             ) -> list[tuple[Run, str, np.ndarray, float]]:
     """(run, group, training samples (every other one), their norm) of every group of
-    every run (`segments`, `whole` or not)."""
+    every run (`segments`, `whole` or not, the first `share` of it)."""
     out = []
     for r in runs:
-        tr, _ = segments(r, whole)
+        tr, _ = segments(r, whole, share)
         for g in run_groups(r):
             y = group_signal(r, g)
             if y is not None:
@@ -111,6 +113,9 @@ class Campaign:
     #: the training targets span each run's whole first 60 % (`whole_training`), not only
     #: its first `TRAIN_MAX_S`
     whole: bool = False
+    #: the share of each run's training segment the targets span: 1, or `SCREEN_SHARE`
+    #: (`screening`)
+    share: float = 1.0
 
     @classmethod
     def of(cls, runs: Sequence[Run] | Campaign) -> Campaign:
@@ -152,9 +157,26 @@ class Campaign:
         if self.whole:
             return self
         if "_whole" not in self.__dict__:
-            self._whole = dataclasses.replace(self, targets=_targets(self.runs, True),
-                                              whole=True)
+            self._whole = dataclasses.replace(self, targets=_targets(self.runs, True,
+                                                                     self.share), whole=True)
         return self._whole
+
+    def screening(self) -> Campaign:
+        """This campaign with training targets over the first `SCREEN_SHARE` of each run's
+        training segment (a candidate's screen, `vtable.diagnose.projected`); kept, built
+        once."""
+        if self.share != 1.0:
+            return self
+        if "_screening" not in self.__dict__:
+            self._screening = dataclasses.replace(
+                self, targets=_targets(self.runs, self.whole, SCREEN_SHARE),
+                share=SCREEN_SHARE)
+        return self._screening
+
+    def train_stop(self, run: Run) -> int:
+        """The samples of `run` a fit on this campaign simulates (its training segment's
+        end: `segments`)."""
+        return segments(run, self.whole, self.share)[0].stop
 
     @property
     def states(self) -> dict[str, list[str]]:

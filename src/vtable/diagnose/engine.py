@@ -378,7 +378,8 @@ class Diagnoser:
         pass are refined (fitted in full) best first, the costliest first on the cores;
         one whose screened training cost is above `REFINE_FACTOR` times that of an
         admissible refined candidate cannot win the round and is kept as screened."""
-        frame = Frame.of(self._model(), current, self.campaign.training_for(current), cost)
+        frame = Frame.of(self._model(), current,
+                         self.campaign.training_for(current).screening())
         ranking: list[Candidate] = []
         screen = nonlinearity_evidence(self.campaign, st.stages[-1].predictions)
         self.screens.append(screen)

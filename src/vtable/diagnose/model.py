@@ -29,7 +29,7 @@ from threadpoolctl import threadpool_limits
 
 from vtable.diagnose.calibration import LOOP, Calibration
 from vtable.diagnose.campaign import Campaign
-from vtable.diagnose.compare import Comparison, compare, segments
+from vtable.diagnose.compare import Comparison, compare
 from vtable.diagnose.layout import Layout, with_states
 from vtable.diagnose.projected import Frame, projected_start
 from vtable.diagnose.reuse import model_at
@@ -168,7 +168,7 @@ class TableModel(Layout):
         for r in campaign.runs:
             if self.stop is not None and self.stop.is_set():
                 raise StopRequestedError
-            n = segments(r, campaign.whole)[0].stop if train_only else len(r.time)
+            n = campaign.train_stop(r) if train_only else len(r.time)
             key = (r.name, n)
             if key not in self._commands:  # one array per segment: its interpolation is kept
                 self._commands[key] = (r.time[:n], r.channel("h_span")[:n])
@@ -185,7 +185,7 @@ class TableModel(Layout):
         for r, names in campaign.target_channels:
             if self.stop is not None and self.stop.is_set():
                 raise StopRequestedError
-            n = segments(r, campaign.whole)[0].stop
+            n = campaign.train_stop(r)
             key = (r.name, n)
             if key not in self._commands:  # one array per segment: its interpolation is kept
                 self._commands[key] = (r.time[:n], r.channel("h_span")[:n])

@@ -35,6 +35,12 @@ SIAM J. Numer. Anal. 10, 1973). So, with J worked out once per round for every c
    this start (the effect's best values, the current parameters moved by δb within their
    bounds) one of the fit's starts (`TableModel`'s `multistart`).
 
+Steps 1-3 run on the first half of each run's training segment (`Campaign.screening`,
+`sampling.SCREEN_SHARE`; the round's J is taken there): a gain of 1 % of the training cost
+shows there as on the whole segment, at half the simulated time, and a candidate that
+passes is fitted on the whole segment (step 4); one screened out has its cost and
+training error taken on the whole segment where its steps ended (one simulation).
+
 A candidate screened out then costs a few simulations, where a few least-squares steps in
 every parameter from each of its starts cost tens of Jacobians. Parameters the
 candidate brings that the current model lacks (the platen's pitch inertia and the height of
@@ -73,16 +79,20 @@ class Frame:
     J: np.ndarray  # the data rows of the Jacobian itself
 
     @classmethod
-    def of(cls, model, physics, campaign, cost: float) -> Frame:
+    def of(cls, model, physics, campaign) -> Frame:
         """`physics` (the current, fitted model) linearised by forward differences with
-        `model` (a `TableModel` on the campaign's table: its layout and residuals)."""
+        `model` (a `TableModel` on the campaign's table: its layout and residuals) on
+        `campaign`'s training targets (a screening campaign's: `Campaign.screening`), and
+        its cost there."""
         lay = model._layout(physics)
         x = model._pack(physics, lay)
         lo, hi = model.bounds(lay)
         secant = Secant(lambda z: model._cost(z, physics, lay, campaign), lo, hi)
-        J = secant.at(np.clip(x, lo, hi))[:campaign.n_target]
+        z = np.clip(x, lo, hi)
+        J = secant.at(z)[:campaign.n_target]
+        f = secant.fun(z)  # kept by the model: no simulation
         Q, R = scipy.linalg.qr(J, mode="economic")
-        return cls(tuple(p.key for p in lay), x, Q, R, cost, J)
+        return cls(tuple(p.key for p in lay), x, Q, R, float(f @ f), J)
 
     def project(self, r: np.ndarray) -> np.ndarray:
         """r with what the current parameters take up to first order removed: P⊥ r."""
@@ -97,15 +107,18 @@ class Frame:
             return -np.linalg.lstsq(self.R, c, rcond=None)[0]
 
 
-def projected_start(model, campaign, start, lay, x0: np.ndarray, frame: Frame,
+def projected_start(model, full, start, lay, x0: np.ndarray, frame: Frame,
                     points: list[np.ndarray], idx: list[int], screen: float,
                     declared: np.ndarray | None = None):
     """Steps 1-3 of the module docstring for `model` (a `TableModel` fitting candidate
     `model.multistart` from `start`, layout `lay`, packed `x0`): `points` the effect's
     values to try (fitted scale, at the indices `idx`), `screen` the relative gain it must
     show; `declared`, the start with the servo loop as declared (fitted scale) when the
-    fitted loop is far from it. Returns `model` done and screened out, or the start of
-    step 4 (every parameter, fitted scale) for the caller's fit."""
+    fitted loop is far from it. The steps run on the screening share of the training
+    campaign `full` (`Campaign.screening`, which `frame` linearises). Returns `model` done
+    and screened out (its cost and training error on `full`), or the start of step 4
+    (every parameter, fitted scale) for the caller's fit."""
+    campaign = full.screening()
     lo, hi = model.bounds(lay)
     n = campaign.n_target
     shared = [(i, frame.keys.index(p.key)) for i, p in enumerate(lay) if p.key in frame.keys]
@@ -176,7 +189,8 @@ def projected_start(model, campaign, start, lay, x0: np.ndarray, frame: Frame,
             return np.clip(sol.x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         if best is None or float(sol.fun @ sol.fun) < float(best.fun @ best.fun):
             best = sol
-    return model._done(campaign, start, lay, best.x, best.fun, None, screened=True)
+    return model._done(full, start, lay, best.x, model._cost(best.x, start, lay, full), None,
+                       screened=True)
 
 
 def _prior_jacobian(model, lay, campaign, x: np.ndarray) -> np.ndarray:

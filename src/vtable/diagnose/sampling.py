@@ -31,6 +31,10 @@ HELD_OUT = 0.4  # the last 40 % of every run is held out from fitting ...
 #: ... and the fits use at most the first 30 s of each run: a few parameters do not need
 #: more, and every simulated second costs the fits time (a 165 s run trains on 30 s)
 TRAIN_MAX_S = 30.0
+#: a candidate's screen (`vtable.diagnose.projected`) fits on the first half of each run's
+#: training segment: whether an effect lowers the training cost by 1 % shows there at half
+#: the simulations, and a candidate that passes is fitted on the whole segment
+SCREEN_SHARE = 0.5
 ANALYSIS_FS = 200.0  # Hz: faster runs are anti-alias filtered and resampled to this rate
 MIN_FS = 100.0  # Hz: slower runs cannot resolve the bands and the noise floor
 #: Hz: the fastest run resampled (by a ratio of denominator at most 1000: 200 Hz from 200 kHz)
@@ -72,11 +76,13 @@ def analysis_run(run: Run) -> Run:
 
 
 
-def segments(run: Run, whole: bool = False) -> tuple[slice, slice]:
-    """Training (the first 60 %, at most `TRAIN_MAX_S` unless `whole`) and held-out (the
-    last 40 %) samples of a run."""
+def segments(run: Run, whole: bool = False, share: float = 1.0) -> tuple[slice, slice]:
+    """Training (the first 60 %, at most `TRAIN_MAX_S` unless `whole`; its first `share`,
+    e.g. `SCREEN_SHARE`) and held-out (the last 40 %) samples of a run."""
     n = len(run.time)
     cut = round(n * (1 - HELD_OUT))
     stop = cut if whole else min(cut, round(TRAIN_MAX_S * run.fs) + 1)
+    if share < 1.0:
+        stop = max(2, round(stop * share))
     return slice(0, stop), slice(cut, n)
 
