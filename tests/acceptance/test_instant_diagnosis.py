@@ -193,6 +193,34 @@ def test_the_screen_runs_on_the_first_half_of_each_training_segment():
     assert c.whole_training().screening().train_stop(s.runs[0]) == w.train_stop(s.runs[0])
 
 
+def test_the_workers_compile_the_first_rounds_candidates_as_the_start_is_fitted():
+    """`Fits.warm` starts the Dask workers and has each candidate's kernels compiled (or
+    loaded) there in tasks that run before the fits submitted later; a model that cannot
+    be built is skipped (False), not raised. One worker: nothing to start."""
+    from vtable.diagnose.calibration import Calibration
+    from vtable.diagnose.pool import Fits
+    from vtable.diagnose.workers import _warm
+
+    c = Campaign.of(truth_campaign(*PITCH))
+    start = Physics(nominal_open_loop(c.table), c.specimen, {})
+    models = [start.with_effect("actuator_friction"),
+              start.with_effect("force_feedback_filter"),
+              start.with_effect("storey_yield", {"storey": 3})]  # the SDOF frame has one
+    assert [_warm(c, ph, ()) for ph in models] == [True, True, False]  # as the task does
+    alone = Fits(c, [], 1, Calibration(), TableModel)
+    alone.warm(models)
+    assert alone.tasks is None
+    fits = Fits(c, [], 2, Calibration(), TableModel)
+    try:
+        fits.warm(models)
+        assert fits.tasks is not None and len(fits.tasks._futures) == 3
+        assert [f.result(timeout=120) for f in fits.tasks._futures] == [True, True, False]
+        done = dict(fits.dispatch([("start", {"start": start})]))  # a fit after them
+        assert done["start"].cost > 0
+    finally:
+        fits.close()
+
+
 def test_the_amplitude_screen_tells_friction_from_a_missing_linear_effect():
     """On the starting model's residual: the table's pitch missing (linear) leaves the same
     residual H1 in every run, z below `Z_SCREEN` (measured 9.1: the random runs against the

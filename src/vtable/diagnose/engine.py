@@ -232,6 +232,12 @@ class Diagnoser:
         steps = 2 + self.max_rounds * len(self.catalog)
         done = 0
         progress(done, steps, "fitting the starting model")
+        late = {e for e in self.catalog if effect(e).accumulates}
+        drift = not set(self.catalog) - late  # the round of what accumulates over a run
+        # the first round's candidates compiled by the workers meanwhile: nonlinear first
+        # (their integrators take longest to compile)
+        first = [self.start.with_effect(e) for e in self._todo(self.start, late, drift)[0]]
+        self.fits.warm(sorted(first, key=self._linear))
         fitted = self.fit(self.start)
         current, cost = fitted.physics_, fitted.cost_
         self.notes += [f"starting model: {f}" for f in fitted.flags_]
@@ -248,8 +254,7 @@ class Diagnoser:
         seeds = {e: dict(v) for e, (v, _) in self.table_view.evidence.items()}
         spent: dict[str, float] = {}  # each candidate's last fit's CPU seconds
         backward: list[str] = []  # effects added before the last one: tested without each
-        k, late = 0, {e for e in self.catalog if effect(e).accumulates}
-        drift = not set(self.catalog) - late  # the round of what accumulates over a run
+        k = 0
         while True:
             if k >= self.max_rounds + drift:  # the rounds ran out: then what accumulates
                 if drift or not late - set(current.effects):

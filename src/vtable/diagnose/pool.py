@@ -80,8 +80,7 @@ class Fits:
 
     def start(self) -> Tasks | None:
         """This diagnosis's tasks on the Dask cluster (`workers.cluster`: made on first
-        use, after the starting model's fit, so that forked workers hold the kernels it
-        loaded), or None: one worker, or a user's effect registered from code."""
+        use), or None: one worker, or a user's effect registered from code."""
         if self.workers < 2 and not self.scheduler:
             return None
         files = self.user_files()
@@ -91,6 +90,15 @@ class Fits:
             self.tasks = Tasks(cluster(self.workers, self.scheduler), self.campaign, files)
             self.on_dask = True
         return self.tasks
+
+    def warm(self, models: list) -> None:
+        """Start the workers now and have them compile (or load) the kernels of `models`
+        (`Physics`: the first round's candidates) while this process fits the starting
+        model: a first run's compiling uses every core from the start (`Tasks.warm`).
+        Nothing without Dask workers."""
+        tasks = self.start()
+        if tasks is not None:
+            tasks.warm(models)
 
     def dispatch(self, jobs: list[tuple[Any, tuple]]) -> Iterator[tuple[Any, tuple]]:
         """Run fits (key, the estimator's keywords: start, multistart, ...) on every core and

@@ -47,6 +47,7 @@ from vtable.diagnose.model import TableModel
 from vtable.effects import registry as effects_registry
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
+from vtable.models.reduced import ReducedModel
 
 #: seconds between two looks at a diagnosis's stop event from a running fit
 POLL_S = 0.2
@@ -115,6 +116,20 @@ def _fit(campaign: Campaign, job: dict[str, Any], calibration: Calibration, stop
     the estimator's keywords (start, multistart, baseline, seed, frame, ...)."""
     _load_files(files)
     return fitted(TableModel(**{"calibration": calibration, **job}, stop=stop), campaign)
+
+
+def _warm(campaign: Campaign, physics: Any, files: tuple[tuple[str, str, str], ...]) -> bool:
+    """Compile (or load from numba's cache) the kernels of `physics`'s reduced model in this
+    worker: a few samples of the campaign's first run simulated. Whether it could be built
+    (a model that cannot is the diagnosis's to report, not this task's)."""
+    _load_files(files)
+    r = campaign.runs[0]
+    try:
+        ReducedModel(physics.in_state(campaign.state(r)), campaign.table).simulate(
+            r.time[:4], r.channel("h_span")[:4])
+    except VtableError:
+        return False
+    return True
 
 
 class CandidateFit(NamedTuple):
@@ -245,6 +260,12 @@ class Tasks:
                                  self.files, pure=False)
         self._futures.append(fut)
         return fut
+
+    def warm(self, models: list) -> None:
+        """Have the workers compile (or load) the kernels of `models` (`Physics`), one task
+        each, in this order, before the fits submitted after them."""
+        self._futures += [self.client.submit(_warm, self._campaign, ph, self.files,
+                                             pure=False) for ph in models]
 
     def halt(self) -> None:
         """Stop the running fits at their next look at the event; cancel the rest."""
