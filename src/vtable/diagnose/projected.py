@@ -63,6 +63,9 @@ from vtable.diagnose.secant import Secant
 #: the steps in every parameter a candidate takes before it is screened out (step 3)
 REFINE_STEPS = 3
 SCREEN_STEPS = 6
+#: least-squares steps the current model's parameters take on the screening share before
+#: the round's candidates are screened there (`Frame.of`)
+BASE_STEPS = 6
 
 
 @dataclass
@@ -87,12 +90,19 @@ class Frame:
         lay = model._layout(physics)
         x = model._pack(physics, lay)
         lo, hi = model.bounds(lay)
-        secant = Secant(lambda z: model._cost(z, physics, lay, campaign), lo, hi)
-        z = np.clip(x, lo, hi)
-        J = secant.at(z)[:campaign.n_target]
-        f = secant.fun(z)  # kept by the model: no simulation
+        secant = Secant(lambda z: model._cost(z, physics, lay, campaign), lo, hi,
+                        refresh=1 << 30)
+        z = np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+        J = secant.at(z)
+        # fitted on the whole training segments, the current model is not at its minimum on
+        # the screening share: its parameters take `BASE_STEPS` there first (Broyden's
+        # updates from J), so that no candidate is credited with what they gain alone
+        secant.seed(z, J)
+        sol = scipy.optimize.least_squares(secant.fun, z, jac=secant.jac, bounds=(lo, hi),
+                                           xtol=1e-6, ftol=1e-8, max_nfev=BASE_STEPS)
+        J = J[:campaign.n_target]
         Q, R = scipy.linalg.qr(J, mode="economic")
-        return cls(tuple(p.key for p in lay), x, Q, R, float(f @ f), J)
+        return cls(tuple(p.key for p in lay), sol.x, Q, R, float(sol.fun @ sol.fun), J)
 
     def project(self, r: np.ndarray) -> np.ndarray:
         """r with what the current parameters take up to first order removed: P⊥ r."""
