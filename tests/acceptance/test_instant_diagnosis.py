@@ -193,6 +193,36 @@ def test_the_screen_runs_on_the_first_half_of_each_training_segment():
     assert c.whole_training().screening().train_stop(s.runs[0]) == w.train_stop(s.runs[0])
 
 
+def test_the_round_frame_is_refitted_on_the_screening_share():
+    """`Frame.of` on the screening share: the current model (fitted on the whole training
+    segments) takes `BASE_STEPS` there first, so the baseline a candidate must beat by 1 %
+    is what the base alone reaches on the share — below the fitted model's cost there and
+    within 1 % of a converged refit (forward differences, up to 40 steps)."""
+    from vtable.diagnose.projected import Frame
+
+    c = Campaign.of(truth_campaign(*FRICTION))
+    start = Physics(nominal_open_loop(c.table), c.specimen, {"actuator_friction": {}})
+    fitted = TableModel(start=start).fit(c)
+    model = TableModel()
+    model.vt, model.declared, model.campaign_ = c.table, c.specimen, c
+    share = c.training_for(fitted.physics_).screening()
+    frame = Frame.of(model, fitted.physics_, share)
+    lay = model._layout(fitted.physics_)
+    x = model._pack(fitted.physics_, lay)
+    lo, hi = model.bounds(lay)
+    f0 = model._cost(x, fitted.physics_, lay, share)
+    assert frame.cost < float(f0 @ f0)
+    full = model._cost(frame.x, fitted.physics_, lay, share)
+    assert float(full @ full) == pytest.approx(frame.cost, rel=1e-12)  # its own cost
+    ref = scipy.optimize.least_squares(
+        lambda z: model._cost(z, fitted.physics_, lay, share),
+        np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)), bounds=(lo, hi),
+        diff_step=1e-4, max_nfev=40)
+    assert frame.cost <= 1.01 * float(ref.fun @ ref.fun), (frame.cost, float(f0 @ f0),
+                                                            float(ref.fun @ ref.fun))
+    assert frame.J.shape == (share.n_target, len(lay))
+
+
 def test_the_workers_compile_the_first_rounds_candidates_as_the_start_is_fitted():
     """`Fits.warm` starts the Dask workers and has each candidate's kernels compiled (or
     loaded) there in tasks that run before the fits submitted later; a model that cannot

@@ -36,10 +36,14 @@ SIAM J. Numer. Anal. 10, 1973). So, with J worked out once per round for every c
    bounds) one of the fit's starts (`TableModel`'s `multistart`).
 
 Steps 1-3 run on the first half of each run's training segment (`Campaign.screening`,
-`sampling.SCREEN_SHARE`; the round's J is taken there): a gain of 1 % of the training cost
-shows there as on the whole segment, at half the simulated time, and a candidate that
-passes is fitted on the whole segment (step 4); one screened out has its cost and
-training error taken on the whole segment where its steps ended (one simulation).
+`sampling.SCREEN_SHARE`): a gain of 1 % of the training cost shows there as on the whole
+segment, at half the simulated time, and a candidate that passes is fitted on the whole
+segment (step 4); one screened out has its cost and training error taken on the whole
+segment where its steps ended (one simulation). The current model, fitted on the whole
+segments, is not at its minimum on the half: its parameters take `BASE_STEPS` there
+first (`Frame.of`), and the round's J and the cost a candidate must lower by 1 % are
+taken where they end (else every candidate is credited with what the base gains alone:
+nine of eleven passed on a yielding building's campaign).
 
 A candidate screened out then costs a few simulations, where a few least-squares steps in
 every parameter from each of its starts cost tens of Jacobians. Parameters the
