@@ -133,6 +133,31 @@ def bounds_verdict(at_bounds: list[dict[str, Any]], calibration: Calibration) ->
             + f" the suspect: {how}")
 
 
+def leaning_start(diagnoser, start) -> tuple | None:
+    """When a diagnosis's calibrated starting model `start` leans on bounds
+    (`base_at_bounds`): the calibration with them widened and the parameters; the starting
+    model refitted with it (a job of the first round) gives the baseline a candidate effect
+    must also beat (SELECTION: an effect is not added in place of a wrong declaration);
+    None when nothing leans or the bounds are at their widest."""
+    lean = base_at_bounds(diagnoser.base_table(start), diagnoser.calibration)
+    names = [bounding_setting(b["parameter"], b["side"]) for b in lean]
+    wider = diagnoser.calibration.widened([n for n in names if n is not None])
+    if not lean or wider == diagnoser.calibration:
+        return None
+    return wider, [b["parameter"] for b in lean]
+
+
+def widened(diagnoser, lean: tuple, fitted) -> tuple:
+    """(wider calibration, the parameters, the refit's held-out predictions) from the
+    starting model's refit `fitted` (a `workers.CandidateFit`) with `lean`'s bounds
+    (`leaning_start`); the diagnosis's notes say so."""
+    wider, names = lean
+    diagnoser.notes.append(f"the calibrated starting model leans on its bounds "
+                           f"({', '.join(names)}): candidates must also beat it refitted "
+                           f"with --calibrate {wider.text()}")
+    return wider, names, diagnoser.predict(fitted.physics)
+
+
 def pushed_beyond(dg, current, err: float, predictions) -> list[dict[str, Any]]:
     """The declarations the final model `current` of diagnoser `dg` leans on (`leaning`:
     within a quarter of their range from a bound a --calibrate setting sets, short of

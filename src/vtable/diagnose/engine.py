@@ -27,16 +27,17 @@ from typing import Any
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from vtable.diagnose.bounds import base_at_bounds, pushed_beyond
-from vtable.diagnose.calibration import Calibration, bounding_setting
+from vtable.diagnose.bounds import leaning_start, pushed_beyond, widened
+from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import compare
 from vtable.diagnose.evidence import evidence_view
 from vtable.diagnose.judge import judged, not_fitted
-from vtable.diagnose.model import BASE_PARAMS, StopRequestedError, TableModel
+from vtable.diagnose.model import BASE_PARAMS, TableModel
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
 from vtable.diagnose.projected import Frame
 from vtable.diagnose.prose import nothing_added
+from vtable.diagnose.residuals import StopRequestedError
 from vtable.diagnose.result import (
     ERROR_DEFINITION,
     Candidate,
@@ -121,28 +122,6 @@ class Diagnoser:
         """Fit `ph` (see `TableModel`): the fitted estimator (`physics_`, `train_error_`,
         `flags_`, `cost_`, `screened_`)."""
         return self.model(ph, **kw).fit(self.campaign)
-
-    def _leaning(self, start: Physics) -> tuple | None:
-        """When the calibrated starting model leans on bounds (`base_at_bounds`): the
-        calibration with them widened and the parameters; the starting model refitted with
-        it (a job of the first round, `_candidates`) gives the baseline a candidate effect
-        must also beat (SELECTION: an effect is not added in place of a wrong declaration);
-        None when nothing leans or the bounds are at their widest."""
-        lean = base_at_bounds(self.base_table(start), self.calibration)
-        names = [bounding_setting(b["parameter"], b["side"]) for b in lean]
-        wider = self.calibration.widened([n for n in names if n is not None])
-        if not lean or wider == self.calibration:
-            return None
-        return wider, [b["parameter"] for b in lean]
-
-    def _widened(self, lean: tuple, fitted: CandidateFit) -> tuple:
-        """(wider calibration, the parameters, the refit's held-out predictions) from the
-        starting model's refit with `lean`'s bounds (`_leaning`)."""
-        wider, names = lean
-        self.notes.append(f"the calibrated starting model leans on its bounds "
-                          f"({', '.join(names)}): candidates must also beat it refitted with "
-                          f"--calibrate {wider.text()}")
-        return wider, names, self.predict(fitted.physics)
 
     def _pushed_beyond(self, st: State) -> list[dict[str, Any]]:
         """`bounds.pushed_beyond` of the final model."""
@@ -248,7 +227,7 @@ class Diagnoser:
         st.cmp0 = self._detail(st)
         st.err = st.start_err = err = st.cmp0.error
         self.widened = None  # the starting model refitted with its leaning bounds widened
-        lean = self._leaning(current)
+        lean = leaning_start(self, current)
         reason = ""
         # each candidate's last fitted parameters (first: what the runs show of them)
         seeds = {e: dict(v) for e, (v, _) in self.table_view.evidence.items()}
@@ -423,7 +402,7 @@ class Diagnoser:
                 left[name] = fitted
                 continue
             if kind == "widened":
-                self.widened = self._widened(lean, fitted)
+                self.widened = widened(self, lean, fitted)
                 continue
             done += 1
             if fitted.passed is None:  # screened out, refined at once, or no valid model

@@ -20,7 +20,7 @@ import dataclasses
 import math
 import threading
 from collections import deque
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -30,8 +30,9 @@ from threadpoolctl import threadpool_limits
 from vtable.diagnose.calibration import LOOP, Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare
-from vtable.diagnose.layout import Layout, with_states
+from vtable.diagnose.layout import with_states
 from vtable.diagnose.projected import Frame, projected_start
+from vtable.diagnose.residuals import COSTS_KEPT, Residuals
 from vtable.diagnose.reuse import model_at
 from vtable.diagnose.secant import REFRESH, Secant
 from vtable.diagnose.statistics import correlations
@@ -66,17 +67,13 @@ DECLARED_STEPS = 10
 #: 4 % air took f_o 43 % down, an RC filter ξ_o 22 %): closer, it has absorbed nothing
 #: worth the steps
 FAR = 0.1
-#: residual vectors a fit keeps, so that a point asked again is not simulated again
-#: (`TableModel._cost`)
-COSTS_KEPT = 16
-FINAL_FTOL = 1e-4
+#: the last least-squares run of a fit (forward differences at every step) ends at a step
+#: that lowers the cost by less than this share of it (1e-4 flipped a real run's mount for
+#: a filter; 1e-8 spent a tenth of the run's steps on the last 1e-6)
+FINAL_FTOL = 1e-6
 
 
-class StopRequestedError(Exception):
-    """Raised inside a fit when the caller asked it to stop (an interrupt)."""
-
-
-class TableModel(Layout):
+class TableModel(Residuals):
     """The linear uni-directional servo loop carrying the runs' specimen (report ch. 7)
     plus `effects`, with the base calibrated around the runs' declarations
     (`vtable.diagnose.calibration`).
@@ -146,87 +143,6 @@ class TableModel(Layout):
         self.declared = None  # the campaign's declared specimen, known when fitting
         self.state_specimens: dict = {}  # further states -> their declared specimen
         self.campaign_: Campaign | None = None
-
-    # -- simulate ----------------------------------------------------------------------
-    def _models(self, ph: Physics, campaign: Campaign) -> Callable[[Run], ReducedModel]:
-        """The reduced model of each run: `ph` in the run's specimen state
-        (`Campaign.state`), built once per state."""
-        vt, built = self.vt or campaign.table, {}
-
-        def of(run: Run) -> ReducedModel:
-            s = campaign.state(run)
-            if s not in built:
-                built[s] = ReducedModel(ph.in_state(s), vt)
-            return built[s]
-
-        return of
-
-    def _predict(self, ph: Physics, campaign: Campaign, train_only: bool = False
-                 ) -> dict[str, dict[str, np.ndarray]]:
-        model = self._models(ph, campaign)
-        out = {}
-        for r in campaign.runs:
-            if self.stop is not None and self.stop.is_set():
-                raise StopRequestedError
-            n = campaign.train_stop(r) if train_only else len(r.time)
-            key = (r.name, n)
-            if key not in self._commands:  # one array per segment: its interpolation is kept
-                self._commands[key] = (r.time[:n], r.channel("h_span")[:n])
-            out[r.name] = model(r).simulate(*self._commands[key])
-        return out
-
-    def _train_outputs(self, ph: Physics, campaign: Campaign
-                       ) -> dict[str, dict[str, np.ndarray]]:
-        """The channels the training targets need, at their samples (every other one of
-        each run's training segment: `Campaign.targets`), of the model `ph`
-        (`ReducedModel.outputs`)."""
-        model = self._models(ph, campaign)
-        out = {}
-        for r, names in campaign.target_channels:
-            if self.stop is not None and self.stop.is_set():
-                raise StopRequestedError
-            n = campaign.train_stop(r)
-            key = (r.name, n)
-            if key not in self._commands:  # one array per segment: its interpolation is kept
-                self._commands[key] = (r.time[:n], r.channel("h_span")[:n])
-            out[r.name] = model(r).outputs(*self._commands[key], names, step=2)
-        return out
-
-    def _residuals(self, ph: Physics, campaign: Campaign) -> np.ndarray:
-        try:
-            pred = self._train_outputs(ph, campaign)
-        except VtableError:
-            return np.full(campaign.n_target, 10.0)
-        out = np.empty(campaign.n_target)
-        k = 0
-        for (r, _, y, _), chans in zip(campaign.targets, campaign.target_groups, strict=True):
-            p = pred[r.name]
-            arrays = [p[c] for c in chans if c in p]
-            out[k:k + len(y)] = arrays[0] if all(a is arrays[0] for a in arrays) \
-                else np.mean(arrays, axis=0)
-            k += len(y)
-        y, scale, fill = campaign.target_vectors
-        out -= y
-        out *= scale
-        bad = ~np.isfinite(out)
-        if bad.any():
-            out[bad] = fill[bad]
-        return out
-
-    def _cost(self, x, start, lay, campaign) -> np.ndarray:
-        """The residual vector (training data rows, then the calibration's priors) at the
-        packed parameters `x`. The same point asked again within a fit (a least-squares
-        run starting where the last ended, a screen's start confirmed and then fitted from)
-        is not simulated again: the last `COSTS_KEPT` vectors are kept (8 % of a README
-        campaign's evaluations)."""
-        key = np.asarray(x, dtype=float).tobytes()
-        for s, lo, c, k, f in self._costs:
-            if k == key and s is start and lo is lay and c is campaign:
-                return f.copy()
-        f = np.concatenate([self._residuals(self._unpack_fast(x, start, lay), campaign),
-                            self._priors(x, lay, campaign)])
-        self._costs.append((start, lay, campaign, key, f.copy()))
-        return f
 
     # -- the estimator -----------------------------------------------------------------
     def fit(self, runs: Sequence[Run] | Campaign) -> TableModel:

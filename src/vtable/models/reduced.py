@@ -24,7 +24,7 @@ import numpy as np
 
 from vtable.analytic.hold import first_order_hold
 from vtable.analytic.structure import storey_channels, storey_masses
-from vtable.controllers.force_law import law_params, named
+from vtable.controllers.force_law import law_params
 from vtable.effects.table import TableView
 from vtable.errors import VtableError, interrupted
 from vtable.hydraulics import group_law
@@ -38,7 +38,9 @@ from vtable.models.linear_table import mechanics
 from vtable.models.modal import ModalOutputs
 from vtable.models.reduced_kernel import (
     KERNELS,
+    law_where,
     linear_system,
+    python_elements,
     simulate_linear,
     simulate_reduced,
     simulate_reduced_python,
@@ -254,39 +256,6 @@ def _mechanics(ph: phys.Physics, vt: VirtualTable):
     return vt_on, mech
 
 
-def _law_where(law: Callable) -> str:
-    """A law's name and the file it lives in, for a message."""
-    law = getattr(law, "py_func", law)
-    code = getattr(law, "__code__", None)
-    where = f" ({code.co_filename})" if code is not None else ""
-    return f"{getattr(law, '__qualname__', law)}{where}"
-
-
-def _combined(elements: list[ForceElement], ix: dict[str, int]):
-    """The force elements as one Python function for `simulate_reduced_python` (a law numba
-    cannot compile): every element's law on its relative motion, its force added to its
-    coordinate and subtracted from the other. Returns (function, states, parameters)."""
-    params = np.concatenate([e.params for e in elements]) if elements else np.zeros(0)
-    spans = []
-    s = o = 0
-    for e in elements:
-        spans.append((e, ix[e.a], None if e.b is None else ix[e.b], s, o))
-        s, o = s + e.states, o + len(e.params)
-
-    def combined(q, qd, z, p, f, dz):
-        for e, i, j, s0, o0 in spans:
-            d = q[i] - (q[j] if j is not None else 0.0)
-            v = qd[i] - (qd[j] if j is not None else 0.0)
-            vals = p[o0:o0 + len(e.params)]
-            arg = named(e.names)(*vals) if e.names is not None else vals
-            r = e.law(d, v, z[s0:s0 + e.states], arg, dz[s0:s0 + e.states])
-            f[i] += r
-            if j is not None:
-                f[j] -= r
-
-    return combined, s, params
-
-
 class ReducedModel(ModalOutputs):
     """Predicts a run's channels from its command for a given `Physics`."""
 
@@ -373,9 +342,9 @@ class ReducedModel(ModalOutputs):
             if interrupted(e):  # Ctrl-C while numba compiled: not a law it cannot type
                 raise KeyboardInterrupt from e
             self.element = law.composition(KERNELS)
-            self.elem, _, self.pe = _combined(elements, self.ix)
+            self.elem, _, self.pe = python_elements(elements, self.ix)
             self.python = True
-            names = ", ".join(sorted({_law_where(e.law) for e in elements}))
+            names = ", ".join(sorted({law_where(e.law) for e in elements}))
             why = (str(e).strip().splitlines() or [""])[0][:160]
             warnings.warn(f"a force law numba cannot compile runs as Python (slower): "
                           f"{names}: {type(e).__name__}: {why}", RuntimeWarning, stacklevel=3)

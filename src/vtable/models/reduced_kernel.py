@@ -24,10 +24,12 @@ same input the RK4 integrator assumes, at a fraction of its cost.
 from __future__ import annotations
 
 import types
+from collections.abc import Callable
 
 import numpy as np
 
 from vtable._numba import njit
+from vtable.controllers.force_law import named
 from vtable.hydraulics.element import NS, actuator_rates, dof_drive, fed_back
 
 
@@ -250,6 +252,40 @@ def simulate_reduced(module, xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, k
                   ia, ib, ne, np.zeros(ny), np.empty(ny), np.empty((4, ny)), np.zeros(nq),
                   np.zeros(nq), Q, Qd, Qdd, F, PL)
     return Q, Qd, Qdd, F, PL
+
+
+def law_where(law: Callable) -> str:
+    """A law's name and the file it lives in, for a message."""
+    law = getattr(law, "py_func", law)
+    code = getattr(law, "__code__", None)
+    where = f" ({code.co_filename})" if code is not None else ""
+    return f"{getattr(law, '__qualname__', law)}{where}"
+
+
+def python_elements(elements: list, ix: dict[str, int]):
+    """The force elements (`reduced.ForceElement`) as one Python function for
+    `simulate_reduced_python` (a law numba cannot compile): every element's law on its
+    relative motion, its force added to its coordinate and subtracted from the other.
+    Returns (function, states, parameters)."""
+    params = np.concatenate([e.params for e in elements]) if elements else np.zeros(0)
+    spans = []
+    s = o = 0
+    for e in elements:
+        spans.append((e, ix[e.a], None if e.b is None else ix[e.b], s, o))
+        s, o = s + e.states, o + len(e.params)
+
+    def combined(q, qd, z, p, f, dz):
+        for e, i, j, s0, o0 in spans:
+            d = q[i] - (q[j] if j is not None else 0.0)
+            v = qd[i] - (qd[j] if j is not None else 0.0)
+            vals = p[o0:o0 + len(e.params)]
+            arg = named(e.names)(*vals) if e.names is not None else vals
+            r = e.law(d, v, z[s0:s0 + e.states], arg, dz[s0:s0 + e.states])
+            f[i] += r
+            if j is not None:
+                f[j] -= r
+
+    return combined, s, params
 
 
 def simulate_reduced_python(module, *args):
