@@ -130,7 +130,7 @@ def test_a_point_asked_again_is_not_simulated_again(monkeypatch):
     """`TableModel._cost` keeps its last `COSTS_KEPT` residual vectors: the same point on
     the same start, layout and campaign costs no simulation and gives the same vector (a
     copy: changing it changes nothing kept); another point, start or layout does."""
-    from vtable.diagnose.model import COSTS_KEPT
+    from vtable.diagnose.residuals import COSTS_KEPT
 
     runs = truth_campaign(*PITCH)
     c = Campaign.of(runs)

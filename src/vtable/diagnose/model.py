@@ -19,7 +19,6 @@ import copy
 import dataclasses
 import math
 import threading
-from collections import deque
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -32,7 +31,7 @@ from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare
 from vtable.diagnose.layout import with_states
 from vtable.diagnose.projected import Frame, projected_start
-from vtable.diagnose.residuals import COSTS_KEPT, Residuals
+from vtable.diagnose.residuals import Residuals
 from vtable.diagnose.reuse import model_at
 from vtable.diagnose.secant import REFRESH, Secant
 from vtable.diagnose.statistics import correlations
@@ -133,10 +132,7 @@ class TableModel(Residuals):
         self.seed = seed
         self.calibration = calibration or Calibration()
         self.baseline = baseline
-        self._last = None  # (start, layout, x, physics) last unpacked
-        self._commands: dict = {}  # (run, samples) -> the command the model is driven by
-        #: the last residual vectors `_cost` made: (start, layout, campaign, x, residuals)
-        self._costs: deque = deque(maxlen=COSTS_KEPT)
+        self.clear_caches()
         self.screened_ = False
         self.physics_: Physics | None = None
         self.vt = None  # the campaign's table, known when fitting
@@ -195,7 +191,7 @@ class TableModel(Residuals):
             except VtableError:  # e.g. a storey the specimen does not have
                 continue
             sub = copy.copy(self)
-            sub._last, sub._commands, sub._costs = None, {}, deque(maxlen=COSTS_KEPT)
+            sub.clear_caches()
             sub._fit_from(campaign, ph)
             costs[tuple(combo.values())] = sub.cost_
             if best is None or sub.cost_ < best.cost_:

@@ -74,9 +74,10 @@ BASE_STEPS = 6
 
 @dataclass
 class Frame:
-    """The current model's linearisation, shared by a round's candidates: its parameters'
-    keys and values (fitted scale), the orthonormal basis Q and triangle R of its
-    Jacobian's data rows (J = QR), and its training cost."""
+    """The current model's linearisation on the screening share, shared by a round's
+    candidates: its parameters' keys and values (fitted scale) after `BASE_STEPS` there, the
+    orthonormal basis Q and triangle R of its Jacobian's data rows (J = QR), and its cost
+    there."""
 
     keys: tuple[str, ...]
     x: np.ndarray

@@ -8,6 +8,7 @@ then fitted from) is not simulated again (8 % of a README campaign's evaluations
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable
 
 import numpy as np
@@ -28,9 +29,16 @@ class StopRequestedError(Exception):
 
 
 class Residuals(Layout):
-    """The simulation and residuals of `TableModel` (its base): reads its `stop` flag,
-    `vt`, and the caches `_commands` ((run, samples) -> the command) and `_costs` (a
-    deque of at most `COSTS_KEPT`: (start, layout, campaign, x, residuals))."""
+    """The simulation and residuals of `TableModel` (its base): reads its `stop` flag and
+    `vt`; owns the caches (`clear_caches`)."""
+
+    def clear_caches(self) -> None:
+        """No command, residual vector or unpacked point kept: `_commands` ((run, samples)
+        -> the command), `_costs` (at most `COSTS_KEPT` of (start, layout, campaign, x,
+        residuals)), `_last` (`Layout._unpack_fast`'s)."""
+        self._commands: dict = {}
+        self._costs: deque = deque(maxlen=COSTS_KEPT)
+        self._last = None
 
     def _models(self, ph: Physics, campaign: Campaign) -> Callable[[Run], ReducedModel]:
         """The reduced model of each run: `ph` in the run's specimen state

@@ -294,7 +294,11 @@ class ReducedModel(ModalOutputs):
         self.storeys, self.h_top, self.specimen = m.storeys, m.h_top, m.specimen
         self.max_step = m.max_step
         self._law = law
-        self._element(m.elements, kernels)  # the stage set's element (`element`, `sp`)
+        if kernels:
+            self._element(m.elements)  # the stage set's compiled element (`element`, `sp`)
+        else:  # structure only: its stages checked, no element
+            law.check()
+            self.element = self.elem = self.sp = None
         #: a linear model is stepped exactly (`reduced_kernel.simulate_linear`)
         self.linear = (not m.elements and not np.any(c2) and law.linear and LINEAR_PATH)
         if self.linear and kernels:
@@ -308,18 +312,12 @@ class ReducedModel(ModalOutputs):
             self._holds[h] = first_order_hold(self._linear[0], self._linear[1], h)
         return self._holds[h]
 
-    def _element(self, elements: list[ForceElement], compile_now: bool = True) -> None:
+    def _element(self, elements: list[ForceElement]) -> None:
         """The stage set's compiled element (`element`), with the force elements' laws
         written into it (`compose.ElementLaw`: cached on disk like the stages, one module
         for every coordinate they act on), their parameters `pe` and coordinates `ia`,
-        `ib`; a law numba cannot compile runs as Python instead (slower, said).
-        `compile_now=False`: a structure-only model's (no element: its stages checked)."""
+        `ib`; a law numba cannot compile runs as Python instead (slower, said)."""
         law = self._law
-        if not compile_now:
-            law.check()
-            self.element = self.sp = self.elem = None
-            self.python, self.ne = False, sum(e.states for e in elements)
-            return
         self.python = False
         self.ne, self.pe = sum(e.states for e in elements), np.zeros(0)
         self.elem = None
