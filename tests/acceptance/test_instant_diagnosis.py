@@ -310,6 +310,46 @@ def test_friction_is_found_with_the_nonlinear_candidates_fitted():
     assert d.final_error == pytest.approx(plain.score(), abs=5e-4)
 
 
+def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monkeypatch,
+                                                                          tmp_path):
+    """The README's friction campaign (friction hidden; the table's pitch and RC filter the
+    bare model lacks): the candidate that wins a later round is the one whose screen
+    passed, best, in the round before, and its fit (refined in its screen's task, the
+    round's longest) is the first screen dispatched, so that no core waits for it at the
+    round's end (ordered by what the last round's fits cost, it was dispatched third)."""
+    from readme_campaigns import campaign
+
+    from vtable.diagnose import pool
+
+    runs = [read_run(p) for p in campaign("actuator_friction", 0.01, tmp_path)]
+    screens: list[list[str]] = []  # each dispatch's screen jobs, in order
+    dispatch = pool.Fits.dispatch
+
+    def recorded(self, jobs):
+        screens.append([name for (kind, name), _ in jobs if kind == "screen"])
+        return dispatch(self, jobs)
+
+    monkeypatch.setattr(pool.Fits, "dispatch", recorded)
+    d = Diagnoser(runs, catalog=BUILT_IN)
+    promised = []  # each round's `promise`: the round before's passed screens
+    fit = d._candidates
+
+    def candidates(*a, **kw):
+        promised.append(dict(d.promise))
+        return fit(*a, **kw)
+
+    monkeypatch.setattr(d, "_candidates", candidates)
+    result = d.diagnose()
+    assert sorted(result.final_effects) == ["actuator_friction", "force_feedback_filter",
+                                            "pitch_flexibility"], result.verdict
+    rounds = [s for s in screens if s]
+    added = [r.added for r in result.rounds]
+    for k in (1, 2):  # the second and third rounds
+        left = {e: v for e, v in promised[k].items() if e not in added[:k]}
+        assert min(left, key=left.get) == added[k], (k, promised[k], added)
+        assert rounds[k][0] == added[k], (k, rounds[k])
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

@@ -25,7 +25,6 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 from vtable.diagnose.bounds import leaning_start, pushed_beyond, widened
 from vtable.diagnose.calibration import Calibration
@@ -33,7 +32,7 @@ from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import compare
 from vtable.diagnose.evidence import evidence_view
 from vtable.diagnose.judge import judged, not_fitted
-from vtable.diagnose.model import BASE_PARAMS, TableModel
+from vtable.diagnose.model import BASE_PARAMS, TableModel, one_blas_thread
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
 from vtable.diagnose.projected import Frame
 from vtable.diagnose.prose import nothing_added
@@ -110,6 +109,9 @@ class Diagnoser:
         self._stop = self.fits.stop
         #: each round's nonlinearity screen (`vtable.diagnose.screen`)
         self.screens: list = []
+        #: the candidates whose screen passed in the last round: their training cost as a
+        #: share of the model's they were screened on (what orders the next round's fits)
+        self.promise: dict[str, float] = {}
 
     def model(self, start: Physics, **kw) -> TableModel:
         """The estimator the loop fits (sharing this diagnosis's stop flag; `kw`:
@@ -191,7 +193,7 @@ class Diagnoser:
 
     def _loop(self, st: State, post: Callable[[tuple[int, int, str]], None]) -> None:
         try:
-            with threadpool_limits(limits=1, user_api="blas"):  # small matrices: see model
+            with one_blas_thread():  # small matrices: see model
                 st.result = self._run(st, lambda i, n, s: post((i, n, s)))
         except StopRequestedError:
             pass
@@ -374,10 +376,13 @@ class Diagnoser:
                                           st.stages[-1].predictions, self.campaign,
                                           self.table_view, screen.text()))
                 done += 1
-        # the costliest fits go first (what each took last round; nonlinear ones before
-        # linear ones in the first), so that no long fit starts last on an idle core
-        todo.sort(key=lambda e: -spent.get(e, 0.0 if self._linear(current.with_effect(e))
-                                           else 1.0))
+        # the costliest fits go first, so that no long fit starts last on an idle core:
+        # those whose screen passed last round, the likeliest to be refined in their task
+        # now, best first (`promise`); then the rest by what each took last round
+        # (nonlinear ones before linear ones in the first)
+        todo.sort(key=lambda e: (0, self.promise[e]) if e in self.promise else
+                  (1, -spent.get(e, 0.0 if self._linear(current.with_effect(e)) else 1.0)))
+        self.promise = {}
 
         def job(e: str, **kw) -> dict:
             return {"start": current.with_effect(e), "multistart": e, "seed": seeds.get(e),
@@ -410,9 +415,12 @@ class Diagnoser:
                 ranking.append(c)
                 fitted_now.append(c)
                 progress(done, steps, f"round {k}: tried {name}")
+                if not c.screened and np.isfinite(fitted.cost):  # refined in its task
+                    self.promise[name] = fitted.cost / cost
             else:
                 passed[name] = fitted
                 spent[name] = fitted.cpu_s
+                self.promise[name] = fitted.cost / cost
         order = sorted(passed, key=lambda e: passed[e].cost)
         best: Candidate | None = None
         for c in fitted_now:  # a candidate refined in its screen's task may have won

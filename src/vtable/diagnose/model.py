@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 import math
 import threading
 from collections.abc import Mapping, Sequence
@@ -24,7 +25,7 @@ from typing import Any
 
 import numpy as np
 import scipy.optimize
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 from vtable.diagnose.calibration import LOOP, Calibration
 from vtable.diagnose.campaign import Campaign
@@ -70,6 +71,18 @@ FAR = 0.1
 #: that lowers the cost by less than this share of it (1e-4 flipped a real run's mount for
 #: a filter; 1e-8 spent a tenth of the run's steps on the last 1e-6)
 FINAL_FTOL = 1e-6
+
+
+@functools.cache
+def _blas() -> ThreadpoolController:
+    return ThreadpoolController()
+
+
+def one_blas_thread():
+    """A context in which BLAS runs on one thread: a fit's matrices are small, and the
+    threads' start costs more than they save (the libraries looked up once per process:
+    each look is ~3 ms, once per fit it was)."""
+    return _blas().limit(limits=1, user_api="blas")
 
 
 class TableModel(Residuals):
@@ -146,7 +159,7 @@ class TableModel(Residuals):
         (RMS over the groups of the normalised training residual), `flags_` (fitted
         parameters at a bound, effect parameters not identifiable apart from the base),
         `base_` (the spec's `base` table), `notes_`."""
-        with threadpool_limits(limits=1, user_api="blas"):
+        with one_blas_thread():
             return self._fit(Campaign.of(runs))
 
     def at(self, runs: Sequence[Run] | Campaign, values: Mapping[str, float],

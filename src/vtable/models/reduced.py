@@ -240,11 +240,17 @@ _MECHANICS: dict = {}
 def _mechanics(ph: phys.Physics, vt: VirtualTable):
     """(`ph.on_table(vt)`, its `mechanics` with `ph`'s specimen), kept for the last few
     (table, calibrated table values, specimen): a fit builds the model hundreds of times,
-    most of them with the same table and specimen (held with the result, so their ids stay
-    their own). The matrices are read-only."""
-    key = (id(vt), tuple(sorted(ph.table.items())), id(ph.specimen))
+    most of them with the same table and specimen values (a Jacobian's columns in the
+    servo loop's or an effect's parameters). The specimen is a key by its value (each
+    fitted point unpacks a new one), by its id when it cannot be hashed; the table by its
+    id (held with the result, so that it stays its own). The matrices are read-only."""
+    try:
+        spec = (hash(ph.specimen), ph.specimen)
+    except TypeError:
+        spec = id(ph.specimen)
+    key = (id(vt), tuple(sorted(ph.table.items())), spec)
     hit = _MECHANICS.get(key)
-    if hit is not None and hit[0] is vt and hit[1] is ph.specimen:
+    if hit is not None and hit[0] is vt and (hit[1] is ph.specimen or hit[1] == ph.specimen):
         return hit[2], hit[3]
     vt_on = ph.on_table(vt)
     mech = mechanics(vt_on, ph.specimen)
