@@ -251,6 +251,22 @@ def test_the_workers_compile_the_first_rounds_candidates_as_the_start_is_fitted(
         fits.close()
 
 
+def test_the_heap_is_frozen_for_the_workers_fork_until_they_end():
+    """The local workers are forked with this process's objects out of the collector's
+    sight (`gc.freeze`: the imports' and the campaign's, tens of thousands), given back
+    when the cluster ends."""
+    import gc
+
+    from vtable.diagnose import workers
+
+    workers.shutdown()
+    assert gc.get_freeze_count() == 0
+    workers.cluster(2)
+    assert gc.get_freeze_count() > 10_000
+    workers.shutdown()
+    assert gc.get_freeze_count() == 0
+
+
 def test_the_amplitude_screen_tells_friction_from_a_missing_linear_effect():
     """On the starting model's residual: the table's pitch missing (linear) leaves the same
     residual H1 in every run, z below `Z_SCREEN` (measured 9.1: the random runs against the

@@ -9,7 +9,11 @@ cluster of `n` single-threaded worker processes, made once per process and kept.
 the workers are forked from this process (`distributed.worker.multiprocessing-method`
 "fork"): they start in a tenth of a second with vtable imported and its compiled kernels
 loaded, where spawned ones would import everything again; they ignore Ctrl-C (the
-disposition they are forked with), which the parent handles.
+disposition they are forked with), which the parent handles. Right before the fork every
+object this process holds is moved out of the garbage collector's sight (`gc.freeze`,
+until `shutdown`): a collection in a worker or here no longer walks (and, in a worker,
+copies page by page) the heap of the imports and the campaign (README campaign: 6 % less
+CPU, 8 % less wall).
 
 A diagnosis scatters its campaign to every worker once (`Tasks.campaign`) and submits
 `_fit` tasks: each returns what `fitted` does (a `CandidateFit`). User files (effects
@@ -24,6 +28,7 @@ from __future__ import annotations
 import atexit
 import contextlib
 import functools
+import gc
 import hashlib
 import logging
 import os
@@ -186,6 +191,7 @@ def cluster(n: int, scheduler: str | None = None):
         else:
             _fork_safe()
             _FORKING.set()  # the children forked now are our workers: Ctrl-C is ours
+            gc.freeze()  # what exists now is the workers' too: no collection touches it
             try:
                 with dask.config.set({"distributed.worker.multiprocessing-method": "fork",
                                       "distributed.worker.daemon": True,
@@ -222,7 +228,8 @@ def _fork_safe() -> None:
 
 
 def shutdown() -> None:
-    """End every cluster this process made (a later diagnosis starts new workers)."""
+    """End every cluster this process made (a later diagnosis starts new workers); the
+    objects frozen for the local workers' fork (`cluster`) are collected again."""
     with _LOCK:
         for client in _CLIENTS.values():
             with contextlib.suppress(Exception):
@@ -231,6 +238,7 @@ def shutdown() -> None:
                 if lc is not None:
                     lc.close()
         _CLIENTS.clear()
+        gc.unfreeze()
 
 
 atexit.register(shutdown)
