@@ -341,9 +341,9 @@ def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monk
     screens: list[list[str]] = []  # each dispatch's screen jobs, in order
     dispatch = pool.Fits.dispatch
 
-    def recorded(self, jobs):
+    def recorded(self, jobs, **kw):
         screens.append([name for (kind, name), _ in jobs if kind == "screen"])
-        return dispatch(self, jobs)
+        return dispatch(self, jobs, **kw)
 
     monkeypatch.setattr(pool.Fits, "dispatch", recorded)
     d = Diagnoser(runs, catalog=BUILT_IN)

@@ -249,7 +249,6 @@ class Diagnoser:
                     continue
                 reason = reason or "every catalog effect is in the model"
                 break
-            cmp_cur = self._detail(st)
             ranking, left, done = self._candidates(st, current, cost, todo, backward, seeds,
                                                    spent, lean, progress, done, steps, k)
             lean = None  # refitted in the first round
@@ -265,7 +264,7 @@ class Diagnoser:
                 break
             ranking.sort(key=lambda c: c.score)
             seeds.update({c.effect: c.params for c in ranking if not c.screened})
-            best = self._select(ranking, widened, err, cmp_cur)
+            best = self._select(ranking, widened, err, self._detail(st))
             if best is not None:
                 st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
                 current, err, cost = best.physics, best.error_after, best.cost
@@ -402,7 +401,8 @@ class Diagnoser:
         left: dict[str, CandidateFit] = {}
         passed: dict[str, CandidateFit] = {}
         fitted_now: list[Candidate] = []
-        for (kind, name), fitted in self.fits.dispatch(jobs):
+        # the current model's detailed comparison (the evidence's) while the fits run
+        for (kind, name), fitted in self.fits.dispatch(jobs, meanwhile=lambda: self._detail(st)):
             if kind == "without":
                 left[name] = fitted
                 continue

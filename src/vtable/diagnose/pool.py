@@ -100,25 +100,36 @@ class Fits:
         if tasks is not None:
             tasks.warm(models)
 
-    def dispatch(self, jobs: list[tuple[Any, tuple]]) -> Iterator[tuple[Any, tuple]]:
+    def dispatch(self, jobs: list[tuple[Any, tuple]], meanwhile: Callable[[], Any] | None = None
+                 ) -> Iterator[tuple[Any, tuple]]:
         """Run fits (key, the estimator's keywords: start, multistart, ...) on every core and
         yield (key, `workers.fitted`'s tuple) as each finishes: as Dask tasks, or in
-        threads when a user's effect cannot be loaded in another process. On a stop,
-        pending fits are cancelled and running ones end at their next simulation."""
+        threads when a user's effect cannot be loaded in another process; `meanwhile`, the
+        caller's work that needs no fit, runs in this thread once they are submitted (first,
+        when they run here). On a stop, pending fits are cancelled and running ones end at
+        their next simulation."""
         if not jobs:
+            if meanwhile is not None:
+                meanwhile()
             return
         if self.workers == 1 and not self.scheduler:  # one after the other, here
+            if meanwhile is not None:
+                meanwhile()
             for key, job in jobs:
                 yield key, self.here(job)
             return
         tasks = self.start()
         if tasks is not None:
             futures = {tasks.submit(job, self.calibration): key for key, job in jobs}
+            if meanwhile is not None:
+                meanwhile()
             for fut in dask_completed(list(futures)):
                 yield futures[fut], fut.result()
             return
         with ThreadPoolExecutor(max_workers=self.workers) as threads:
             pending = {threads.submit(self.here, job): key for key, job in jobs}
+            if meanwhile is not None:
+                meanwhile()
             try:
                 for fut in as_completed(pending):
                     yield pending[fut], fut.result()
