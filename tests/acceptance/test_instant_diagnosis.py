@@ -332,7 +332,9 @@ def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monk
     bare model lacks): the candidate that wins a later round is the one whose screen
     passed, best, in the round before, and its fit (refined in its screen's task, the
     round's longest) is the first screen dispatched, so that no core waits for it at the
-    round's end (ordered by what the last round's fits cost, it was dispatched third)."""
+    round's end (ordered by what the last round's fits cost, it was dispatched third). In
+    the last round, with friction in and no amplitude dependence left, the linear
+    candidates are fitted all the same (they were not, as nonlinear models)."""
     from readme_campaigns import campaign
 
     from vtable.diagnose import pool
@@ -364,6 +366,28 @@ def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monk
         left = {e: v for e, v in promised[k].items() if e not in added[:k]}
         assert min(left, key=left.get) == added[k], (k, promised[k], added)
         assert rounds[k][0] == added[k], (k, rounds[k])
+    # the last round's residual shows no amplitude dependence: with friction in, the
+    # nonlinear candidates are not fitted, the linear ones are (their models are
+    # nonlinear only by the friction they join)
+    last = result.rounds[-1]
+    assert not d.screens[-1].present
+    linear = {"valve_dynamics", "foundation_compliance", "platen_resonator", "sensor_filter"}
+    ranked = {c.effect: c for c in last.ranking}
+    assert linear <= set(ranked) and not any(ranked[e].not_fitted for e in linear)
+    assert all(c.not_fitted for e, c in ranked.items() if e not in linear | {"sensor_mount"})
+
+
+def test_an_effect_is_nonlinear_by_what_it_brings_not_by_the_model_it_joins():
+    """Every catalog effect: nonlinear on a model that already has friction (its own
+    force element, damper or stage: `ReducedModel.nonlinear_parts`) exactly when the bare
+    model with it alone is not linear."""
+    d = Diagnoser(truth_campaign(*PITCH), catalog=BUILT_IN, workers=1)
+    friction = d.start.with_effect("actuator_friction")
+    assert not d._linear(friction)
+    for e in sorted(BUILT_IN):
+        if e == "actuator_friction" or d._inapplicable(friction.with_effect(e)):
+            continue
+        assert d._nonlinear(friction, e) == (not d._linear(d.start.with_effect(e))), e
 
 
 def _free_port() -> int:

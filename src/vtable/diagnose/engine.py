@@ -146,6 +146,17 @@ class Diagnoser:
         except VtableError:
             return False
 
+    def _nonlinear(self, current: Physics, e: str) -> bool:
+        """Whether effect `e` brings a nonlinear part of its own to `current` (a force
+        element, a quadratic damper, a nonlinear stage: `ReducedModel.nonlinear_parts`).
+        Once friction is in, every candidate's model is nonlinear; a linear effect is
+        still linear, and the amplitude screen says nothing of it."""
+        try:
+            return (ReducedModel(current.with_effect(e), self.vt, kernels=False).nonlinear_parts
+                    > ReducedModel(current, self.vt, kernels=False).nonlinear_parts)
+        except VtableError:
+            return True
+
     def _model(self, calibration: Calibration | None = None) -> TableModel:
         """An unfitted estimator on this campaign's table and declaration (for its tables
         of the base: `calibration`'s bounds, default this diagnosis's)."""
@@ -369,7 +380,7 @@ class Diagnoser:
         screen = nonlinearity_evidence(self.campaign, st.stages[-1].predictions)
         self.screens.append(screen)
         if not screen.present:
-            for e in [e for e in todo if not self._linear(current.with_effect(e))]:
+            for e in [e for e in todo if self._nonlinear(current, e)]:
                 todo = [t for t in todo if t != e]
                 ranking.append(not_fitted(e, current.with_effect(e), cost, st.err,
                                           st.stages[-1].predictions, self.campaign,
@@ -380,7 +391,7 @@ class Diagnoser:
         # now, best first (`promise`); then the rest by what each took last round
         # (nonlinear ones before linear ones in the first)
         todo.sort(key=lambda e: (0, self.promise[e]) if e in self.promise else
-                  (1, -spent.get(e, 0.0 if self._linear(current.with_effect(e)) else 1.0)))
+                  (1, -spent.get(e, 1.0 if self._nonlinear(current, e) else 0.0)))
         self.promise = {}
 
         def job(e: str, **kw) -> dict:

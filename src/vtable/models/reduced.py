@@ -305,6 +305,10 @@ class ReducedModel(ModalOutputs):
         else:  # structure only: its stages checked, no element
             law.check()
             self.element = self.elem = self.sp = None
+        #: its nonlinear parts: force elements, quadratic dampers, nonlinear stages of the
+        #: servo law (an effect that adds none is linear, whatever model it joins)
+        self.nonlinear_parts = len(m.elements) + int(np.count_nonzero(c2)) + \
+            sum(not s.linear for s, _ in law.stages)
         #: a linear model is stepped exactly (`reduced_kernel.simulate_linear`)
         self.linear = (not m.elements and not np.any(c2) and law.linear and LINEAR_PATH)
         if self.linear and kernels:
