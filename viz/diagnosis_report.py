@@ -71,7 +71,39 @@ def _png(fig) -> str:
 
 def _img(fig) -> str:
     """`fig` as an <img> of the page's width (`STYLE`), its PNG embedded."""
-    return f"<img src='data:image/png;base64,{_png(fig)}'>"
+    return _tag(_png(fig))
+
+
+def _tag(png: str) -> str:
+    return f"<img src='data:image/png;base64,{png}'>"
+
+
+def _drawn(figure, d: Any, *args) -> str | None:
+    """`figure(d, *args)`'s PNG (base64), or None where it draws nothing; a run given by
+    its index in `d.runs`."""
+    fig = figure(d, *(d.runs[a] if isinstance(a, _Run) else a for a in args))
+    return None if fig is None else _png(fig)
+
+
+class _Run(int):
+    """A run of `d.runs` by its index (what a figure job sends instead of the run)."""
+
+
+def _drawn_all(d: Any, jobs: list[tuple]) -> list[str | None]:
+    """The PNGs of `jobs` ((figure, *args), `_drawn`), in order: on the workers of the
+    local Dask cluster the diagnosis ran on, when it is still up (a figure is ~0.2 s of
+    matplotlib; `vtable diagnose --report` draws a dozen), else here one by one."""
+    from vtable.diagnose.workers import running
+
+    client = running()
+    if client is None or len(jobs) < 2:
+        return [_drawn(*job[:1], d, *job[1:]) for job in jobs]
+    shared = client.scatter(d, hash=False, broadcast=True)
+    futures = [client.submit(_drawn, job[0], shared, *job[1:], pure=False) for job in jobs]
+    try:
+        return client.gather(futures)
+    finally:
+        client.cancel([*futures, shared])
 
 
 def waterfall(d: Any):
@@ -326,9 +358,24 @@ def write_report(d: Any, path: str | Path) -> Path:
                          f"<td>{v['fitted']:.4g}</td><td>{v['bounds'][0]:g} – "
                          f"{v['bounds'][1]:g}</td><td>{e(v.get('unit', ''))}</td></tr>")
         parts.append("</table>")
+    jobs: list[tuple] = []  # every figure, drawn together (`_drawn_all`)
+    if d.history():
+        jobs.append((waterfall,))
+    if d.stages and d.comparison_start is not None and d.comparison_final is not None:
+        for i, _ in enumerate(d.runs):
+            jobs += [(tf_overlay, g, _Run(i))
+                     for g in ("table displacement", "pitch", "structure acceleration")]
+        jobs += [(time_histories, _Run(i)) for i, _ in enumerate(d.runs)]
+        jobs += [(hysteresis_loops, _Run(i)) for i, _ in enumerate(d.runs)]
+    drawn = dict(zip(range(len(jobs)), _drawn_all(d, jobs), strict=True))
+    pngs = {(job[0], *job[1:]): drawn[k] for k, job in enumerate(jobs)}
+
+    def imgs(*keys) -> list[str]:
+        return [_tag(pngs[k]) for k in keys if pngs.get(k) is not None]
+
     if d.history():
         parts += ["<h2 id='waterfall'>" + ("Held-out error" if compared else "Error waterfall")
-                  + "</h2>", _img(waterfall(d))]
+                  + "</h2>", *imgs((waterfall,))]
     for i, r in enumerate(d.rounds, 1):
         parts.append(f"<h2>Round {i}: {'added ' + e(r.added) if r.added else 'nothing added'}"
                      "</h2><table><tr><th>rank</th><th>effect</th><th>held-out error</th>"
@@ -340,21 +387,16 @@ def write_report(d: Any, path: str | Path) -> Path:
     if d.stages and d.comparison_start is not None and d.comparison_final is not None:
         parts += [f"<h2 id='tf'>Transfer functions: {w['tf']}</h2>",
                   bode_caption(w["models"])]
-        for run in d.runs:
-            for g in ("table displacement", "pitch", "structure acceleration"):
-                fig = tf_overlay(d, g, run)
-                if fig is not None:
-                    parts.append(_img(fig))
+        runs = [_Run(i) for i, _ in enumerate(d.runs)]
+        parts += imgs(*((tf_overlay, g, r) for r in runs
+                        for g in ("table displacement", "pitch", "structure acceleration")))
         parts.append(f"<h2 id='time'>Time histories: measured and {w['final']} (held out)</h2>")
-        for run in d.runs:
-            fig = time_histories(d, run)
-            if fig is not None:
-                parts.append(_img(fig))
-        loops = [fig for fig in (hysteresis_loops(d, run) for run in d.runs) if fig is not None]
+        parts += imgs(*((time_histories, r) for r in runs))
+        loops = imgs(*((hysteresis_loops, r) for r in runs))
         if loops:
             parts.append("<h2 id='loops'>Hysteresis loops: storey shear against drift "
                          f"(measured and {w['final']})</h2>")
-            parts += [_img(fig) for fig in loops]
+            parts += loops
         parts.append("<h2>Error per channel group (held out, NRMS)</h2><table><tr><th>run</th>"
                      "<th>group</th>" + ("<th>model</th>" if compared else
                                          "<th>start</th><th>final</th>") + "</tr>")

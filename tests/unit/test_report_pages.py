@@ -272,3 +272,31 @@ def test_rerun_legends_cover_no_plot_needlessly(tmp_path):
     assert series_names(tmp_path / "d.rrd", "/table_displacement/model/1_pitch_flexibility") == {
         "1: pitch_flexibility"}
     assert series_names(tmp_path / "d.rrd", "/table_displacement/measured") == {"measured"}
+
+
+def test_the_reports_figures_are_drawn_on_the_diagnosis_workers(tmp_path, monkeypatch):
+    """With the local cluster of a diagnosis still up, the report's figures are drawn on
+    its workers, none here; the page is the same, byte for byte, as one drawn here."""
+    from vtable.diagnose import workers
+    from vtable.viz import diagnosis_report
+
+    _, d, _ = campaign()
+    here = []
+    drawn = diagnosis_report._drawn
+
+    def counted(*a):
+        here.append(a[0].__name__)
+        return drawn(*a)
+
+    monkeypatch.setattr(diagnosis_report, "_drawn", counted)
+    workers.shutdown()
+    d.plot(report=tmp_path / "here.html")
+    assert len(here) >= 4  # the waterfall, the Bode plots, the time histories
+    n = len(here)
+    workers.cluster(2)
+    try:
+        d.plot(report=tmp_path / "workers.html")
+    finally:
+        workers.shutdown()
+    assert len(here) == n  # none drawn in this process
+    assert (tmp_path / "here.html").read_bytes() == (tmp_path / "workers.html").read_bytes()

@@ -227,6 +227,16 @@ def _fork_safe() -> None:
     os.register_at_fork(after_in_child=fresh)
 
 
+def running():
+    """The client of the local cluster this process made, while it is up, or None (a
+    diagnosis's report draws its figures there: `vtable.viz.diagnosis_report`)."""
+    with _LOCK:
+        for (_, scheduler), client in _CLIENTS.items():
+            if scheduler is None and client.status == "running":
+                return client
+    return None
+
+
 def shutdown() -> None:
     """End every cluster this process made (a later diagnosis starts new workers); the
     objects frozen for the local workers' fork (`cluster`) are collected again."""
