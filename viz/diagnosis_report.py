@@ -29,6 +29,7 @@ from vtable import display
 from vtable.diagnose.groups import GROUP_UNITS, group_prediction, group_signal, short
 from vtable.diagnose.prose import linear_model
 from vtable.diagnose.sampling import segments
+from vtable.diagnose.workers import running
 from vtable.errors import VtableError
 from vtable.fileio import write_text
 from vtable.ident.frames import SHORTEST, frame_for_averages, frame_for_mode
@@ -93,8 +94,6 @@ def _drawn_all(d: Any, jobs: list[tuple]) -> list[str | None]:
     """The PNGs of `jobs` ((figure, *args), `_drawn`), in order: on the workers of the
     local Dask cluster the diagnosis ran on, when it is still up (a figure is ~0.2 s of
     matplotlib; `vtable diagnose --report` draws a dozen), else here one by one."""
-    from vtable.diagnose.workers import running
-
     client = running()
     if client is None or len(jobs) < 2:
         return [_drawn(*job[:1], d, *job[1:]) for job in jobs]

@@ -147,10 +147,8 @@ class Diagnoser:
             return False
 
     def _nonlinear(self, current: Physics, e: str) -> bool:
-        """Whether effect `e` brings a nonlinear part of its own to `current` (a force
-        element, a quadratic damper, a nonlinear stage: `ReducedModel.nonlinear_parts`).
-        Once friction is in, every candidate's model is nonlinear; a linear effect is
-        still linear, and the amplitude screen says nothing of it."""
+        """Whether `e` brings a nonlinear part of its own to `current`
+        (`ReducedModel.nonlinear_parts`), whatever nonlinear parts `current` has."""
         try:
             return (ReducedModel(current.with_effect(e), self.vt, kernels=False).nonlinear_parts
                     > ReducedModel(current, self.vt, kernels=False).nonlinear_parts)
@@ -386,10 +384,9 @@ class Diagnoser:
                                           st.stages[-1].predictions, self.campaign,
                                           self.table_view, screen.text()))
                 done += 1
-        # the costliest fits go first, so that no long fit starts last on an idle core:
-        # those whose screen passed last round, the likeliest to be refined in their task
-        # now, best first (`promise`); then the rest by what each took last round
-        # (nonlinear ones before linear ones in the first)
+        # the costliest fits first (no long fit starts last on an idle core): those whose
+        # screen passed last round, best first (`promise`: likely refined in their task
+        # now); then by what each took last round (nonlinear ones first in the first)
         todo.sort(key=lambda e: (0, self.promise[e]) if e in self.promise else
                   (1, -spent.get(e, 1.0 if self._nonlinear(current, e) else 0.0)))
         self.promise = {}
