@@ -108,3 +108,33 @@ def test_commands_the_table_cannot_play_are_refused(capsys, args, msg):
 def test_numeric_arguments_are_plain_numbers(capsys, value):
     code, _, err = run(capsys, "tf", "eerc-sdof", "--fmax", value)
     assert code == 2 and "--fmax" in err and err.count("\n") == 1
+
+
+def test_a_command_ends_as_python_would_without_the_teardown(tmp_path):
+    """The `vtable` entry point skips the interpreter's teardown (0.3 s after a diagnosis):
+    the exit handlers still run (a user's, and the one that ends the diagnosis's Dask
+    workers), the JSON on stdout is whole, the exit code is the command's, and no process
+    of the command's session is left."""
+    import os
+    import sys
+
+    from conftest import effect_campaign
+
+    from vtable.runs import write_run
+
+    _, runs = effect_campaign(("pitch_flexibility",))
+    paths = [str(write_run(r, tmp_path / r.name)[1]) for r in runs[:2]]
+    mark = tmp_path / "atexit"
+    code = ("import atexit, sys; from pathlib import Path; "
+            f"atexit.register(lambda: Path({str(mark)!r}).write_text('ran')); "
+            "sys.argv = ['vtable', *sys.argv[1:]]; from vtable.__main__ import run; run()")
+    p = subprocess.Popen([sys.executable, "-c", code, "diagnose", *paths, "--json",
+                          "--max-rounds", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, start_new_session=True)
+    out, err = p.communicate(timeout=300)
+    assert p.returncode == 0, err[-500:]
+    assert json.loads(out)["format"] == "vtable-diagnosis/1"
+    assert mark.read_text() == "ran"
+    time.sleep(0.5)
+    with pytest.raises(ProcessLookupError):  # the workers ended with it
+        os.killpg(p.pid, 0)
