@@ -58,8 +58,9 @@ def line(case: sc.Case, r: dict) -> str:
     found = ",".join(r["found"]) or "-"
     if isinstance(case, sc.Case21) and r.get("storey_yield"):
         p = r["storey_yield"]
-        found = found.replace("storey_yield", f"storey_yield(s{p['storey']:g},"
-                                               f"{p['yield_drift']:.3g}in,{p['post_yield_ratio']:.2g})")
+        storeys = ",".join(map(str, sc.yielding_storeys(p)))
+        found = found.replace("storey_yield", f"storey_yield(s{storeys},"
+                              f"{p['yield_drift']:.3g}in,{p['post_yield_ratio']:.2g})")
     truth_ = _truth(case)
     if isinstance(case, sc.Case21) and case.yielding:
         h = case.yielding

@@ -838,6 +838,12 @@ def expected_storeys(case: Case21) -> list[int]:
     return list(h.get("storeys", [1]))
 
 
+def yielding_storeys(p: dict) -> list[int]:
+    """The storeys a fitted storey_yield's values {storey, storeys, ...} make yield."""
+    k = int(p.get("storey", 0))
+    return list(range(k, k + int(p.get("storeys", 1))))
+
+
 def judge21(case: Case21, r: dict) -> dict:
     """Issue 21's rule: a yielding case's final set is exactly the hidden one with
     storey_yield on the storey that yields (a case of two: both) and its yield drift within
@@ -852,8 +858,8 @@ def judge21(case: Case21, r: dict) -> dict:
         why = []
         if found != case.hidden:
             why.append(f"found {found or 'nothing'}, hidden {case.hidden}")
-        if p and [int(p.get("storey", 0))] != want:
-            why.append(f"storey {p.get('storey')}, the truth's {want}")
+        if p and yielding_storeys(p) != want:
+            why.append(f"storeys {yielding_storeys(p)}, the truth's {want}")
         if p and abs(p["yield_drift"] / u_y - 1) > 0.2:
             why.append(f"yield drift {p['yield_drift']:.3g} in, the truth's {u_y:g}")
         return {"ok": not why, "why": "; ".join(why), "false_storey_yield": False}

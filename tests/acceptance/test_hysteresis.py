@@ -212,18 +212,19 @@ c_theta_lb_in_s_per_rad = 3.7e8
 
 
 @functools.cache
-def yielding_building(tmp: str) -> list[str]:
-    """A 3-storey building whose 2nd storey yields at 0.15 in (α 0.05) on the truth's
+def yielding_building(tmp: str, storeys: tuple[int, ...] = (2,)) -> list[str]:
+    """A 3-storey building whose `storeys` yield at 0.15 in (α 0.05) on the truth's
     pitching table, declared elastic and off (`truth.perturb`): two random runs and El
     Centro (2 in), 10 s, 2 % noise."""
     import truth
 
-    hyst = {"storeys": [2], "yield_drift_in": 0.15, "post_yield_ratio": 0.05}
+    hyst = {"storeys": list(storeys), "yield_drift_in": 0.15, "post_yield_ratio": 0.05}
     spec = truth.building([20.0, 20.0, 20.0], [80.0, 150.0, 219.0],
                           frequencies_hz=[2.0, 6.0, 9.5], xi=0.02, hysteresis=hyst)
     elastic = truth.building([20.0, 20.0, 20.0], [80.0, 150.0, 219.0],
                              frequencies_hz=[2.0, 6.0, 9.5], xi=0.02)
-    paths = truth.campaign(f"{tmp}/building", truth.eerc_table(pitch="hybrid"), spec,
+    paths = truth.campaign(f"{tmp}/building{''.join(map(str, storeys))}",
+                           truth.eerc_table(pitch="hybrid"), spec,
                            truth.perturb(elastic, seed=5), fs=200.0, duration_s=10.0,
                            seed=3, quake_peak_in=2.0)
     return [str(p) for p in paths]
@@ -235,28 +236,31 @@ def yielding_building(tmp: str) -> list[str]:
 RIVALS = ["storey_yield", "pitch_flexibility", "amplitude_dependent_damping"]
 
 
-@pytest.mark.parametrize("case", ["frame", "building"])
+@pytest.mark.parametrize("case", ["frame", "building", "building, two storeys"])
 def test_diagnose_finds_the_storey_that_yields_and_its_yield_drift(case, tmp_path_factory):
     """Issue 21: on the independent truth's campaigns declared elastic (the frame yielding
-    at 0.3 in, α 0.1; the building's 2nd storey at 0.15 in, α 0.05), `diagnose` adds
-    storey_yield on the right storey with the yield drift within 20 % (the frame beating
-    amplitude-dependent damping), and ends within 2x the noise floor. The building is
+    at 0.3 in, α 0.1; the building's 2nd storey at 0.15 in, α 0.05; its 1st and 2nd
+    alike), `diagnose` adds storey_yield on the right storeys with the yield drift within
+    20 % (the frame beating amplitude-dependent damping), and ends within 2x the noise
+    floor. The building is
     given the table's pitch (`--with pitch_flexibility`): asked to find both, the diagnosis
     takes the storey first and cannot add the pitch after (a limit of its forward
     selection)."""
     from vtable import verbs
 
-    tmp = str(tmp_path_factory.mktemp(f"yield_{case}"))
-    paths = truth_campaign(tmp)[1] if case == "frame" else yielding_building(tmp)
+    tmp = str(tmp_path_factory.mktemp("yield"))
+    storeys = {"frame": (1,), "building": (2,), "building, two storeys": (1, 2)}[case]
+    paths = truth_campaign(tmp)[1] if case == "frame" else yielding_building(tmp, storeys)
     if case == "frame":
         d = verbs.diagnose(paths, catalog=RIVALS)
-    else:  # the storey among three is the point here; the frame meets the rival
+    else:  # the storeys among three are the point here; the frame meets the rival
         d = verbs.diagnose(paths, with_=["pitch_flexibility"], catalog=["storey_yield"])
-    storey, u_y, alpha = (1, 0.3, 0.1) if case == "frame" else (2, 0.15, 0.05)
+    u_y, alpha = (0.3, 0.1) if case == "frame" else (0.15, 0.05)
+    storey = storeys[0]
     assert "storey_yield" in d.final_effects, d.verdict
     p = d.final.effects["storey_yield"]
     print(case, p, d.final_error, d.noise_floor)
-    assert p["storey"] == storey, p
+    assert (p["storey"], p["storeys"]) == (storey, len(storeys)), p
     assert p["yield_drift"] == pytest.approx(u_y, rel=0.2), p
     assert p["post_yield_ratio"] == pytest.approx(alpha, abs=0.05), p
     assert d.unexplained is None and d.final_error < 2 * d.noise_floor, d.verdict
@@ -331,5 +335,45 @@ def test_a_yield_drift_that_no_run_reaches_blocks_the_candidate():
     assert why == ("storey_yield.yield_drift 0.8 in is never reached (storey 1's largest "
                    "drift in the model's prediction is 0.787 in): no run shows it yield")
     assert e.unseen({"storey": 2.0, "yield_drift": 20.0, "post_yield_ratio": 0.1}, pred) is None
+    # storeys 1-2: the larger of their drifts (storey 2's, 1 m) reaches 20 in
+    assert e.unseen({"storey": 1.0, "storeys": 2.0, "yield_drift": 20.0,
+                     "post_yield_ratio": 0.1}, pred) is None
+    assert "storeys 1-2's largest drift in the model's prediction is 39.4 in" in e.unseen(
+        {"storey": 1.0, "storeys": 2.0, "yield_drift": 40.0, "post_yield_ratio": 0.1}, pred)
     c = Candidate("storey_yield", {}, 0.0, 0.0, "", 3, None, [why], None)
     assert c.blocking == [why]
+
+
+def test_storey_yield_tries_every_run_of_adjacent_storeys_and_builds_them():
+    """`storey_yield`'s choices on a 3-storey building: each storey alone, then each pair,
+    then all three (6); storeys 2-3 put a Bouc–Wen element on each of the two storeys'
+    drifts, with the storey's own elastic stiffness; a run beyond the building, or over a
+    storey declared yielding, is a one-line error naming it."""
+    from vtable.analytic.structure import storey_stiffnesses_of
+    from vtable.effects import get
+    from vtable.models.physics import Physics, nominal_open_loop
+    from vtable.models.reduced import ReducedModel
+    from vtable.params.hysteresis import parse_hysteresis
+
+    e = get("storey_yield")
+    spec = specimen_from_dict({"kind": "shear_building", "weights_kip": [25.0, 25.0, 25.0],
+                               "heights_in": [110.0, 160.0, 210.0],
+                               "frequencies_hz": [2.87, 7.5, 11.1], "damping": 0.02})
+    assert [(c["storey"], c["storeys"]) for c in e.choices(spec)] == [
+        (1, 1), (2, 1), (3, 1), (1, 2), (2, 2), (1, 3)]
+    assert e.choices(presets.specimen("sdof_frame")) == [{"storey": 1.0, "storeys": 1.0}]
+    ph = Physics(nominal_open_loop(), spec, {}).with_effect(
+        "storey_yield", {"storey": 2, "storeys": 2, "yield_drift": 0.2})
+    m = ReducedModel(ph, kernels=False)
+    els = m.assembly.elements
+    assert [el.a for el in els] == ["x_s2", "x_s3"]
+    k = storey_stiffnesses_of(spec)
+    assert [dict(zip(el.names, el.params, strict=True))["k"] for el in els] == \
+        pytest.approx([k[1], k[2]], rel=1e-12)
+    with pytest.raises(VtableError, match=r"^storey_yield: storeys 2-4, but the specimen "
+                                          r"has 3 storeys$"):
+        ReducedModel(ph.with_effect("storey_yield", {"storey": 2, "storeys": 3}), kernels=False)
+    declared = dataclasses.replace(spec, hysteresis=parse_hysteresis(
+        {"storeys": [3], "yield_drift_in": 0.3, "post_yield_ratio": 0.1}, 3, "h"))
+    with pytest.raises(VtableError, match="storey 3 is declared yielding already"):
+        ReducedModel(dataclasses.replace(ph, specimen=declared), kernels=False)

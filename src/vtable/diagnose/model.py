@@ -18,6 +18,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import functools
+import itertools
 import math
 import threading
 from collections.abc import Mapping, Sequence
@@ -190,9 +191,15 @@ class TableModel(Residuals):
         the model can be built with (a storey the specimen has), keeping the lowest
         training cost; `choice_costs_` holds each combination's."""
         combos: list[dict] = [{}]
-        for name, p in choices:
-            combos = [{**c, (name, p.name): v} for c in combos
-                      for v in range(int(p.lower), int(p.upper) + 1)]
+        for name in dict.fromkeys(n for n, _ in choices):
+            own = [p for n, p in choices if n == name]
+            allowed = effect(name).choices(start.specimen)
+            if allowed is None:  # every combination of the ranges
+                allowed = [dict(zip([p.name for p in own], vs, strict=True))
+                           for vs in itertools.product(*(range(int(p.lower), int(p.upper) + 1)
+                                                         for p in own))]
+            combos = [{**c, **{(name, k): v for k, v in a.items()}} for c in combos
+                      for a in allowed]
         best, costs = None, {}
         for combo in combos:
             ph = start

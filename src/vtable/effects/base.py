@@ -222,6 +222,12 @@ class Effect:
         charged as implausible. Values outside a parameter's bounds are held at them."""
         return None
 
+    def choices(self, specimen: Any) -> list[dict[str, float]] | None:
+        """The combinations of the effect's discrete parameters (`Param(discrete=True)`) a
+        fit tries on `specimen`, each {name: whole value}; None (the default): every
+        combination of their ranges, those the model cannot be built with skipped."""
+        return None
+
     def unseen(self, values: dict[str, float],
                predictions: Mapping[str, Mapping[str, Any]]) -> str | None:
         """Why the effect at its fitted `values` (its units) does not act in the fitted

@@ -1,13 +1,17 @@
-"""storey_yield: a storey of the specimen yields — the Bouc–Wen storey of
-`vtable.analytic.hysteresis` (Wen 1976; Baber & Wen 1981) on storey `storey`, with its yield
-drift u_y and post-yield stiffness ratio α fitted (n = 2, β = γ = 0.5, the usual shape).
+"""storey_yield: storeys of the specimen yield — the Bouc–Wen storey of
+`vtable.analytic.hysteresis` (Wen 1976; Baber & Wen 1981) on storey `storey` and the
+`storeys` − 1 above it, with their yield drift u_y and post-yield stiffness ratio α fitted
+(one pair for them all; n = 2, β = γ = 0.5, the usual shape).
 
 A default candidate of `diagnose` like every catalog effect: it is fitted only where the
-runs show amplitude dependence the current model misses (`vtable.diagnose.screen`). The
-storey is a choice, not a distance: the fit tries every storey the specimen has and keeps
-the best (`Param(discrete=True)`). A bare table or a rigid block has no storey, and
-the effect cannot be built there. The report treats the fixed-base parameters as
-amplitude-dependent (ch. 3, §5.3's loops); this is that dependence as a yielding storey.
+runs show amplitude dependence the current model misses (`vtable.diagnose.screen`). Which
+storeys yield is a choice, not a distance: the fit tries every run of adjacent storeys the
+specimen has (`choices`: a storey alone, then two, ...) and keeps the best
+(`Param(discrete=True)`). Yielding concentrates in adjacent storeys (a storey mechanism,
+or the lower storeys of a frame, where the shear is largest); storeys yielding apart, or at
+yield drifts far apart, are a user's effect. A bare table or a rigid block has no storey,
+and the effect cannot be built there. The report treats the fixed-base parameters as
+amplitude-dependent (ch. 3, §5.3's loops); this is that dependence as yielding storeys.
 """
 
 from __future__ import annotations
@@ -23,13 +27,17 @@ from vtable.units import from_si
 
 class StoreyYield(Effect):
     name = "storey_yield"
-    physics = ("a storey of the specimen yields: a Bouc–Wen storey force (yield drift u_y, "
-               "post-yield stiffness ratio α) on that storey")
+    physics = ("storeys of the specimen yield: a Bouc–Wen storey force (yield drift u_y, "
+               "post-yield stiffness ratio α) on a storey, or on adjacent storeys alike")
     section = "ch. 3, §5.3 (amplitude-dependent fixed-base parameters; loops)"
     signature = ("the structure's response softens and damps more at large spans than at "
                  "small ones; storey shear flattens at a yield level; residual drift")
     params = (Param("storey", "1", 1.0, 1.0, 50.0, source="a choice: every storey is tried",
-                    doc="the storey that yields, 1-based from the bottom", discrete=True),
+                    doc="the (lowest) storey that yields, 1-based from the bottom",
+                    discrete=True),
+              Param("storeys", "1", 1.0, 1.0, 50.0, source="a choice: every run of adjacent "
+                    "storeys is tried", doc="how many adjacent storeys yield, from `storey` "
+                    "up", discrete=True),
               Param("yield_drift", "in", 0.5, 0.01, 20.0, log=True,
                     source="assumed (a drift ratio of a few tenths of a %)",
                     doc="u_y, the drift at which it yields"),
@@ -38,28 +46,38 @@ class StoreyYield(Effect):
 
     def apply(self, m, p):
         n = len(storey_masses(m.specimen))
-        k = round(p["storey"])
-        if not 1 <= k <= n:
-            raise VtableError(f"storey_yield: storey {k}, but the specimen has "
+        k, j = round(p["storey"]), round(p["storeys"])
+        if not 1 <= k <= k + j - 1 <= n:
+            which = f"storey {k}" if j == 1 else f"storeys {k}-{k + j - 1}"
+            raise VtableError(f"storey_yield: {which}, but the specimen has "
                               f"{n or 'no'} storey{'s' if n != 1 else ''}")
         declared = getattr(m.specimen, "hysteresis", None)
-        if declared is not None and k in declared.storeys:
-            raise VtableError(f"storey_yield: storey {k} is declared yielding already "
-                              "([specimen.hysteresis])")
-        add_yielding_storey(m, m.specimen, k, p["yield_drift"], p["post_yield_ratio"])
+        for i in range(k, k + j):
+            if declared is not None and i in declared.storeys:
+                raise VtableError(f"storey_yield: storey {i} is declared yielding already "
+                                  "([specimen.hysteresis])")
+            add_yielding_storey(m, m.specimen, i, p["yield_drift"], p["post_yield_ratio"])
+
+    def choices(self, specimen):
+        """Every run of adjacent storeys of `specimen`: each storey alone, then each pair,
+        ... (n (n + 1) / 2 for n storeys)."""
+        n = len(storey_masses(specimen))
+        return [{"storey": float(k), "storeys": float(j)}
+                for j in range(1, n + 1) for k in range(1, n - j + 2)]
 
     def unseen(self, values, predictions):
-        """A yield drift beyond the storey's largest drift in the model's own prediction
-        of every run (ductility below 1): no run shows the storey yield, and the fit has
-        bought a smooth softening with an extrapolated u_y."""
-        k = round(values["storey"])
-        peaks = [float(np.max(np.abs(ch[f"floor{k}_drift"]))) for ch in predictions.values()
-                 if f"floor{k}_drift" in ch]
+        """A yield drift beyond every yielding storey's largest drift in the model's own
+        prediction of every run (ductility below 1): no run shows them yield, and the fit
+        has bought a smooth softening with an extrapolated u_y."""
+        k, j = round(values["storey"]), round(values.get("storeys", 1))
+        peaks = [float(np.max(np.abs(ch[f"floor{i}_drift"]))) for ch in predictions.values()
+                 for i in range(k, k + j) if f"floor{i}_drift" in ch]
         u_y = self.param("yield_drift").to_si(values["yield_drift"])
         if not peaks or max(peaks) >= u_y:
             return None
+        which = f"storey {k}'s" if j == 1 else f"storeys {k}-{k + j - 1}'s"
         return (f"storey_yield.yield_drift {values['yield_drift']:.3g} in is never reached "
-                f"(storey {k}'s largest drift in the model's prediction is "
+                f"({which} largest drift in the model's prediction is "
                 f"{from_si(max(peaks), 'in'):.3g} in): no run shows it yield")
 
 
