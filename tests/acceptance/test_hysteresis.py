@@ -377,3 +377,37 @@ def test_storey_yield_tries_every_run_of_adjacent_storeys_and_builds_them():
         {"storeys": [3], "yield_drift_in": 0.3, "post_yield_ratio": 0.1}, 3, "h"))
     with pytest.raises(VtableError, match="storey 3 is declared yielding already"):
         ReducedModel(dataclasses.replace(ph, specimen=declared), kernels=False)
+
+
+def test_a_candidates_fit_chooses_its_own_storeys_and_keeps_the_models(monkeypatch,
+                                                                      tmp_path):
+    """Which storeys yield is chosen when `storey_yield` is the candidate (every run of
+    storeys: six on the building) or when a model is fitted afresh; a later candidate's
+    fit, and a refit of a fitted model (`choose=False`: a backward step, the widened
+    bounds, a state per run), keep the storeys the model holds (they were chosen when it
+    was added; re-choosing them multiplied every later candidate's fit by six)."""
+    from vtable.diagnose.campaign import Campaign
+    from vtable.diagnose.model import TableModel
+    from vtable.models.physics import Physics, nominal_open_loop
+    from vtable.runs import read_run
+
+    c = Campaign.of([read_run(p) for p in yielding_building(str(tmp_path))])
+    base = Physics(nominal_open_loop(c.table), c.specimen, {})
+    held = base.with_effect("storey_yield", {"storey": 2, "storeys": 1})
+    tried = []
+
+    def fit_from(self, campaign, start):  # the combination tried, no fit
+        p = start.effects["storey_yield"]
+        tried.append((p["storey"], p["storeys"]))
+        self.cost_ = float(len(tried))
+        return self
+
+    monkeypatch.setattr(TableModel, "_fit_from", fit_from)
+    runs = [(dict(start=held, multistart="storey_yield"), 6),
+            (dict(start=held.with_effect("pitch_flexibility"), multistart="pitch_flexibility"),
+             [(2, 1)]),
+            (dict(start=held), 6), (dict(start=held, choose=False), [(2, 1)])]
+    for kw, want in runs:
+        tried.clear()
+        TableModel(**kw).fit(c)
+        assert (len(set(tried)) if want == 6 else tried) == want, (kw, tried)

@@ -175,7 +175,8 @@ def pushed_beyond(dg, current, err: float, predictions) -> list[dict[str, Any]]:
                                     if (n := bounding_setting(k, side)) is not None])
     if not lean or wider == dg.calibration:
         return []
-    refit = TableModel(start=current, stop=dg._stop, calibration=wider).fit(dg.campaign)
+    refit = TableModel(start=current, stop=dg._stop, calibration=wider,
+                       choose=False).fit(dg.campaign)
     pred = dg.predict(refit.physics_)
     gain = held_out_gain(predictions, pred, dg.runs, dg.campaign.noise)
     moved = dg._model(wider).base_table(refit.physics_)

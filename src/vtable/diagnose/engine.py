@@ -32,7 +32,7 @@ from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import compare
 from vtable.diagnose.evidence import evidence_view
 from vtable.diagnose.judge import judged, not_fitted
-from vtable.diagnose.model import BASE_PARAMS, TableModel, one_blas_thread
+from vtable.diagnose.model import BASE_PARAMS, TableModel, one_blas_thread, refit_without
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
 from vtable.diagnose.projected import Frame
 from vtable.diagnose.prose import nothing_added
@@ -115,7 +115,7 @@ class Diagnoser:
 
     def model(self, start: Physics, **kw) -> TableModel:
         """The estimator the loop fits (sharing this diagnosis's stop flag; `kw`:
-        `TableModel`'s multistart, baseline, seed, frame, screen_only, begin, and a
+        `TableModel`'s multistart, baseline, seed, frame, screen_only, begin, choose, and a
         calibration other than this diagnosis's)."""
         kw.setdefault("calibration", self.calibration)
         return TableModel(start=start, stop=self._stop, **kw)
@@ -295,7 +295,7 @@ class Diagnoser:
                 drift, reason = True, why  # now what accumulates over a run
         if backward:  # the rounds ran out right after an addition
             left = dict((name, fitted) for (_, name), fitted in self.fits.dispatch(
-                [(("without", e), {"start": current.without(e)}) for e in backward]))
+                [(("without", e), refit_without(current, e)) for e in backward]))
             self._backward(st, backward, left, progress, done, steps, k)
         if not reason:
             reason = f"stopped after {self.max_rounds} rounds"
@@ -402,7 +402,7 @@ class Diagnoser:
             return job(e, frame=None) if apart(current.with_effect(e)) else \
                 job(e, baseline=cost, screen_only=True)
 
-        jobs = [(("without", e), {"start": current.without(e)}) for e in backward]
+        jobs = [(("without", e), refit_without(current, e)) for e in backward]
         if lean is not None:  # the starting model refitted with its leaning bounds widened
             jobs.insert(0, (("widened", ""), {"start": self.start, "calibration": lean[0]}))
         jobs += [(("screen", e), screened(e)) for e in todo]

@@ -104,7 +104,8 @@ class TableModel(Residuals):
         from the effect at its defaults with the base as fitted (`AS_IS_STEPS` steps in
         every parameter) and from its best grid start with the loop as declared
         (`DECLARED_STEPS`): an earlier fit's base that absorbed part of the effect gives
-        it back only so.
+        it back only so. Its discrete parameters are chosen (`Effect.choices`), the other
+        effects' kept as `start` has them.
     stop
         A `threading.Event`; when set, the fit ends at its next simulation
         (`StopRequestedError`).
@@ -131,6 +132,10 @@ class TableModel(Residuals):
     begin
         The fitted-scale vector a screen that passed stopped at (`passed_`): the fit's
         projected start, the screen not run again.
+    choose
+        Without a `multistart` effect, whether the fit chooses every effect's discrete
+        parameters (`Effect.choices`: which storey yields), or keeps `start`'s (False: a
+        refit of a fitted model, whose choices were made when its effects were added).
     """
 
     def __init__(self, effects: Sequence[str] = (), *, start: Physics | None = None,
@@ -138,8 +143,9 @@ class TableModel(Residuals):
                  calibration: Calibration | None = None,
                  baseline: float | None = None, seed: dict[str, float] | None = None,
                  frame: Frame | None = None, screen_only: bool = False,
-                 begin: np.ndarray | None = None) -> None:
+                 begin: np.ndarray | None = None, choose: bool = True) -> None:
         self.effects = tuple(effects)
+        self.choose = choose
         self.frame, self.screen_only, self.begin = frame, screen_only, begin
         self.passed_: np.ndarray | None = None  # where a screen that passed stopped
         self.start, self.multistart, self.stop = start, multistart, stop
@@ -180,8 +186,12 @@ class TableModel(Residuals):
                 start = start.with_effect(e)
         campaign = campaign.training_for(start)
         self.campaign_ = campaign
+        # the whole values chosen: the candidate's own when there is one (the model it
+        # joins chose its own when they were added), else every effect's unless kept
+        choose = {self.multistart} if self.multistart else \
+            set(start.effects) if self.choose else set()
         choices = [(name, p) for name in start.effects for p in effect(name).params
-                   if p.discrete]
+                   if p.discrete and name in choose]
         if not choices:
             return self._fit_from(campaign, start)
         return self._fit_choices(campaign, start, choices)
@@ -447,3 +457,9 @@ class TableModel(Residuals):
                                   + (" (log)" if p.log else ""))}
                 for p in self.base_params(ph)}
 
+
+
+def refit_without(current: Physics, name: str) -> dict[str, Any]:
+    """The keywords of a backward step's refit: the fitted model `current` without the
+    effect `name`, the others' discrete choices kept (`TableModel`'s `choose`)."""
+    return {"start": current.without(name), "choose": False}

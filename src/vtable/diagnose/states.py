@@ -40,7 +40,7 @@ def split(dg, st) -> list[PlantDifference] | None:
     if not pairs:
         return []
     per_run = camp.with_states({r.name: r.name for r in dg.runs})
-    m = dg.model(st.current).fit(per_run)
+    m = dg.model(st.current, choose=False).fit(per_run)
     pred = m.predictions(per_run)
     err = compare(pred, dg.runs, scored="held", floor=dg.floor).error
     g = held_out_gain(st.stages[-1].predictions, pred, dg.runs, camp.noise)
