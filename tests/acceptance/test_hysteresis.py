@@ -361,7 +361,7 @@ def test_storey_yield_tries_every_run_of_adjacent_storeys_and_builds_them():
                                "frequencies_hz": [2.87, 7.5, 11.1], "damping": 0.02})
     assert [(c["storey"], c["storeys"]) for c in e.choices(spec)] == [
         (1, 1), (2, 1), (3, 1), (1, 2), (2, 2), (1, 3)]
-    assert e.choices(presets.specimen("sdof_frame")) == [{"storey": 1.0, "storeys": 1.0}]
+    assert e.choices(presets.specimen("sdof_frame")) == [{"storey": 1, "storeys": 1}]
     ph = Physics(nominal_open_loop(), spec, {}).with_effect(
         "storey_yield", {"storey": 2, "storeys": 2, "yield_drift": 0.2})
     m = ReducedModel(ph, kernels=False)

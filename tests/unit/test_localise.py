@@ -3,6 +3,8 @@ side worked out once per run however many models are localised on it."""
 
 from __future__ import annotations
 
+import copy
+import gc
 import importlib
 
 import numpy as np
@@ -31,8 +33,7 @@ def test_band_errors_are_the_relative_tf_difference_and_the_measured_side_is_kep
     """A prediction s times the measured signal has the H1 s H from the command: its band
     error |sH - H| / |H| is |s - 1| in every band, whatever the coherence. The second model
     localised on the same runs computes no measured transfer function again."""
-    _, runs = effect_campaign(("pitch_flexibility",))
-    runs = runs[:2]
+    runs = [copy.copy(r) for r in effect_campaign(("pitch_flexibility",))[1][:2]]
     calls = []
     real = cmp_module.transfer_function
     monkeypatch.setattr(cmp_module, "transfer_function",
@@ -46,3 +47,9 @@ def test_band_errors_are_the_relative_tf_difference_and_the_measured_side_is_kep
         assert len(values) >= 10
         assert values == pytest.approx([abs(s - 1)] * len(values), rel=1e-9)
     assert np.isclose(second.error, 0.2, rtol=1e-9)
+    # kept while the runs live, not after (a long session diagnoses many campaigns)
+    assert {id(r) for r in runs} <= set(cmp_module._MEASURED)
+    ids = {id(r) for r in runs}
+    del runs, first, second
+    gc.collect()
+    assert not ids & set(cmp_module._MEASURED)

@@ -16,6 +16,8 @@ The pieces live by job: channel groups (`groups`), the analysis rate and segment
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 import scipy.signal
 
@@ -94,18 +96,17 @@ def compare(pred: dict[str, dict[str, np.ndarray]], runs: list[Run], *, scored: 
     return cmp
 
 
-#: the measured side of `_localise` per run (by identity, the run held): the command's
-#: auto-spectrum and each group's H1 with its coherence. A diagnosis localises every
-#: round's model on the same runs; only the prediction's cross-spectrum is new.
-_MEASURED: dict[int, tuple[Run, dict]] = {}
+#: the measured side of `_localise` per run, while the run lives (by identity): the
+#: command's auto-spectrum and each group's H1 with its coherence. A diagnosis localises
+#: every round's model on the same runs; only the prediction's cross-spectrum is new.
+_MEASURED: dict[int, tuple[weakref.ref, dict]] = {}
 
 
 def _measured(r: Run) -> dict:
     hit = _MEASURED.get(id(r))
-    if hit is None or hit[0] is not r:
-        if len(_MEASURED) >= 64:
-            _MEASURED.pop(next(iter(_MEASURED)))
-        hit = _MEASURED[id(r)] = (r, {})
+    if hit is None or hit[0]() is not r:
+        hit = _MEASURED[id(r)] = (weakref.ref(r), {})
+        weakref.finalize(r, _MEASURED.pop, id(r), None)
     return hit[1]
 
 

@@ -458,7 +458,6 @@ class TableModel(Residuals):
                 for p in self.base_params(ph)}
 
 
-
 def refit_without(current: Physics, name: str) -> dict[str, Any]:
     """The keywords of a backward step's refit: the fitted model `current` without the
     effect `name`, the others' discrete choices kept (`TableModel`'s `choose`)."""

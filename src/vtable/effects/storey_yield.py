@@ -62,7 +62,7 @@ class StoreyYield(Effect):
         """Every run of adjacent storeys of `specimen`: each storey alone, then each pair,
         ... (n (n + 1) / 2 for n storeys)."""
         n = len(storey_masses(specimen))
-        return [{"storey": float(k), "storeys": float(j)}
+        return [{"storey": k, "storeys": j}
                 for j in range(1, n + 1) for k in range(1, n - j + 2)]
 
     def unseen(self, values, predictions):
