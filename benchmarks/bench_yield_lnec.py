@@ -65,14 +65,15 @@ def main(argv: list[str] | None = None) -> int:
         why = []
         if sorted(r["found"]) != ["storey_yield"]:
             why.append(f"found {r['found'] or 'nothing'}")
-        if p and int(p["storey"]) != storey:
-            why.append(f"storey {p['storey']:g}, the truth's {storey}")
+        if p and sc.yielding_storeys(p) != [storey]:
+            why.append(f"storeys {sc.yielding_storeys(p)}, the truth's {storey}")
         if p and abs(p["yield_drift"] / u_y - 1) > 0.2:
             why.append(f"yield drift {p['yield_drift']:.3g} in, the truth's {u_y:g}")
         if ratio > 2.0:
             why.append(f"final {ratio:.1f}x the floor")
         right += not why
-        fitted = (f"storey {p['storey']:g} at {p['yield_drift']:.3g} in (truth {u_y:g}), "
+        fitted = (f"storeys {','.join(map(str, sc.yielding_storeys(p)))} at "
+                  f"{p['yield_drift']:.3g} in (truth {u_y:g}), "
                   f"post-yield {p['post_yield_ratio']:.3g}" if p else "no storey_yield")
         print(f"{case.name:<28} {fitted:<50} start {r['start_error']:6.2%} final "
               f"{r['final_error']:6.2%} floor {r['noise_floor']:6.2%} ({ratio:.1f}x) "
