@@ -197,35 +197,53 @@ class TableModel(Residuals):
         return self._fit_choices(campaign, start, choices)
 
     def _fit_choices(self, campaign: Campaign, start: Physics, choices) -> TableModel:
-        """Fit once for every combination of the discrete parameters' whole values that
-        the model can be built with (a storey the specimen has), keeping the lowest
-        training cost; `choice_costs_` holds each combination's."""
-        combos: list[dict] = [{}]
-        for name in dict.fromkeys(n for n, _ in choices):
+        """Fit once for every combination of the discrete parameters' whole values that the
+        effects propose (`Effect.choices`) and the model can be built with, keeping the
+        lowest training cost; `choice_costs_` holds each combination's. One effect
+        choosing may propose more after seeing the costs of those fitted (storey_yield
+        grows the best run of storeys), until it proposes nothing new."""
+        names = list(dict.fromkeys(n for n, _ in choices))
+
+        def proposed(name: str, tried: list) -> list[dict]:
             own = [p for n, p in choices if n == name]
-            allowed = effect(name).choices(start.specimen)
-            if allowed is None:  # every combination of the ranges
-                allowed = [dict(zip([p.name for p in own], vs, strict=True))
-                           for vs in itertools.product(*(range(int(p.lower), int(p.upper) + 1)
-                                                         for p in own))]
-            combos = [{**c, **{(name, k): v for k, v in a.items()}} for c in combos
-                      for a in allowed]
-        best, costs = None, {}
-        for combo in combos:
-            ph = start
-            for (name, pname), v in combo.items():
-                ph = dataclasses.replace(ph, effects={**ph.effects,
-                                                      name: {**ph.effects[name], pname: v}})
-            try:
-                ReducedModel(ph, self.vt, kernels=False)
-            except VtableError:  # e.g. a storey the specimen does not have
-                continue
-            sub = copy.copy(self)
-            sub.clear_caches()
-            sub._fit_from(campaign, ph)
-            costs[tuple(combo.values())] = sub.cost_
-            if best is None or sub.cost_ < best.cost_:
-                best = sub
+            allowed = effect(name).choices(start.specimen, tried)
+            if allowed is None:  # every combination of the ranges, at once
+                allowed = [] if tried else [
+                    dict(zip([p.name for p in own], vs, strict=True))
+                    for vs in itertools.product(*(range(int(p.lower), int(p.upper) + 1)
+                                                  for p in own))]
+            return [{(name, k): v for k, v in a.items()} for a in allowed]
+
+        batch: list[dict] = [{}]
+        for name in names:
+            batch = [{**c, **a} for c in batch for a in proposed(name, [])]
+        best, costs, seen = None, {}, set()
+        order = list(batch[0]) if batch else []  # the (effect, parameter) of each value
+        while batch:
+            for combo in batch:
+                key = tuple(combo.values())
+                if key in seen:
+                    continue
+                seen.add(key)
+                ph = start
+                for (name, pname), v in combo.items():
+                    ph = dataclasses.replace(ph, effects={**ph.effects,
+                                                          name: {**ph.effects[name], pname: v}})
+                try:
+                    ReducedModel(ph, self.vt, kernels=False)
+                except VtableError:  # e.g. a storey the specimen does not have
+                    continue
+                sub = copy.copy(self)
+                sub.clear_caches()
+                sub._fit_from(campaign, ph)
+                costs[key] = sub.cost_
+                if best is None or sub.cost_ < best.cost_:
+                    best = sub
+            if len(names) != 1:
+                break
+            tried = [({k: v for (_, k), v in zip(order, key, strict=True)}, c)
+                     for key, c in costs.items()]
+            batch = [c for c in proposed(names[0], tried) if tuple(c.values()) not in seen]
         if best is None:
             raise VtableError(f"no value of {', '.join(f'{n}.{p.name}' for n, p in choices)} "
                               "gives a model of these runs")

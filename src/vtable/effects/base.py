@@ -222,10 +222,13 @@ class Effect:
         charged as implausible. Values outside a parameter's bounds are held at them."""
         return None
 
-    def choices(self, specimen: Any) -> list[dict[str, float]] | None:
+    def choices(self, specimen: Any, tried: Sequence[tuple[dict[str, float], float]] = ()
+                ) -> list[dict[str, float]] | None:
         """The combinations of the effect's discrete parameters (`Param(discrete=True)`) a
-        fit tries on `specimen`, each {name: whole value}; None (the default): every
-        combination of their ranges, those the model cannot be built with skipped."""
+        fit tries next on `specimen`, each {name: whole value}, given those `tried` so far
+        ((combination, training cost) each; none at first); an empty list: no more. None
+        (the default): every combination of their ranges at first, those the model cannot
+        be built with skipped."""
         return None
 
     def unseen(self, values: dict[str, float],

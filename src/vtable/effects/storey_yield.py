@@ -5,13 +5,13 @@
 
 A default candidate of `diagnose` like every catalog effect: it is fitted only where the
 runs show amplitude dependence the current model misses (`vtable.diagnose.screen`). Which
-storeys yield is a choice, not a distance: the fit tries every run of adjacent storeys the
-specimen has (`choices`: a storey alone, then two, ...) and keeps the best
-(`Param(discrete=True)`). Yielding concentrates in adjacent storeys (a storey mechanism,
-or the lower storeys of a frame, where the shear is largest); storeys yielding apart, or at
-yield drifts far apart, are a user's effect. A bare table or a rigid block has no storey,
-and the effect cannot be built there. The report treats the fixed-base parameters as
-amplitude-dependent (ch. 3, §5.3's loops); this is that dependence as yielding storeys.
+storeys yield is a choice, not a distance (`Param(discrete=True)`): the fit tries each
+storey alone, then grows the best run of adjacent storeys a storey at a time while that fits
+better (`choices`), and keeps the best. Yielding concentrates in adjacent storeys (a storey
+mechanism, or the lower storeys of a frame, where the shear is largest); storeys yielding
+apart, or at yield drifts far apart, are a user's effect. A bare table or a rigid block has
+no storey, and the effect cannot be built there. The report treats the fixed-base parameters
+as amplitude-dependent (ch. 3, §5.3's loops); this is that dependence as yielding storeys.
 """
 
 from __future__ import annotations
@@ -35,9 +35,9 @@ class StoreyYield(Effect):
     params = (Param("storey", "1", 1.0, 1.0, 50.0, source="a choice: every storey is tried",
                     doc="the (lowest) storey that yields, 1-based from the bottom",
                     discrete=True),
-              Param("storeys", "1", 1.0, 1.0, 50.0, source="a choice: every run of adjacent "
-                    "storeys is tried", doc="how many adjacent storeys yield, from `storey` "
-                    "up", discrete=True),
+              Param("storeys", "1", 1.0, 1.0, 50.0, source="a choice: the best storey's run "
+                    "grown while it fits better", doc="how many adjacent storeys yield, from "
+                    "`storey` up", discrete=True),
               Param("yield_drift", "in", 0.5, 0.01, 20.0, log=True,
                     source="assumed (a drift ratio of a few tenths of a %)",
                     doc="u_y, the drift at which it yields"),
@@ -58,12 +58,18 @@ class StoreyYield(Effect):
                                   "([specimen.hysteresis])")
             add_yielding_storey(m, m.specimen, i, p["yield_drift"], p["post_yield_ratio"])
 
-    def choices(self, specimen):
-        """Every run of adjacent storeys of `specimen`: each storey alone, then each pair,
-        ... (n (n + 1) / 2 for n storeys)."""
+    def choices(self, specimen, tried=()):
+        """Each storey of `specimen` alone first; then the best run tried so far grown by
+        the storey below it and by the one above, while that lowers the training cost
+        (n + 2 per storey the run grows, of the n (n + 1) / 2 runs there are: a tall
+        building is not fitted once per run)."""
         n = len(storey_masses(specimen))
-        return [{"storey": k, "storeys": j}
-                for j in range(1, n + 1) for k in range(1, n - j + 2)]
+        if not tried:
+            return [{"storey": k, "storeys": 1} for k in range(1, n + 1)]
+        p, _ = min(tried, key=lambda t: t[1])
+        k, j = round(p["storey"]), round(p["storeys"])
+        return [{"storey": a, "storeys": b} for a, b in ((k - 1, j + 1), (k, j + 1))
+                if a >= 1 and a + b - 1 <= n]
 
     def unseen(self, values, predictions):
         """A yield drift beyond every yielding storey's largest drift in the model's own
