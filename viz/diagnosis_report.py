@@ -16,6 +16,7 @@ its one model, and its headings and captions say so."""
 from __future__ import annotations
 
 import base64
+import contextlib
 import html
 import io
 from pathlib import Path
@@ -30,7 +31,7 @@ from vtable.diagnose.groups import GROUP_UNITS, group_prediction, group_signal, 
 from vtable.diagnose.prose import linear_model
 from vtable.diagnose.sampling import segments
 from vtable.diagnose.workers import running
-from vtable.errors import VtableError
+from vtable.errors import VtableError, interrupted
 from vtable.fileio import write_text
 from vtable.ident.frames import SHORTEST, frame_for_averages, frame_for_mode
 from vtable.ident.structure import lowest_declared_mode
@@ -93,16 +94,24 @@ class _Run(int):
 def _drawn_all(d: Any, jobs: list[tuple]) -> list[str | None]:
     """The PNGs of `jobs` ((figure, *args), `_drawn`), in order: on the workers of the
     local Dask cluster the diagnosis ran on, when it is still up (a figure is ~0.2 s of
-    matplotlib; `vtable diagnose --report` draws a dozen), else here one by one."""
+    matplotlib; `vtable diagnose --report` draws a dozen), else here one by one — also
+    when the workers cannot draw them (an effect registered in code, which they cannot
+    load; workers gone)."""
     client = running()
-    if client is None or len(jobs) < 2:
-        return [_drawn(*job[:1], d, *job[1:]) for job in jobs]
-    shared = client.scatter(d, hash=False, broadcast=True)
-    futures = [client.submit(_drawn, job[0], shared, *job[1:], pure=False) for job in jobs]
-    try:
-        return client.gather(futures)
-    finally:
-        client.cancel([*futures, shared])
+    if client is not None and len(jobs) > 1:
+        futures: list = []
+        try:
+            futures.append(client.scatter(d, hash=False, broadcast=True, timeout=10))
+            futures += [client.submit(_drawn, job[0], futures[0], *job[1:], pure=False)
+                        for job in jobs]
+            return client.gather(futures[1:])
+        except Exception as e:  # drawn here instead
+            if interrupted(e):
+                raise
+        finally:
+            with contextlib.suppress(Exception):
+                client.cancel(futures)
+    return [_drawn(*job[:1], d, *job[1:]) for job in jobs]
 
 
 def waterfall(d: Any):

@@ -16,12 +16,14 @@ nothing (every file a command writes is closed or flushed when it returns: `vtab
 from __future__ import annotations
 
 import atexit
+import contextlib
+import ctypes
 import os
 import signal
 import sys
 import threading
 
-from vtable.errors import on_sigint
+from vtable.errors import on_sigint, sigint_seen
 
 
 def _quiet_interrupts(u) -> None:
@@ -44,20 +46,32 @@ def run() -> None:
 
 
 def _end(code: int) -> None:
-    """Exit with `code` without the interpreter's teardown (module docstring)."""
-    try:
-        for t in threading.enumerate():
-            if t is not threading.current_thread() and not t.daemon:
-                t.join()
-        atexit._run_exitfuncs()
-    except KeyboardInterrupt:
+    """Exit with `code` without the interpreter's teardown (module docstring): first what
+    Python's exit does (threads' exit hooks and joins, then the exit handlers), the
+    streams flushed, Python's and C's. A closed pipe then is 141, a Ctrl-C meanwhile 130
+    (said in one line), another failed flush of stdout 120 (Python's own)."""
+    interrupted = False
+    for step in (threading._shutdown, atexit._run_exitfuncs):
+        try:
+            step()
+        except KeyboardInterrupt:  # the handlers still run after an interrupted join
+            interrupted = True
+    if code == 0 and (interrupted or sigint_seen()):  # a handler's interrupt is swallowed
         print("vtable: interrupted", file=sys.stderr)
         code = 130
-    for stream in (sys.stdout, sys.stderr):
-        try:
-            stream.flush()
-        except (OSError, ValueError):  # a closed pipe: nothing more to say there
-            pass
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        from vtable.cli import quiet_stdout  # loaded by now
+
+        quiet_stdout()
+        code = code or 141
+    except (OSError, ValueError):
+        code = code or 120
+    with contextlib.suppress(OSError, ValueError):
+        sys.stderr.flush()
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None).fflush(None)  # what C libraries (OpenSees, MuJoCo) left buffered
     os._exit(code)
 
 

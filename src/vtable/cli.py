@@ -135,7 +135,7 @@ _COMMANDS = {"demo": cmd_demo, "modes": cmd_modes, "margins": cmd_margins, "tf":
              "assess": cmd_assess, "study": cmd_study, "drive": cmd_drive}
 
 
-def _quiet_stdout() -> None:
+def quiet_stdout() -> None:
     """After a closed pipe: send what is left of stdout to /dev/null, so the interpreter's
     final flush does not complain."""
     try:
@@ -181,7 +181,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"vtable: error: {e}", file=sys.stderr)
         return 2
     except BrokenPipeError:
-        _quiet_stdout()
+        quiet_stdout()
         return 141
     except KeyboardInterrupt as e:
         if not getattr(e, "reported", False):

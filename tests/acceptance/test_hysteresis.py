@@ -395,7 +395,8 @@ def test_a_candidates_fit_chooses_its_own_storeys_and_keeps_the_models(monkeypat
     fitted afresh: each storey alone, then the best run grown while it fits better (here
     storeys 1-2 best: five of the six runs fitted, 1-2 kept); a later candidate's fit, and
     a refit of a fitted model (`choose=False`: a backward step, the widened bounds, a state
-    per run), keep the storeys the model holds (they were chosen when it was added;
+    per run; `choose=[...]`: a drive's refit with effects added, which chooses theirs
+    only), keep the storeys the model holds (they were chosen when it was added;
     re-choosing them multiplied every later candidate's fit)."""
     from vtable.diagnose.campaign import Campaign
     from vtable.diagnose.model import TableModel
@@ -419,7 +420,10 @@ def test_a_candidates_fit_chooses_its_own_storeys_and_keeps_the_models(monkeypat
     runs = [(dict(start=held, multistart="storey_yield"), grown, (1, 2)),
             (dict(start=held.with_effect("pitch_flexibility"), multistart="pitch_flexibility"),
              [(2, 1)], (2, 1)),
-            (dict(start=held), grown, (1, 2)), (dict(start=held, choose=False), [(2, 1)], (2, 1))]
+            (dict(start=held), grown, (1, 2)), (dict(start=held, choose=False), [(2, 1)], (2, 1)),
+            (dict(start=held, choose=["storey_yield"]), grown, (1, 2)),  # named: chosen
+            (dict(start=held.with_effect("pitch_flexibility"), choose=["pitch_flexibility"]),
+             [(2, 1)], (2, 1))]  # a refit adding the pitch keeps the storeys
     for kw, want, kept in runs:
         tried.clear()
         m = TableModel(**kw).fit(c)

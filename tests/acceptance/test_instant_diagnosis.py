@@ -251,10 +251,11 @@ def test_the_workers_compile_the_first_rounds_candidates_as_the_start_is_fitted(
         fits.close()
 
 
-def test_the_heap_is_frozen_for_the_workers_fork_until_they_end():
+def test_the_heap_is_frozen_for_the_workers_fork_until_they_end(monkeypatch):
     """The local workers are forked with this process's objects out of the collector's
     sight (`gc.freeze`: the imports' and the campaign's, tens of thousands), given back
-    when the cluster ends."""
+    when the cluster ends, or at once when it cannot be made; a freeze of the program's
+    own is not ours to undo."""
     import gc
 
     from vtable.diagnose import workers
@@ -265,6 +266,20 @@ def test_the_heap_is_frozen_for_the_workers_fork_until_they_end():
     assert gc.get_freeze_count() > 10_000
     workers.shutdown()
     assert gc.get_freeze_count() == 0
+
+    def refused(*a, **k):
+        raise OSError("no port")
+
+    monkeypatch.setattr(workers, "LocalCluster", refused)
+    with pytest.raises(OSError):
+        workers.cluster(2)
+    assert gc.get_freeze_count() == 0
+    gc.freeze()  # the program's own
+    try:
+        workers.shutdown()
+        assert gc.get_freeze_count() > 10_000
+    finally:
+        gc.unfreeze()
 
 
 def test_the_amplitude_screen_tells_friction_from_a_missing_linear_effect():

@@ -138,3 +138,56 @@ def test_a_command_ends_as_python_would_without_the_teardown(tmp_path):
     time.sleep(0.5)
     with pytest.raises(ProcessLookupError):  # the workers ended with it
         os.killpg(p.pid, 0)
+
+
+_ENDS = {
+    # stdout still buffered when its reader has gone (an exit handler's line): quietly
+    "closed pipe": ("import atexit, sys, time\n"
+                    "sys.argv = ['vtable', 'presets']\n"
+                    "sys.stdout = open(1, 'w', buffering=1 << 20, closefd=False)\n"
+                    "def late():\n"
+                    "    time.sleep(1.0)  # the reader closes its end meanwhile\n"
+                    "    print('late')\n"
+                    "atexit.register(late)\n"
+                    "from vtable.__main__ import run\n"
+                    "run()\n", 141, ""),
+    # Ctrl-C while the exit handlers run (a handler's interrupt is swallowed by Python)
+    "Ctrl-C in an exit handler": ("import atexit, os, signal, sys, time\n"
+                                  "sys.argv = ['vtable', 'presets']\n"
+                                  "def late():\n"
+                                  "    os.kill(os.getpid(), signal.SIGINT)\n"
+                                  "    time.sleep(0.2)\n"
+                                  "atexit.register(late)\n"
+                                  "from vtable.__main__ import run\n"
+                                  "run()\n", 130, "vtable: interrupted\n"),
+    # a user's executor still up: its idle workers are stopped as Python's exit stops them
+    "an idle executor": ("import sys\n"
+                         "from concurrent.futures import ThreadPoolExecutor\n"
+                         "pool = ThreadPoolExecutor(2)\n"
+                         "pool.submit(int).result()\n"
+                         "sys.argv = ['vtable', 'presets']\n"
+                         "from vtable.__main__ import run\n"
+                         "run()\n", 0, ""),
+}
+
+
+@pytest.mark.parametrize("case", list(_ENDS))
+def test_the_command_ends_with_python_s_exit_codes(case):
+    """The command's own exit (without the teardown) keeps what Python's exit does: a
+    closed pipe found by the last flush is exit 141 and silent, a Ctrl-C while the exit
+    handlers run is 130 and one line, and a live thread pool's idle workers do not hold the
+    exit (a review of this stop's first version found all three)."""
+    import sys
+
+    code, want, err = _ENDS[case]
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    if case == "closed pipe":  # the command's output read, then the pipe closed
+        assert p.stdout.readline()
+        p.stdout.close()
+        got_err = p.stderr.read()
+        p.wait(timeout=60)
+    else:
+        _, got_err = p.communicate(timeout=60)
+    assert (p.returncode, got_err) == (want, err)

@@ -3,8 +3,6 @@ side worked out once per run however many models are localised on it."""
 
 from __future__ import annotations
 
-import copy
-import gc
 import importlib
 
 import numpy as np
@@ -31,25 +29,25 @@ def _scaled(runs, s: float) -> dict:
 
 def test_band_errors_are_the_relative_tf_difference_and_the_measured_side_is_kept(monkeypatch):
     """A prediction s times the measured signal has the H1 s H from the command: its band
-    error |sH - H| / |H| is |s - 1| in every band, whatever the coherence. The second model
-    localised on the same runs computes no measured transfer function again."""
-    runs = [copy.copy(r) for r in effect_campaign(("pitch_flexibility",))[1][:2]]
+    error |sH - H| / |H| is |s - 1| in every band, whatever the coherence. A second model
+    localised on the same runs with the same memo (a diagnosis's) computes no measured
+    transfer function again; without a memo every call starts afresh (a run changed since
+    is read as it is now)."""
+    _, runs = effect_campaign(("pitch_flexibility",))
+    runs = runs[:2]
     calls = []
     real = cmp_module.transfer_function
     monkeypatch.setattr(cmp_module, "transfer_function",
                         lambda *a, **k: calls.append(1) or real(*a, **k))
-    first = compare(_scaled(runs, 1.1), runs, detail=True)
+    memo: dict = {}
+    first = compare(_scaled(runs, 1.1), runs, detail=True, memo=memo)
     n_first = len(calls)
-    second = compare(_scaled(runs, 0.8), runs, detail=True)
+    second = compare(_scaled(runs, 0.8), runs, detail=True, memo=memo)
     assert n_first > 0 and len(calls) == n_first
     for c, s in ((first, 1.1), (second, 0.8)):
         values = [v for bands in c.bands.values() for v in bands.values()]
         assert len(values) >= 10
         assert values == pytest.approx([abs(s - 1)] * len(values), rel=1e-9)
     assert np.isclose(second.error, 0.2, rtol=1e-9)
-    # kept while the runs live, not after (a long session diagnoses many campaigns)
-    assert {id(r) for r in runs} <= set(cmp_module._MEASURED)
-    ids = {id(r) for r in runs}
-    del runs, first, second
-    gc.collect()
-    assert not ids & set(cmp_module._MEASURED)
+    compare(_scaled(runs, 0.8), runs, detail=True)
+    assert len(calls) == 2 * n_first

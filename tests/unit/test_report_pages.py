@@ -276,7 +276,8 @@ def test_rerun_legends_cover_no_plot_needlessly(tmp_path):
 
 def test_the_reports_figures_are_drawn_on_the_diagnosis_workers(tmp_path, monkeypatch):
     """With the local cluster of a diagnosis still up, the report's figures are drawn on
-    its workers, none here; the page is the same, byte for byte, as one drawn here."""
+    its workers, none here; the page is the same, byte for byte, as one drawn here; and
+    when the workers cannot draw them, here (the same page again)."""
     from vtable.diagnose import workers
     from vtable.viz import diagnosis_report
 
@@ -300,3 +301,15 @@ def test_the_reports_figures_are_drawn_on_the_diagnosis_workers(tmp_path, monkey
         workers.shutdown()
     assert len(here) == n  # none drawn in this process
     assert (tmp_path / "here.html").read_bytes() == (tmp_path / "workers.html").read_bytes()
+
+    class Gone:  # a cluster that cannot draw them (workers gone, an effect they lack)
+        def scatter(self, *a, **k):
+            raise OSError("no workers")
+
+        def cancel(self, futures):
+            pass
+
+    monkeypatch.setattr(diagnosis_report, "running", lambda: Gone())
+    d.plot(report=tmp_path / "fallback.html")  # drawn here, the same page
+    assert len(here) == 2 * n
+    assert (tmp_path / "fallback.html").read_bytes() == (tmp_path / "here.html").read_bytes()

@@ -16,8 +16,6 @@ The pieces live by job: channel groups (`groups`), the analysis rate and segment
 
 from __future__ import annotations
 
-import weakref
-
 import numpy as np
 import scipy.signal
 
@@ -59,6 +57,7 @@ from vtable.diagnose.sampling import (
 )
 from vtable.diagnose.statistics import Comparison, Gain, held_out_gain, nrms
 from vtable.display import run_family
+from vtable.errors import VtableError
 from vtable.ident.tf import frames, transfer_function
 from vtable.runs.model import Run
 
@@ -72,9 +71,12 @@ __all__ = ["ANALYSIS_FS", "BANDS", "GROUPS", "GROUP_UNITS", "HELD_OUT", "MIN_FS"
 
 
 def compare(pred: dict[str, dict[str, np.ndarray]], runs: list[Run], *, scored: str = "held",
-            floor: float | None = None, detail: bool = False) -> Comparison:
+            floor: float | None = None, detail: bool = False,
+            memo: dict | None = None) -> Comparison:
     """Errors of predictions {run name: channels} on `runs` (scored on the held-out
-    segments, the training ones or "all")."""
+    segments, the training ones or "all"). `memo`: where `detail` keeps the measured
+    side of its band errors between calls on the same runs (a diagnosis localises every
+    round's model on them: only the prediction's cross-spectrum is new)."""
     per_run: dict[str, dict[str, float]] = {}
     all_errs = []
     for r in runs:
@@ -92,27 +94,14 @@ def compare(pred: dict[str, dict[str, np.ndarray]], runs: list[Run], *, scored: 
     cmp = Comparison(float(np.mean(all_errs)), per_run,
                      noise_floor(runs, scored) if floor is None else floor)
     if detail:
-        _localise(cmp, pred, runs)
+        _localise(cmp, pred, runs, {} if memo is None else memo)
     return cmp
 
 
-#: the measured side of `_localise` per run, while the run lives (by identity): the
-#: command's auto-spectrum and each group's H1 with its coherence. A diagnosis localises
-#: every round's model on the same runs; only the prediction's cross-spectrum is new.
-_MEASURED: dict[int, tuple[weakref.ref, dict]] = {}
-
-
-def _measured(r: Run) -> dict:
-    hit = _MEASURED.get(id(r))
-    if hit is None or hit[0]() is not r:
-        hit = _MEASURED[id(r)] = (weakref.ref(r), {})
-        weakref.finalize(r, _MEASURED.pop, id(r), None)
-    return hit[1]
-
-
-def _localise(cmp: Comparison, pred, runs: list[Run]) -> None:
+def _localise(cmp: Comparison, pred, runs: list[Run], memo: dict) -> None:
     """Band errors (coherence-weighted TF differences from the command), per-run
-    amplitude, and the 2 s windows carrying the most residual."""
+    amplitude, and the 2 s windows carrying the most residual; the measured spectra of
+    each run (its command's auto-spectrum, each group's H1) kept in `memo` by its name."""
     bands: dict[str, dict[str, list[float]]] = {}
     for r in runs:
         if not r.has("h_span"):
@@ -120,21 +109,24 @@ def _localise(cmp: Comparison, pred, runs: list[Run]) -> None:
         x = r.channel("h_span")
         n = min(1024, 2 ** int(np.log2(len(x) / 2)))
         kw = frames(r.fs, n)
-        memo = _measured(r)
-        if "G_xx" not in memo:
-            memo["G_xx"] = scipy.signal.welch(x, **kw)[1]
+        measured = memo.setdefault(r.name, {})
+        if "G_xx" not in measured:
+            measured["G_xx"] = scipy.signal.welch(x, **kw)[1]
         for g in run_groups(r):
             yhat = group_prediction(pred[r.name], r, g)
             if yhat is None:
                 continue
-            if g not in memo:
+            if yhat.shape != x.shape:
+                raise VtableError(f"{r.name}: the prediction of {g} has {len(yhat)} samples, "
+                                  f"the run {len(x)}")
+            if g not in measured:
                 y = group_signal(r, g)
-                memo[g] = None if y is None else transfer_function(x, y, r.fs, n)
-            tm = memo[g]
+                measured[g] = None if y is None else transfer_function(x, y, r.fs, n)
+            tm = measured[g]
             if tm is None:
                 continue
             with np.errstate(divide="ignore", invalid="ignore"):
-                H = scipy.signal.csd(x, yhat, **kw)[1] / memo["G_xx"]  # the prediction's H1
+                H = scipy.signal.csd(x, yhat, **kw)[1] / measured["G_xx"]  # the model's H1
             for lo, hi in BANDS:
                 sel = (tm.f > max(lo, 0.2)) & (tm.f <= hi) & np.isfinite(tm.H) & \
                       np.isfinite(H)

@@ -102,7 +102,7 @@ class Diagnoser:
         self.table_view = evidence_view(self.vt, self.catalog, self.campaign, self.notes)
         self.progress = progress or (lambda i, n, s: None)
         self.max_rounds = max_rounds
-        self.floor = self.campaign.floor
+        self.floor, self._spectra = self.campaign.floor, {}  # `compare`'s memo of the runs
         self.calibration = calibration or Calibration()
         self.fits = Fits(self.campaign, self.catalog, self.workers, self.calibration,
                          self.model, scheduler)
@@ -214,7 +214,7 @@ class Diagnoser:
         if st.cmp is None:
             stage = st.stages[-1]
             st.cmp = compare(stage.predictions, self.runs, scored="held", floor=self.floor,
-                             detail=True)
+                             detail=True, memo=self._spectra)
             stage.comparison = st.cmp
         return st.cmp
 

@@ -133,9 +133,10 @@ class TableModel(Residuals):
         The fitted-scale vector a screen that passed stopped at (`passed_`): the fit's
         projected start, the screen not run again.
     choose
-        Without a `multistart` effect, whether the fit chooses every effect's discrete
-        parameters (`Effect.choices`: which storey yields), or keeps `start`'s (False: a
-        refit of a fitted model, whose choices were made when its effects were added).
+        Without a `multistart` effect, whose discrete parameters the fit chooses
+        (`Effect.choices`: which storey yields): every effect's (True), none (False: a
+        refit of a fitted model, whose choices were made when its effects were added;
+        `start`'s are kept), or those of the effects named (the ones a refit adds).
     """
 
     def __init__(self, effects: Sequence[str] = (), *, start: Physics | None = None,
@@ -143,7 +144,8 @@ class TableModel(Residuals):
                  calibration: Calibration | None = None,
                  baseline: float | None = None, seed: dict[str, float] | None = None,
                  frame: Frame | None = None, screen_only: bool = False,
-                 begin: np.ndarray | None = None, choose: bool = True) -> None:
+                 begin: np.ndarray | None = None,
+                 choose: bool | Sequence[str] = True) -> None:
         self.effects = tuple(effects)
         self.choose = choose
         self.frame, self.screen_only, self.begin = frame, screen_only, begin
@@ -188,8 +190,8 @@ class TableModel(Residuals):
         self.campaign_ = campaign
         # the whole values chosen: the candidate's own when there is one (the model it
         # joins chose its own when they were added), else every effect's unless kept
-        choose = {self.multistart} if self.multistart else \
-            set(start.effects) if self.choose else set()
+        choose = {self.multistart} if self.multistart else set(start.effects) \
+            if self.choose is True else set(self.choose or ())
         choices = [(name, p) for name in start.effects for p in effect(name).params
                    if p.discrete and name in choose]
         if not choices:

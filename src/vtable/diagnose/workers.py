@@ -199,6 +199,10 @@ def cluster(n: int, scheduler: str | None = None):
                     lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                       dashboard_address=":0", silence_logs=logging.CRITICAL)
                     client = Client(lc)
+            except BaseException:
+                if not any(k[1] is None for k in _CLIENTS):  # no local cluster holds it
+                    gc.unfreeze()
+                raise
             finally:
                 _FORKING.clear()
         _CLIENTS[key] = client
@@ -239,8 +243,10 @@ def running():
 
 def shutdown() -> None:
     """End every cluster this process made (a later diagnosis starts new workers); the
-    objects frozen for the local workers' fork (`cluster`) are collected again."""
+    objects frozen for the local workers' fork (`cluster`) are collected again (a freeze
+    of the program's own, without a local cluster of ours, is left alone)."""
     with _LOCK:
+        local = any(scheduler is None for _, scheduler in _CLIENTS)
         for client in _CLIENTS.values():
             with contextlib.suppress(Exception):
                 lc = client.cluster
@@ -248,7 +254,8 @@ def shutdown() -> None:
                 if lc is not None:
                     lc.close()
         _CLIENTS.clear()
-        gc.unfreeze()
+        if local:
+            gc.unfreeze()
 
 
 atexit.register(shutdown)

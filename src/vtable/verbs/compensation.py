@@ -80,7 +80,8 @@ def calibrated(runs: list[Run], effects: list[str], calibration: Calibration,
             extra = [e for e in effects if e not in diag_effects]
             if not extra and not measured_runs:
                 return reused, f"the diagnosis's final model as fitted ({from_})"
-            model = TableModel(extra, start=reused.physics_, calibration=cal)
+            model = TableModel(extra, start=reused.physics_, calibration=cal,
+                               choose=extra)  # the diagnosis's storeys kept
             return model.fit(runs + measured_runs), (
                 f"the diagnosis's final model ({from_}) refitted"
                 + (f" with {', '.join(extra)}" if extra else "")
