@@ -58,7 +58,7 @@ from vtable.diagnose.sampling import (
 from vtable.diagnose.statistics import Comparison, Gain, held_out_gain, nrms
 from vtable.display import run_family
 from vtable.errors import VtableError
-from vtable.ident.tf import frames, transfer_function
+from vtable.ident.tf import transfer_function, welch_kw
 from vtable.runs.model import Run
 
 __all__ = ["ANALYSIS_FS", "BANDS", "GROUPS", "GROUP_UNITS", "HELD_OUT", "MIN_FS",
@@ -108,7 +108,7 @@ def _localise(cmp: Comparison, pred, runs: list[Run], memo: dict) -> None:
             continue
         x = r.channel("h_span")
         n = min(1024, 2 ** int(np.log2(len(x) / 2)))
-        kw = frames(r.fs, n)
+        kw = welch_kw(r.fs, n)
         measured = memo.setdefault(r.name, {})
         if "G_xx" not in measured:
             measured["G_xx"] = scipy.signal.welch(x, **kw)[1]

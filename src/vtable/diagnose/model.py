@@ -219,13 +219,10 @@ class TableModel(Residuals):
         batch: list[dict] = [{}]
         for name in names:
             batch = [{**c, **a} for c in batch for a in proposed(name, [])]
-        best, costs, seen = None, {}, set()
-        order = list(batch[0]) if batch else []  # the (effect, parameter) of each value
+        best, costs, seen, tried = None, {}, set(), []
         while batch:
             for combo in batch:
                 key = tuple(combo.values())
-                if key in seen:
-                    continue
                 seen.add(key)
                 ph = start
                 for (name, pname), v in combo.items():
@@ -239,12 +236,11 @@ class TableModel(Residuals):
                 sub.clear_caches()
                 sub._fit_from(campaign, ph)
                 costs[key] = sub.cost_
+                tried.append(({k: v for (_, k), v in combo.items()}, sub.cost_))
                 if best is None or sub.cost_ < best.cost_:
                     best = sub
-            if len(names) != 1:
+            if len(names) != 1:  # several effects choosing: their first proposals only
                 break
-            tried = [({k: v for (_, k), v in zip(order, key, strict=True)}, c)
-                     for key, c in costs.items()]
             batch = [c for c in proposed(names[0], tried) if tuple(c.values()) not in seen]
         if best is None:
             raise VtableError(f"no value of {', '.join(f'{n}.{p.name}' for n, p in choices)} "

@@ -35,8 +35,8 @@ class TransferFunction:
         return (np.interp(f_hz, self.f, self.H.real) + 1j * np.interp(f_hz, self.f, self.H.imag))
 
 
-def frames(fs: float, nperseg: int = 2048, overlap: float = 0.5,
-           window: str = "hann") -> dict:
+def welch_kw(fs: float, nperseg: int = 2048, overlap: float = 0.5,
+             window: str = "hann") -> dict:
     """The Welch averaging `transfer_function` uses, as keywords of scipy.signal's `csd` and
     `welch` (for a caller that keeps a spectrum it reuses)."""
     return {"fs": fs, "window": window, "nperseg": nperseg,
@@ -57,7 +57,7 @@ def transfer_function(x: np.ndarray, y: np.ndarray, fs: float, nperseg: int = 20
         raise VtableError("input and output must be 1-D histories of the same length")
     if len(x) < nperseg:
         raise VtableError(f"{len(x)} samples are shorter than one {nperseg}-point frame")
-    kw = frames(fs, nperseg, overlap, window)
+    kw = welch_kw(fs, nperseg, overlap, window)
     f, Gxy = scipy.signal.csd(x, y, **kw)
     _, Gxx = scipy.signal.welch(x, **kw)
     _, Gyy = scipy.signal.welch(y, **kw)
