@@ -32,7 +32,7 @@ from vtable.diagnose.calibration import LOOP, Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare
 from vtable.diagnose.layout import with_states
-from vtable.diagnose.projected import Frame, projected_start
+from vtable.diagnose.projected import FAR, Frame, projected_start
 from vtable.diagnose.residuals import Residuals
 from vtable.diagnose.reuse import model_at
 from vtable.diagnose.secant import REFRESH, Secant
@@ -62,12 +62,8 @@ AS_IS_STEPS = 2 * SCREEN_STEPS
 #: ... and from the best grid start with the loop as declared: entrained air that the fitted
 #: loop stood in for, and Table B.5's RC filter behind it, step back from there (a README
 #: campaign with 4 % air: 0.0102 after 6, 0.0087 after 10, against 0.0096 without the
-#: filter)
+#: filter), when the fitted loop is `projected.FAR` from the declared one
 DECLARED_STEPS = 10
-#: ... when the fitted loop is this far from the declared one (fitted scale: 0.1 is ~10 %;
-#: 4 % air took f_o 43 % down, an RC filter ξ_o 22 %): closer, it has absorbed nothing
-#: worth the steps
-FAR = 0.1
 #: the last least-squares run of a fit (forward differences at every step) ends at a step
 #: that lowers the cost by less than this share of it (1e-4 flipped a real run's mount for
 #: a filter; 1e-8 spent a tenth of the run's steps on the last 1e-6)

@@ -21,10 +21,11 @@ SIAM J. Numer. Anal. 10, 1973). So, with J worked out once per round for every c
    with the current parameters, and, when the fitted servo loop is far from the declared
    one, from the loop as declared with the effect at its best there (Broyden's updates
    between steps; one start's Broyden Jacobian carried to the next misled: a platen
-   resonator missed). The first two starts are near the current model: their Jacobian
-   takes the frame's J for the parameters the current model has and forward differences
-   for the others (the effect's own: one simulation each, not one per parameter); the
-   declared loop's start takes forward differences in every parameter. An effect the
+   resonator missed). Each start's Jacobian takes, for the parameters the current model
+   has, the current model's own (the frame's J for the first two, near the current
+   model; for the declared loop's, the current model with its loop as declared,
+   linearised once for the round: `Frame.J_declared`), and forward differences for the
+   others (the effect's own: one simulation each, not one per parameter). An effect the
    fitted base had absorbed comes back only when both move together, over several steps
    the linearisation cannot see (an RC filter behind friction, entrained air; the
    table's pitch). Still not 1 % below, it is screened out — a gain of 1 % of the
@@ -70,6 +71,11 @@ SCREEN_STEPS = 6
 #: least-squares steps the current model's parameters take on the screening share before
 #: the round's candidates are screened there (`Frame.of`)
 BASE_STEPS = 6
+#: the fitted loop this far from the declared one (fitted scale: 0.1 is ~10 %; 4 % air took
+#: f_o 43 % down, an RC filter ξ_o 22 %) may stand in for an effect: a candidate is also
+#: started from the loop as declared (`TableModel`'s declared start, step 3's third);
+#: closer, it has absorbed nothing worth the steps
+FAR = 0.1
 
 
 @dataclass
@@ -85,6 +91,9 @@ class Frame:
     R: np.ndarray
     cost: float
     J: np.ndarray  # the data rows of the Jacobian itself
+    #: the data rows of the Jacobian with the loop as declared (the other parameters as
+    #: fitted), when the fitted loop is `FAR` from it; else None
+    J_declared: np.ndarray | None = None
 
     @classmethod
     def of(cls, model, physics, campaign) -> Frame:
@@ -107,7 +116,8 @@ class Frame:
                                            xtol=1e-6, ftol=1e-8, max_nfev=BASE_STEPS)
         J = J[:campaign.n_target]
         Q, R = scipy.linalg.qr(J, mode="economic")
-        return cls(tuple(p.key for p in lay), sol.x, Q, R, float(sol.fun @ sol.fun), J)
+        return cls(tuple(p.key for p in lay), sol.x, Q, R, float(sol.fun @ sol.fun), J,
+                   _declared_jacobian(secant, lay, x, lo, hi, campaign.n_target))
 
     def project(self, r: np.ndarray) -> np.ndarray:
         """r with what the current parameters take up to first order removed: P⊥ r."""
@@ -120,6 +130,30 @@ class Frame:
             return -scipy.linalg.solve_triangular(self.R, c, check_finite=False)
         except (np.linalg.LinAlgError, ValueError):
             return -np.linalg.lstsq(self.R, c, rcond=None)[0]
+
+
+def declared_loop(lay, x: np.ndarray) -> np.ndarray | None:
+    """`x` (packed, layout `lay`) with the servo loop's parameters as declared, when the
+    fitted loop is `FAR` from them (fitted scale); else None."""
+    loop = np.array([p.group == "loop" for p in lay], dtype=bool)
+    if not loop.any():
+        return None
+    declared = np.array([math.log(p.declared) if p.log else p.declared for p in lay])
+    if np.max(np.abs(declared - x)[loop]) <= FAR:
+        return None
+    return np.where(loop, declared, x)
+
+
+def _declared_jacobian(secant, lay, x: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                       n: int) -> np.ndarray | None:
+    """The data rows of the forward-difference Jacobian of the current model with its loop
+    as declared (`declared_loop`), or None when its fitted loop is near the declared one:
+    every candidate's declared start reads its base columns here (one Jacobian a round,
+    not one a candidate)."""
+    z = declared_loop(lay, x)
+    if z is None:
+        return None
+    return secant.at(np.clip(z, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)))[:n]
 
 
 def projected_start(model, full, start, lay, x0: np.ndarray, frame: Frame,
@@ -192,10 +226,12 @@ def projected_start(model, full, start, lay, x0: np.ndarray, frame: Frame,
         z = np.clip(z, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         secant = Secant(lambda q: model._cost(q, start, lay, campaign), lo, hi,
                         refresh=1 << 30)
-        if k < 2:  # near the current model: its Jacobian's columns for the parameters it
-            # has (the frame's), forward differences for the effect's own
+        base_J = frame.J if k < 2 else frame.J_declared
+        if base_J is not None:  # the current model's Jacobian's columns for the parameters
+            # it has (near it, or with the loop as declared), forward differences for the
+            # effect's own
             J = secant.at(z, others)
-            J[:n, ci] = frame.J[:, fi]
+            J[:n, ci] = base_J[:, fi]
             J[n:, ci] = prior_J
             secant.seed(z, J)
         sol = scipy.optimize.least_squares(secant.fun, z, jac=secant.jac, bounds=(lo, hi),
