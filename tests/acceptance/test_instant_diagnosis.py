@@ -223,6 +223,57 @@ def test_the_round_frame_is_refitted_on_the_screening_share():
     assert frame.J.shape == (share.n_target, len(lay))
 
 
+def test_the_declared_loop_is_linearised_once_a_round_for_every_candidates_start(monkeypatch):
+    """Where the fitted servo loop is `FAR` from the declared one, `Frame.of` also takes the
+    current model's Jacobian with its loop as declared (the other parameters as fitted):
+    it agrees with central differences there (an independent estimate), and a candidate's
+    screen started from the declared loop differences only its own parameters (one
+    Jacobian a round, not one a candidate). Near the declared loop there is none."""
+    from scipy.optimize._numdiff import approx_derivative
+
+    from vtable.diagnose import projected
+    from vtable.diagnose.projected import FAR, Frame
+
+    c = Campaign.of(truth_campaign(*FRICTION))
+    start = Physics(nominal_open_loop(c.table), c.specimen, {"actuator_friction": {}})
+    fitted = TableModel(start=start).fit(c)
+    model = TableModel()
+    model.vt, model.declared, model.campaign_ = c.table, c.specimen, c
+    share = c.training_for(fitted.physics_).screening()
+    lay = model._layout(fitted.physics_)
+    x = model._pack(fitted.physics_, lay)
+    loop = np.array([p.group == "loop" for p in lay])
+    declared = np.array([np.log(p.declared) if p.log else p.declared for p in lay])
+    near = model._unpack(np.where(loop, declared, x), fitted.physics_, lay)
+    assert Frame.of(model, near, share).J_declared is None
+    far_x = np.where(loop, declared + 3 * FAR, x)  # a loop that stood in for something
+    far = model._unpack(far_x, fitted.physics_, lay)
+    frame = Frame.of(model, far, share)
+    assert frame.J_declared is not None
+    at = np.where(loop, declared, model._pack(far, lay))
+    ref = approx_derivative(lambda z: model._cost(z, far, lay, share)[:share.n_target], at,
+                            method="3-point", rel_step=1e-4)
+    err = np.linalg.norm(frame.J_declared - ref, axis=0) / np.linalg.norm(ref, axis=0)
+    assert err.max() < 0.05, err
+    assert np.linalg.norm(frame.J_declared - frame.J) > 0.1 * np.linalg.norm(frame.J)
+
+    columns = []  # the columns every forward difference of the screen takes
+    at_cols = projected.Secant.at
+
+    def counted(self, z, cols=None):
+        columns.append(None if cols is None else len(cols))
+        return at_cols(self, z, cols)
+
+    monkeypatch.setattr(projected.Secant, "at", counted)
+    monkeypatch.setattr("vtable.diagnose.model.SCREEN", 10.0)  # no start passes: all three
+    cand = far.with_effect("force_feedback_filter")
+    m = TableModel(start=cand, multistart="force_feedback_filter", frame=frame,
+                   baseline=frame.cost, screen_only=True).fit(c)
+    assert m.screened_
+    own = len(m._layout(cand)) - len(lay)  # the filter's time constant
+    assert columns == [own] * 3, columns  # each start differences only the candidate's own
+
+
 def test_the_workers_compile_the_first_rounds_candidates_as_the_start_is_fitted():
     """`Fits.warm` starts the Dask workers and has each candidate's kernels compiled (or
     loaded) there in tasks that run before the fits submitted later; a model that cannot
