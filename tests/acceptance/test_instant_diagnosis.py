@@ -193,6 +193,18 @@ def test_the_screen_runs_on_the_first_half_of_each_training_segment():
     assert c.whole_training().screening().train_stop(s.runs[0]) == w.train_stop(s.runs[0])
 
 
+@functools.cache
+def friction_fitted():
+    """The friction campaign, the model with friction fitted on it, an unfitted estimator on
+    its table and declaration, and its screening share: (campaign, fitted, model, share)."""
+    c = Campaign.of(truth_campaign(*FRICTION))
+    start = Physics(nominal_open_loop(c.table), c.specimen, {"actuator_friction": {}})
+    fitted = TableModel(start=start).fit(c)
+    model = TableModel()
+    model.vt, model.declared, model.campaign_ = c.table, c.specimen, c
+    return c, fitted, model, c.training_for(fitted.physics_).screening()
+
+
 def test_the_round_frame_is_refitted_on_the_screening_share():
     """`Frame.of` on the screening share: the current model (fitted on the whole training
     segments) takes `BASE_STEPS` there first, so the baseline a candidate must beat by 1 %
@@ -200,12 +212,7 @@ def test_the_round_frame_is_refitted_on_the_screening_share():
     within 1 % of a converged refit (forward differences, up to 40 steps)."""
     from vtable.diagnose.projected import Frame
 
-    c = Campaign.of(truth_campaign(*FRICTION))
-    start = Physics(nominal_open_loop(c.table), c.specimen, {"actuator_friction": {}})
-    fitted = TableModel(start=start).fit(c)
-    model = TableModel()
-    model.vt, model.declared, model.campaign_ = c.table, c.specimen, c
-    share = c.training_for(fitted.physics_).screening()
+    _, fitted, model, share = friction_fitted()
     frame = Frame.of(model, fitted.physics_, share)
     lay = model._layout(fitted.physics_)
     x = model._pack(fitted.physics_, lay)
@@ -234,12 +241,7 @@ def test_the_declared_loop_is_linearised_once_a_round_for_every_candidates_start
     from vtable.diagnose import projected
     from vtable.diagnose.projected import FAR, Frame
 
-    c = Campaign.of(truth_campaign(*FRICTION))
-    start = Physics(nominal_open_loop(c.table), c.specimen, {"actuator_friction": {}})
-    fitted = TableModel(start=start).fit(c)
-    model = TableModel()
-    model.vt, model.declared, model.campaign_ = c.table, c.specimen, c
-    share = c.training_for(fitted.physics_).screening()
+    c, fitted, model, share = friction_fitted()
     lay = model._layout(fitted.physics_)
     x = model._pack(fitted.physics_, lay)
     loop = np.array([p.group == "loop" for p in lay])
