@@ -109,11 +109,6 @@ class Campaign:
     #: run -> the specimen's state it was made in ([specimen] state, or a state per run
     #: the diagnosis gives runs that do not hold one plant: `with_states`); empty: one
     state_of: dict = field(default_factory=dict)
-    #: set by a diagnosis when its time-invariant rounds are done: their model's held-out
-    #: error is above `NOISE_FACTOR` x the noise floor and the runs hold one plant (what
-    #: neither the noise nor a specimen state per run explains: a change during the runs
-    #: may, though no notch moved enough to see)
-    unexplained: bool = False
 
     #: the training targets span each run's whole first 60 % (`whole_training`), not only
     #: its first `TRAIN_MAX_S`

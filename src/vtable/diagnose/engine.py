@@ -33,7 +33,6 @@ from vtable.diagnose.compare import compare
 from vtable.diagnose.evidence import evidence_view
 from vtable.diagnose.judge import judged, not_fitted
 from vtable.diagnose.model import BASE_PARAMS, TableModel, one_blas_thread, refit_without
-from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
 from vtable.diagnose.projected import Frame
 from vtable.diagnose.prose import nothing_added
@@ -50,7 +49,7 @@ from vtable.diagnose.result import (
 )
 from vtable.diagnose.screen import nonlinearity_evidence
 from vtable.diagnose.selection import LATE, failing, preferred, preferred_note
-from vtable.diagnose.states import mixed, split
+from vtable.diagnose.states import split
 from vtable.diagnose.statistics import Comparison, held_out_gain
 from vtable.diagnose.verdict import State, diagnosis_of
 from vtable.diagnose.workers import CandidateFit
@@ -252,11 +251,6 @@ class Diagnoser:
                     break
                 drift = True
             k += 1
-            if drift:  # what accumulates: also where the time-invariant model leaves more
-                # than the noise explains (a change too small to move a notch visibly),
-                # unless runs of one campaign differ as plants (the states' to explain)
-                self.campaign.unexplained = bool(st.err > NOISE_FACTOR * self.floor) and \
-                    not mixed(self, st)
             todo, skipped = self._todo(current, late, drift)
             if not todo and not backward:
                 if not drift and late - set(current.effects):

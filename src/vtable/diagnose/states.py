@@ -27,15 +27,6 @@ from vtable.diagnose.statistics import held_out_gain
 STATES_SHARE = 0.5
 
 
-def mixed(dg, st) -> bool:
-    """Whether diagnoser `dg`'s campaign declares no states and its runs do not hold one
-    plant the current model describes (`plant_differences`): what `split` then tries. A
-    residual this leaves is the states' to explain before a change within the runs."""
-    if dg.campaign.states or len(dg.runs) < 2 or st.current is None:
-        return False
-    return bool(plant_differences(dg.runs, st.stages[-1].predictions))
-
-
 def split(dg, st) -> list[PlantDifference] | None:
     """Diagnoser `dg`'s final model refitted with a specimen state per run, where its
     campaign declares no states and its runs do not hold one plant; the refit becomes the

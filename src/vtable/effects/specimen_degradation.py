@@ -26,9 +26,8 @@ A bare table or a rigid block has no storey: where an effect stood a structure o
 platen in an undeclared specimen's place (`Assembly.add_structure`: platen_resonator), its
 spring degrades the same way, its unit of energy that at 10 mm of deformation
 (`UNDECLARED_HEIGHT`). Where no run's x_t/x_c notch (the specimen's
-fixed-base frequency) moves within the run (`vtable.diagnose.stationarity`) and the
-time-invariant model the diagnosis ends with leaves no more than the noise explains, the
-runs show no change to fit, and the effect is not tried.
+fixed-base frequency) moves within the run (`vtable.diagnose.stationarity`), the runs show
+no change to fit, and the effect is not tried.
 """
 
 from __future__ import annotations
@@ -95,15 +94,11 @@ class SpecimenDegradation(Effect):
 
     def unsupported(self, campaign):
         """Not tried where no run's x_t/x_c notch moves within the run
-        (`Campaign.notches`) and the time-invariant model leaves no more than the noise
-        explains (`Campaign.unexplained`): the runs show no change of the specimen to fit.
-        A softening too small for the notch's resolution (a low-amplitude run, a short
-        one) still leaves a residual the time-invariant model cannot take up."""
-        if getattr(campaign, "notches", None) or getattr(campaign, "unexplained", False):
+        (`Campaign.notches`): the runs show no change of the specimen to fit."""
+        if getattr(campaign, "notches", None):
             return None
         return ("no run's x_t/x_c notch (the specimen's fixed-base frequency) moves within "
-                "the run, and the time-invariant model leaves no more than the noise "
-                "explains: the runs show no change of the specimen")
+                "the run: the runs show no change of the specimen")
 
     def apply(self, m, p):
         spec = m.specimen
