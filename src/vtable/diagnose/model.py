@@ -32,7 +32,7 @@ from vtable.diagnose.calibration import LOOP, Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.compare import Comparison, compare
 from vtable.diagnose.layout import with_states
-from vtable.diagnose.projected import FAR, Frame, projected_start
+from vtable.diagnose.projected import Frame, declared_loop, projected_start
 from vtable.diagnose.residuals import Residuals
 from vtable.diagnose.reuse import model_at
 from vtable.diagnose.secant import REFRESH, Secant
@@ -275,13 +275,9 @@ class TableModel(Residuals):
                               else self.seed[lay[i].key.split(".", 1)[1]] for i in idx])
                 points.append(v)
             near = not loop.any() or np.max(np.abs(mixed - x0[base])[loop]) < 0.02
-            far = not near and np.max(np.abs(mixed - x0[base])[loop]) > FAR
+            declared_x = declared_loop(lay, x0)  # the loop as declared, when `FAR` from it
             projected = self.begin
             if projected is None and self.frame is not None and self.baseline is not None:
-                declared_x = None
-                if far:  # the loop as declared: an effect the fitted loop absorbed
-                    declared_x = x0.copy()
-                    declared_x[base] = mixed
                 projected = projected_start(self, campaign, start, lay, x0, self.frame,
                                             points, idx, SCREEN, declared_x)
                 if projected is self:  # screened out on the projected cost
@@ -328,7 +324,7 @@ class TableModel(Residuals):
             elif self.baseline is not None:  # a screened (costly) candidate: the best start
                 rivals = rivals[:1]
             rivals.append((x0.copy(), AS_IS_STEPS))
-            if far:
+            if declared_x is not None:  # an effect the fitted loop absorbed
                 rivals.append((grid[-1], DECLARED_STEPS))
             x0 = min(starts, key=lambda s: s[0])[1]
         else:
