@@ -230,13 +230,13 @@ def test_ctrl_c_while_numba_compiles_a_force_law_is_not_taken_for_a_typing_error
 
     real = ServoLaw.composition
 
-    def pending(self, extra=(), elements=()):
+    def pending(self, extra=(), elements=(), switchable=()):
         if elements:
             try:
                 raise KeyboardInterrupt
             except KeyboardInterrupt as e:
                 raise SystemError("error return without exception set") from e
-        return real(self, extra, elements)
+        return real(self, extra, elements, switchable)
 
     monkeypatch.setattr(ServoLaw, "composition", pending)
     ph = Physics(nominal_open_loop(), presets.specimen("sdof_frame"), {"storey_yield": {}})

@@ -29,6 +29,7 @@ class ActuatorFriction(Effect):
                  "force offsets")
     params = (Param("friction", "kip", 1.0, 0.01, 30.0, log=True,
                     source="assumed; total over the horizontal actuators"),)
+    stages = (FRICTION,)
 
     def apply(self, m, p):
         m.add_stage(FRICTION, friction=p["friction"] / m.table.n_horizontal, v_eps=V_EPS)

@@ -194,6 +194,11 @@ class Effect:
     #: model holding it trains on the whole first 60 % of every run, not only its first
     #: `vtable.diagnose.sampling.TRAIN_MAX_S`, since the change grows with the run's length
     accumulates: bool = False
+    #: the hydraulic stages (`vtable.hydraulics.stage.Stage`) `apply` may add: a catalog
+    #: effect's ride, switched off, in every nonlinear reduced model's compiled element
+    #: (`vtable.effects.registry.stock_stages`), so that models with and without it share
+    #: one integrator; a user's effect may leave it empty (its model compiles its own)
+    stages: tuple = ()
 
     def apply(self, m: Assembly, p: dict[str, float]) -> None:
         raise NotImplementedError(f"{type(self).__name__} must define apply(m, p)")

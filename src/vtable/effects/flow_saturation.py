@@ -28,6 +28,7 @@ class FlowSaturation(Effect):
                     1.0, 60.0, log=True, source="the table's horizontal velocity "
                     "limit (EERC: Table 2.2, 25 in/s; a table that declares none: the "
                     "range's top)"),)
+    stages = (FLOW_CAP,)
 
     def apply(self, m, p):
         m.add_stage(FLOW_CAP, max_flow=p["v_max"] * m.table.piston_area)

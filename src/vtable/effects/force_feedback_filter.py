@@ -17,6 +17,7 @@ class ForceFeedbackFilter(Effect):
                  "than the ΔP knob suggests")
     params = (Param("rc", "s", lambda t: t.rc, 1e-3, 1.0, log=True,
                     source="the table's RC (EERC: Table B.5)"),)
+    stages = (RC_FILTER,)
 
     def apply(self, m, p):
         m.add_stage(RC_FILTER, rc=p["rc"])

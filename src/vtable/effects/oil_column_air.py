@@ -39,6 +39,7 @@ class OilColumnAir(Effect):
     section = "eq 8.5, C.10"
     signature = "lower open-loop frequency f_o; a softer oil column"
     params = (Param("air_ratio", "1", 0.01, 1e-4, 0.2, log=True, source="eq C.10's r, assumed"),)
+    stages = (AIR,)
 
     def apply(self, m, p):
         m.add_stage(AIR, air_ratio=p["air_ratio"], mean_pressure=m.table.supply_pressure)

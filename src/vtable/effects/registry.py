@@ -3,11 +3,13 @@ docs/effects.md) and the ones users register from their own files."""
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 from vtable.effects.base import Effect
 from vtable.effects.verbs import check_verbs
 from vtable.errors import VtableError, did_you_mean
+from vtable.hydraulics.stage import Stage
 from vtable.userfile import Registry
 
 #: the catalog, in the spec's order (modules of vtable.effects)
@@ -52,6 +54,14 @@ EFFECTS: Registry[Effect] = Registry(
     flag="--effects-from", check=_check,
     unknown=lambda name, known: (f"unknown effect {name!r}{did_you_mean(name, known)}; the "
                                  f"registry has {', '.join(known)}"))
+
+
+@functools.cache
+def stock_stages() -> tuple[Stage, ...]:
+    """The hydraulic stages the catalog's effects may add (`Effect.stages`), in the
+    catalog's order: the reduced model's nonlinear element carries them all behind flags
+    (`vtable.hydraulics.compose`), so every set of them shares one compiled integrator."""
+    return tuple(dict.fromkeys(s for name in BUILT_IN for s in get(name).stages))
 
 
 def register(effect: Effect) -> Effect:

@@ -16,6 +16,7 @@ class ValveDynamics(Effect):
     section = "§6.2, app. C"
     signature = "extra phase lag growing with frequency; lower bandwidth"
     params = (Param("tau", "s", 0.002, 1e-4, 0.05, log=True, source="assumed"),)
+    stages = (VALVE_LAG,)
 
     def apply(self, m, p):
         # on a table that declares its valve's lag (SPOOL_LAG, LNEC's 24.6 ms) this is a

@@ -32,6 +32,7 @@ class ValveFlowNonlinearity(Effect):
     params = (Param("supply_pressure", "psi",
                     lambda t: units.from_si(t.supply_pressure, "psi"), 300.0, 6000.0,
                     log=True, source="the table's supply pressure (EERC: §2.2, 3000 psi)"),)
+    stages = (ORIFICE,)
 
     def apply(self, m, p):
         m.add_stage(ORIFICE, supply_pressure=p["supply_pressure"])

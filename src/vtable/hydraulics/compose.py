@@ -9,6 +9,13 @@ returns it. Its kernels are ``njit(cache=True)``: a process that meets the same 
 again (a diagnosis's workers) loads them compiled from numba's cache instead of
 compiling them.
 
+A stage may be *switchable* (`composition(..., switchable=...)`): its law is written in its
+place behind a flag in the parameter vector (`Composition.vector`: 1 where the stage is
+given, 0 where not, its states' rates then zero), so one compiled module serves every
+subset of those stages (the reduced model's nonlinear kernel carries the catalog's stock
+stages so: a diagnosis compiles one integrator where it compiled one for each set of
+stages it met).
+
 The integrators' loops are compiled without numba's reference counting
 (``_nrt=False``, `vtable.models.reduced_kernel._steps`), which no law that allocates an
 array can be compiled into: `counted(comp)` is the same element with the counting kept,
@@ -65,14 +72,25 @@ class Composition:
     ns: int
     linear: bool
     key: str
-    #: how it was made: (stages, templates, elements), for `counted` to make it again
+    #: how it was made: (stages, templates, elements, switchable), for `counted` to make it
+    #: again
     made: tuple = field(compare=False, repr=False)
+    #: the names of the stages written behind a flag (`composition`'s `switchable`)
+    switchable: frozenset[str] = frozenset()
 
-    def vector(self, h: ServoConstants, values: Sequence[dict[str, float]]) -> np.ndarray:
+    def vector(self, h: ServoConstants, values: Sequence[dict[str, float] | None]
+               ) -> np.ndarray:
         """The kernel's parameters: `h`'s linear constants, then each stage's named
-        parameters (`values`, in the order of `stages`)."""
-        tail = [v for s, p in zip(self.stages, values, strict=True) for v in s.values(p)]
-        return np.concatenate([constants_vector(h), np.asarray(tail, dtype=float)])
+        parameters (`values`, in the order of `stages`; None: a switchable stage left out,
+        its parameters zero), then one flag per switchable stage (1: in, 0: out)."""
+        tail, flags = [], []
+        for s, p in zip(self.stages, values, strict=True):
+            if p is None and s.name not in self.switchable:
+                raise VtableError(f"stage {s.name!r} needs its parameters")
+            tail += [0.0] * len(s.params) if p is None else s.values(p)
+            if s.name in self.switchable:
+                flags.append(0.0 if p is None else 1.0)
+        return np.concatenate([constants_vector(h), np.asarray(tail + flags, dtype=float)])
 
     def state_names(self) -> tuple[str, ...]:
         """One actuator's states: P, then each stage's."""
@@ -103,27 +121,30 @@ class ElementLaw:
 
 
 def composition(stages: Sequence[Stage], extra: Sequence[Callable] = (),
-                elements: Sequence[ElementLaw] = ()) -> Composition:
+                elements: Sequence[ElementLaw] = (), switchable: Sequence[Stage] = ()
+                ) -> Composition:
     """The compiled element of `stages` (see the module docstring); `extra`: kernels
     (njit-decorated functions of another module) written after the element's, calling its
     `dof_drive`, `fed_back`, `actuator_rates` and its states per actuator `NS`;
     `elements`: force-element laws, called by the module's `elements(q, q̇, z, p, f, ż,
     ia, ib)` on the relative motion of coordinates ia[k] and ib[k] (−1: none), given at run
-    time (one compiled module serves every coordinate, every storey)."""
-    stages = checked(stages)
+    time (one compiled module serves every coordinate, every storey); `switchable`: more
+    stages, each written behind a flag (the module docstring)."""
+    stages = checked([*stages, *switchable])
+    switched = frozenset(s.name for s in switchable)
     templates = [element.servo_rates, element.servo_step, *extra]
-    held = (*stages, *templates)
+    held = (*stages, *templates, *switchable)
     elements = tuple(elements)  # frozen, compared by value: each model builds its own
-    ident = (tuple(map(id, held)), elements)
+    ident = (tuple(map(id, held)), len(switchable), elements)
     seen = _SEEN.get(ident)
     if seen is not None and seen[0] == held:  # a model built again
         return _COUNTED.get(seen[1].key, seen[1])
-    key = _key(stages, templates, elements)
+    key = _key(stages, templates, elements, switched)
     hit = _MODULES.get(key)
     if hit is not None:
         _SEEN[ident] = (held, hit)
         return _COUNTED.get(key, hit)
-    return _compiled(stages, templates, elements, key, held, ident)
+    return _compiled(stages, templates, elements, key, held, ident, switched=switched)
 
 
 def checked(stages: Sequence[Stage]) -> tuple[Stage, ...]:
@@ -148,14 +169,14 @@ def counted(comp: Composition) -> Composition:
         return _COUNTED.get(comp.key, comp)
     # (the rule that removes `_UNCOUNTED` lives in this module, whose text names numba's
     # cache folder, the generated files' too: a change to it cannot reuse an old file)
-    stages, templates, elements = comp.made
+    stages, templates, elements, switched = comp.made
     _COUNTED[comp.key] = _compiled(stages, templates, elements, comp.key[:-1] + "c", None,
-                                   None, counting=True)
+                                   None, counting=True, switched=switched)
     return _COUNTED[comp.key]
 
 
-def _compiled(stages, templates, elements, key: str, held, ident, counting: bool = False
-              ) -> Composition:
+def _compiled(stages, templates, elements, key: str, held, ident, counting: bool = False,
+              switched: frozenset[str] = frozenset()) -> Composition:
     """The module of composition `key` written (once: its file is named by the key) and
     imported."""
     laws: list[Callable] = []
@@ -166,7 +187,7 @@ def _compiled(stages, templates, elements, key: str, held, ident, counting: bool
     path = _directory() / f"vtable_stages_{key}.py"
     if not path.exists():
         tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        text = _source(stages, templates, key, elements)
+        text = _source(stages, templates, key, elements, switched)
         tmp.write_text(text.replace(_UNCOUNTED, ")") if counting else text)
         os.replace(tmp, path)
     name = f"vtable_stages_{key}"
@@ -175,7 +196,8 @@ def _compiled(stages, templates, elements, key: str, held, ident, counting: bool
     sys.modules[name] = module
     spec.loader.exec_module(module)
     comp = Composition(stages, module, 1 + sum(s.states for s in stages),
-                       all(s.linear for s in stages), key, (stages, templates, elements))
+                       all(s.linear for s in stages), key,
+                       (stages, templates, elements, switched), switched)
     if not counting:
         _MODULES[key] = comp
         _SEEN[ident] = (held, comp)
@@ -183,9 +205,12 @@ def _compiled(stages, templates, elements, key: str, held, ident, counting: bool
 
 
 def _key(stages: tuple[Stage, ...], templates: list[Callable],
-         elements: tuple[ElementLaw, ...] = ()) -> str:
+         elements: tuple[ElementLaw, ...] = (), switched: frozenset[str] = frozenset()
+         ) -> str:
     h = hashlib.sha256()
     h.update(f"{numba.__version__} {sys.version}\n".encode())
+    if switched:
+        h.update(f"switchable {sorted(switched)}\n".encode())
     h.update(inspect.getsource(element).encode())
     for f in templates:
         h.update(inspect.getsource(getattr(f, "py_func", f)).encode())
@@ -258,8 +283,10 @@ def _elements_source(elements: tuple[ElementLaw, ...], first_law: int) -> tuple[
 
 
 def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str,
-            elements: tuple[ElementLaw, ...] = ()) -> str:
-    names = ", ".join(f"{s.kind} {s.name}" for s in stages) or "none"
+            elements: tuple[ElementLaw, ...] = (),
+            switched: frozenset[str] = frozenset()) -> str:
+    names = ", ".join(f"{s.kind} {s.name}" + (" (switchable)" if s.name in switched else "")
+                      for s in stages) or "none"
     head = [f'"""Generated by vtable.hydraulics.compose (stages: {names}). Do not edit."""',
             "", "from collections import namedtuple", "", "import numpy as np",
             "from numba import njit", "",
@@ -268,8 +295,10 @@ def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str,
             "                                       oil_column, piston_force)", "",
             f"NS = {1 + sum(s.states for s in stages)}", f'_L = laws_of("{key}")']
     calls: dict[str, list[str]] = {k: [] for k in KINDS}
-    rate = ""
+    rate: list[str] = []
+    fed: list[str] = []
     o, so, li = N_LINEAR, 1, 0  # parameter slot, state offset, law index
+    flag = N_LINEAR + sum(len(s.params) for s in stages)  # the first switch's slot
     for k, s in enumerate(stages):
         args = ", ".join(f"sp[{o + i}]" for i in range(len(s.params)))
         head.append(f"_P{k} = namedtuple('{s.name}', {tuple(s.params)!r})")
@@ -278,20 +307,37 @@ def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str,
         z = f"z[o + {so}:o + {so + s.states}]"
         dz = f"dz[o + {so}:o + {so + s.states}]"
         if s.kind == "control":
-            calls["control"].append(f"    u = _law{k}(u, qc, q, qd, {z}, {p}, {dz})")
+            line = f"u = _law{k}(u, qc, q, qd, {z}, {p}, {dz})"
         elif s.kind == "valve":
-            calls["valve"].append(f"    q = _law{k}(q, {z}, {p}, {dz})")
+            line = f"q = _law{k}(q, {z}, {p}, {dz})"
         elif s.kind == "flow":
-            calls["flow"].append(f"    q = _law{k}(q, P, {p})")
+            line = f"q = _law{k}(q, P, {p})"
         elif s.kind == "pressure":
-            calls["pressure"].append(f"    beta = _law{k}(beta, P, {p})")
+            line = f"beta = _law{k}(beta, P, {p})"
         elif s.kind == "feedback":
             head.append(f"_rate{k} = njit(_L[{li + 1}])")
-            calls["feedback"].append(f"    return _law{k}(z[o], {z}, {p})")
-            rate = f"    _rate{k}(P, dP, {z}, {p}, {dz})"
+            line = f"_rate{k}(P, dP, {z}, {p}, {dz})"
         else:
-            calls["force"].append(f"    F = _law{k}(F, v, {p})")
+            line = f"F = _law{k}(F, v, {p})"
+        if s.name in switched:  # behind its flag; left out, its states' rates are zero
+            off = [f"        dz[o + {so + i}] = 0.0" for i in range(s.states)]
+            block = [f"    if sp[{flag}] != 0.0:", f"        {line}",
+                     *(["    else:", *off] if off else [])]
+            if s.kind == "feedback":
+                fed += [f"    if sp[{flag}] != 0.0:",
+                        f"        return _law{k}(z[o], {z}, {p})"]
+            flag += 1
+        else:
+            block = [f"    {line}"]
+            if s.kind == "feedback":
+                fed.append(f"    return _law{k}(z[o], {z}, {p})")
+        if s.kind == "feedback":
+            rate = block
+        else:
+            calls[s.kind] += block
         o, so, li = o + len(s.params), so + s.states, li + 1 + (s.rate is not None)
+    if not fed or fed[-1].startswith("        "):  # no feedback stage, or one switched off
+        fed.append("    return z[o]")
     drive = (["    if not ctl:", "        return dof_error(qc, q, p, qd, g, kp, kv)",
               "    u = dof_error(qc, q, p, qd, 1.0, kp, kv)", *calls["control"],
               "    return g * u"] if calls["control"] else
@@ -299,13 +345,12 @@ def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str,
     inline = '@njit(cache=True, inline="always")'  # into `reduced_kernel._steps`'s loops
     body = ["", "", inline,
             "def dof_drive(qc, q, p, qd, g, kp, kv, z, o, sp, dz, ctl):",
-            *drive, "", "", inline, "def fed_back(z, o, sp):",
-            *(calls["feedback"] or ["    return z[o]"]),
+            *drive, "", "", inline, "def fed_back(z, o, sp):", *fed,
             "", "", inline, "def actuator_rates(z, o, drive, v, sp, dz):",
             "    P = z[o]", "    q = commanded_flow(drive, sp)", *calls["valve"],
             *calls["flow"], "    beta = bulk_modulus(sp)", *calls["pressure"],
             "    dP = oil_column(q, P, v, beta, sp)", "    dz[o] = dP",
-            *([rate] if rate else []), "    F = piston_force(P, sp)", *calls["force"],
+            *rate, "    F = piston_force(P, sp)", *calls["force"],
             "    return F", ""]
     eh, eb = _elements_source(elements, li)  # none: `elements` does nothing
     head += eh

@@ -76,11 +76,13 @@ class ServoLaw:
         """Whether every stage is linear (the loop is then a linear system)."""
         return all(s.linear for s, _ in self.stages)
 
-    def composition(self, extra: Sequence[Callable] = (), elements: Sequence = ()
-                    ) -> Composition:
+    def composition(self, extra: Sequence[Callable] = (), elements: Sequence = (),
+                    switchable: Sequence[Stage] = ()) -> Composition:
         """The compiled element of this law's stages (`compose.composition`), with force
-        elements' laws (`compose.ElementLaw`) when given."""
-        return composition([s for s, _ in self.stages], extra, elements)
+        elements' laws (`compose.ElementLaw`) when given; `switchable` stages are written
+        behind flags (this law's own among them switched on by `vector`)."""
+        fixed = [s for s, _ in self.stages if not any(s is t for t in switchable)]
+        return composition(fixed, extra, elements, switchable)
 
     def check(self) -> None:
         """A one-line error where this law's stages cannot make one element
@@ -90,7 +92,7 @@ class ServoLaw:
     def vector(self, comp: Composition) -> np.ndarray:
         """The element's parameters for `comp` (this law's composition)."""
         given = {s.name: p for s, p in self.stages}
-        return comp.vector(self.hydraulics, [given[s.name] for s in comp.stages])
+        return comp.vector(self.hydraulics, [given.get(s.name) for s in comp.stages])
 
     def with_stages(self, stages: Sequence[StageUse]) -> ServoLaw:
         return replace(self, stages=tuple(stages))

@@ -25,6 +25,7 @@ import numpy as np
 from vtable.analytic.hold import first_order_hold
 from vtable.analytic.structure import storey_channels, storey_masses
 from vtable.controllers.force_law import law_params
+from vtable.effects.registry import stock_stages
 from vtable.effects.table import TableView
 from vtable.errors import VtableError, interrupted
 from vtable.hydraulics import group_law
@@ -234,6 +235,19 @@ class ReducedAssembly:
         return order, ix, M, K, C
 
 
+def switchable(law) -> tuple[Stage, ...]:
+    """The catalog's stages (`registry.stock_stages`) a nonlinear reduced model's element
+    carries behind flags, its law's own switched on: all but one that would clash with a
+    stage of the law's own (another of the same name; a second control or feedback
+    stage)."""
+    own = [s for s, _ in law.stages]
+    stock = stock_stages()
+    fixed = [s for s in own if not any(s is t for t in stock)]
+    names = {s.name for s in fixed}
+    single = {s.kind for s in fixed} & {"control", "feedback"}
+    return tuple(s for s in stock if s.name not in names and s.kind not in single)
+
+
 _MECHANICS: dict = {}
 
 
@@ -300,17 +314,17 @@ class ReducedModel(ModalOutputs):
         self.storeys, self.h_top, self.specimen = m.storeys, m.h_top, m.specimen
         self.max_step = m.max_step
         self._law = law
-        if kernels:
-            self._element(m.elements)  # the stage set's compiled element (`element`, `sp`)
-        else:  # structure only: its stages checked, no element
-            law.check()
-            self.element = self.elem = self.sp = None
         #: its nonlinear parts: force elements, quadratic dampers, nonlinear stages of the
         #: servo law (an effect that adds none is linear, whatever model it joins)
         self.nonlinear_parts = len(m.elements) + int(np.count_nonzero(c2)) + \
             sum(not s.linear for s, _ in law.stages)
         #: a linear model is stepped exactly (`reduced_kernel.simulate_linear`)
         self.linear = (not m.elements and not np.any(c2) and law.linear and LINEAR_PATH)
+        if kernels:
+            self._element(m.elements)  # the stage set's compiled element (`element`, `sp`)
+        else:  # structure only: its stages checked, no element
+            law.check()
+            self.element = self.elem = self.sp = None
         if self.linear and kernels:
             self._linear = linear_system(self.element.module, n, self.Minv, K, C, c2, self.bF,
                                          ax, self.sp, self.T, self.Tp, self.g, self.kp,
@@ -331,8 +345,11 @@ class ReducedModel(ModalOutputs):
         self.python = False
         self.ne, self.pe = sum(e.states for e in elements), np.zeros(0)
         self.elem = None
+        # stepped by RK4, the catalog's stages ride along switched off: one integrator for
+        # every set of them (`compose`); a linear model's element is its own (its states)
+        stock = () if self.linear else switchable(law)
         if not elements:
-            self.element = law.composition(KERNELS)
+            self.element = law.composition(KERNELS, switchable=stock)
             self.sp = law.vector(self.element)
             return
         self.pe = np.concatenate([e.params for e in elements])
@@ -341,7 +358,7 @@ class ReducedModel(ModalOutputs):
                            dtype=np.int64)
         laws = tuple(ElementLaw(e.law, e.states, len(e.params), e.names) for e in elements)
         try:  # compile now: a law numba cannot type runs as Python instead (slower)
-            self.element = law.composition(KERNELS, elements=laws)
+            self.element = law.composition(KERNELS, elements=laws, switchable=stock)
             n = len(self.ix)
             self.element.module.elements(np.zeros(n), np.zeros(n), np.zeros(self.ne), self.pe,
                                          np.zeros(n), np.zeros(self.ne), self.ia, self.ib)
@@ -349,7 +366,7 @@ class ReducedModel(ModalOutputs):
         except Exception as e:  # numba's typing errors have many classes
             if interrupted(e):  # Ctrl-C while numba compiled: not a law it cannot type
                 raise KeyboardInterrupt from e
-            self.element = law.composition(KERNELS)
+            self.element = law.composition(KERNELS, switchable=stock)
             self.elem, _, self.pe = python_elements(elements, self.ix)
             self.python = True
             names = ", ".join(sorted({law_where(e.law) for e in elements}))
