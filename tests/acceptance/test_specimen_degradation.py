@@ -144,3 +144,26 @@ def test_fitted_on_the_first_60_percent_it_predicts_the_end(tmp_path_factory):
     e0, e1 = plain.score(camp), deg.score(camp)
     assert e1 < 0.5 * e0, (e0, e1)
     assert 1e-3 < deg.physics_.effects["specimen_degradation"]["delta"] < 1.0
+
+
+def test_a_short_run_alone_is_found_by_its_residual_not_its_notch(tmp_path_factory):
+    """The truth's 30 s degrading run diagnosed alone: too short to read a notch
+    (`Campaign.notches` empty: it was left unexplained, 27.5 %), but the time-invariant
+    model's residual, as a transfer function from the command, changes between the run's
+    halves (z far above the screen's); specimen_degradation is added and the error falls
+    within 2 x the floor. The same run without degradation: z within the noise."""
+    from vtable.diagnose.engine import Diagnoser
+    from vtable.diagnose.screen import Z_SCREEN, residual_change
+
+    tmp = str(tmp_path_factory.getbasetemp())
+    dg = Diagnoser([_runs(tmp)[0]])
+    d = dg.diagnose()
+    assert not dg.campaign.notches
+    assert dg.campaign.residual_change.change > 5 * Z_SCREEN
+    assert d.final_effects == ["specimen_degradation"]
+    assert d.final_error < 2.0 * dg.floor < 0.25 * d.start_error
+    steady = Diagnoser([_runs(tmp, 0.0)[0]])
+    plain = steady.diagnose()
+    assert steady.campaign.residual_change is None  # within the noise: nothing to explain
+    ev = residual_change(steady.campaign, plain.stages[-1].predictions)
+    assert ev.runs == 1 and ev.change < 0.5 * Z_SCREEN and not ev.present

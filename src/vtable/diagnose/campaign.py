@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -109,6 +110,10 @@ class Campaign:
     #: run -> the specimen's state it was made in ([specimen] state, or a state per run
     #: the diagnosis gives runs that do not hold one plant: `with_states`); empty: one
     state_of: dict = field(default_factory=dict)
+    #: set by a diagnosis when its time-invariant rounds are done and their model leaves
+    #: more than the noise explains in runs of one plant (`states.unexplained`): whether
+    #: its residual changes within a run (`screen.ChangeEvidence`); None: not asked
+    residual_change: Any = None
 
     #: the training targets span each run's whole first 60 % (`whole_training`), not only
     #: its first `TRAIN_MAX_S`

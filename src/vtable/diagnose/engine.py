@@ -49,7 +49,7 @@ from vtable.diagnose.result import (
 )
 from vtable.diagnose.screen import nonlinearity_evidence
 from vtable.diagnose.selection import LATE, failing, preferred, preferred_note
-from vtable.diagnose.states import split
+from vtable.diagnose.states import split, unexplained
 from vtable.diagnose.statistics import Comparison, held_out_gain
 from vtable.diagnose.verdict import State, diagnosis_of
 from vtable.diagnose.workers import CandidateFit
@@ -90,8 +90,7 @@ class Diagnoser:
         self.source_runs, self.runs = self.campaign.source_runs, self.campaign.runs
         for e in start_effects:
             effect(e)
-        self.notes = self.campaign.notes
-        self.vt = self.campaign.table
+        self.notes, self.vt = self.campaign.notes, self.campaign.table
         self.specimen = self.runs[0].specimen()
         self.start = Physics(nominal_open_loop(self.vt), self.specimen,
                              {e: {} for e in start_effects})
@@ -251,6 +250,8 @@ class Diagnoser:
                     break
                 drift = True
             k += 1
+            if drift:  # what accumulates: also where the model leaves a change unexplained
+                self.campaign.residual_change = unexplained(self, st)
             todo, skipped = self._todo(current, late, drift)
             if not todo and not backward:
                 if not drift and late - set(current.effects):
@@ -297,8 +298,7 @@ class Diagnoser:
             left = dict((name, fitted) for (_, name), fitted in self.fits.dispatch(
                 [(("without", e), refit_without(current, e)) for e in backward]))
             self._backward(st, backward, left, progress, done, steps, k)
-        if not reason:
-            reason = f"stopped after {self.max_rounds} rounds"
+        reason = reason or f"stopped after {self.max_rounds} rounds"
         progress(steps - 1, steps, "testing whether the runs hold one plant")
         st.plants = split(self, st)
         final_cmp = self._detail(st)

@@ -129,40 +129,103 @@ def nonlinearity_evidence(campaign: Campaign,
         if pred is None:
             ev.why_not = f"{run.name} has no prediction"
             return ev
-        x = run.channel("h_span")
-        f, s_xx = scipy.signal.welch(x, fs, nperseg=nper)
-        band = (f >= BAND_HZ[0]) & (f <= min(BAND_HZ[1], 0.45 * fs)) & \
-            (s_xx > COMMAND_SHARE * s_xx.max())
-        n_d = (len(x) - nper) // (nper // 2) + 1
-        est[run.name] = {}
-        for g in run_groups(run):
-            y, yh = group_signal(run, g), group_prediction(pred, run, g)
-            if y is None or yh is None or not np.all(np.isfinite(yh)):
-                continue
-            r = y - yh
-            _, s_rr = scipy.signal.welch(r, fs, nperseg=nper)
-            _, s_xr = scipy.signal.csd(x, r, fs, nperseg=nper)
-            k = band & (s_rr > 0)
-            if k.sum() < 4:
-                continue
-            coh = np.abs(s_xr[k]) ** 2 / (s_xx[k] * s_rr[k])
-            R = s_xr[k] / s_xx[k]
-            var = (1 - coh) * s_rr[k] / (n_d * s_xx[k])
-            est[run.name][g] = (f[k], R, var)
+        est[run.name] = _estimates(run, pred, slice(None), nper)
     for (a, ea), (b, eb) in itertools.combinations(est.items(), 2):
         for g in ea.keys() & eb.keys():
-            (fa, ra, va), (fb, rb, vb) = ea[g], eb[g]
-            _, ia, ib = np.intersect1d(fa, fb, return_indices=True)
-            v = va[ia] + vb[ib]
-            ok = v > 0
-            lines = int(ok.sum())
-            if lines < 4:
+            z = _z(ea[g], eb[g])
+            if z is None:
                 continue
             ev.pairs += 1
-            chi = float(np.sum(np.abs(ra[ia][ok] - rb[ib][ok]) ** 2 / v[ok]))
-            z = (chi - lines) / math.sqrt(LINE_CORRELATION * lines)
             if z > ev.amplitude:
                 ev.amplitude, ev.amplitude_at = z, f"{a} against {b}, {g}"
     if not ev.pairs:
         ev.why_not = "no channel group to compare between runs"
+    return ev
+
+
+def _estimates(run, pred: dict[str, np.ndarray], part: slice, nper: int
+               ) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Per channel group of `run`, on the samples `part`: the lines read (`BAND_HZ`, where
+    the command has power), the residual's H1 R from the command and its variance."""
+    fs = run.fs
+    x = run.channel("h_span")[part]
+    f, s_xx = scipy.signal.welch(x, fs, nperseg=nper)
+    band = (f >= BAND_HZ[0]) & (f <= min(BAND_HZ[1], 0.45 * fs)) & \
+        (s_xx > COMMAND_SHARE * s_xx.max())
+    n_d = (len(x) - nper) // (nper // 2) + 1
+    out = {}
+    for g in run_groups(run):
+        y, yh = group_signal(run, g), group_prediction(pred, run, g)
+        if y is None or yh is None or not np.all(np.isfinite(yh[part])):
+            continue
+        r = y[part] - yh[part]
+        _, s_rr = scipy.signal.welch(r, fs, nperseg=nper)
+        _, s_xr = scipy.signal.csd(x, r, fs, nperseg=nper)
+        k = band & (s_rr > 0)
+        if k.sum() < 4:
+            continue
+        coh = np.abs(s_xr[k]) ** 2 / (s_xx[k] * s_rr[k])
+        out[g] = (f[k], s_xr[k] / s_xx[k], (1 - coh) * s_rr[k] / (n_d * s_xx[k]))
+    return out
+
+
+def _z(ea: tuple, eb: tuple) -> float | None:
+    """How far two estimates of the residual's H1 differ: z = (χ² − L) / √(c L) over the
+    lines both read (the module docstring); None on fewer than four lines."""
+    (fa, ra, va), (fb, rb, vb) = ea, eb
+    _, ia, ib = np.intersect1d(fa, fb, return_indices=True)
+    v = va[ia] + vb[ib]
+    ok = v > 0
+    lines = int(ok.sum())
+    if lines < 4:
+        return None
+    chi = float(np.sum(np.abs(ra[ia][ok] - rb[ib][ok]) ** 2 / v[ok]))
+    return (chi - lines) / math.sqrt(LINE_CORRELATION * lines)
+
+
+@dataclass
+class ChangeEvidence:
+    """Whether a run's residual changes between its halves: the largest statistic z (as
+    the amplitude screen's) over the runs whose command is steady (the halves' RMS within
+    `AMPLITUDES`: else a nonlinearity's amplitude dependence would read as a change) and
+    their channel groups, where, and how many runs were compared."""
+
+    change: float = 0.0
+    change_at: str = ""
+    runs: int = 0
+
+    @property
+    def present(self) -> bool:
+        return self.change > Z_SCREEN
+
+    def text(self) -> str:
+        if not self.runs:
+            return "no run has a steady command long enough to compare its halves"
+        return (f"the time-invariant model's residual, as a transfer function from the "
+                f"command, differs between the halves of a run by at most {self.change:.1f} "
+                f"standard deviations of its estimates" +
+                (f" ({self.change_at})" if self.change_at else "") + f" (needs {Z_SCREEN:g})")
+
+
+def residual_change(campaign: Campaign, predictions: dict[str, dict[str, np.ndarray]]
+                    ) -> ChangeEvidence:
+    """The residual's H1 from the command on the first half of each run against its second
+    half (`ChangeEvidence`), on `predictions` (whole runs) of a time-invariant model: a
+    specimen that changes during the run changes it, the noise alone by z ≈ 0."""
+    ev = ChangeEvidence()
+    for run in campaign.runs:
+        pred = predictions.get(run.name)
+        x = run.channel("h_span")
+        h = len(x) // 2
+        nper = 1 << math.floor(math.log2(2 * h / (MIN_AVERAGES + 1))) if h > 0 else 0
+        a, b = float(np.std(x[:h])), float(np.std(x[h:2 * h]))
+        if pred is None or nper < 64 or not min(a, b) > 0 or max(a, b) / min(a, b) > AMPLITUDES:
+            continue
+        first = _estimates(run, pred, slice(0, h), nper)
+        last = _estimates(run, pred, slice(h, 2 * h), nper)
+        ev.runs += 1
+        for g in first.keys() & last.keys():
+            z = _z(first[g], last[g])
+            if z is not None and z > ev.change:
+                ev.change, ev.change_at = z, f"{run.name}, {g}"
     return ev

@@ -16,8 +16,10 @@ from __future__ import annotations
 from typing import Any
 
 from vtable.diagnose.compare import compare
+from vtable.diagnose.noise import NOISE_FACTOR
 from vtable.diagnose.plants import PlantDifference, plant_differences
 from vtable.diagnose.result import DiagnosisStage
+from vtable.diagnose.screen import ChangeEvidence, residual_change
 from vtable.diagnose.selection import failing
 from vtable.diagnose.statistics import held_out_gain
 
@@ -25,6 +27,25 @@ from vtable.diagnose.statistics import held_out_gain
 #: `selection.MIN_SHARE`; the states bring a specimen's parameters per run, and a model-form
 #: difference between runs of one specimen, a law not quite the truth's, is not a state)
 STATES_SHARE = 0.5
+
+
+def mixed(dg, st) -> bool:
+    """Whether diagnoser `dg`'s campaign declares no states and its runs do not hold one
+    plant the current model describes (`plant_differences`): what `split` then tries. A
+    residual this leaves is the states' to explain before a change within the runs."""
+    if dg.campaign.states or len(dg.runs) < 2 or st.current is None:
+        return False
+    return bool(plant_differences(dg.runs, st.stages[-1].predictions))
+
+
+def unexplained(dg, st) -> ChangeEvidence | None:
+    """What the current (time-invariant) model's residual says of a change within the runs
+    (`screen.residual_change`), where its held-out error is above `NOISE_FACTOR` x the noise
+    floor and the runs hold one plant (`mixed`: else the states explain it first); None
+    where neither: nothing left to explain by a change."""
+    if not st.err > NOISE_FACTOR * dg.floor or mixed(dg, st):
+        return None
+    return residual_change(dg.campaign, st.stages[-1].predictions)
 
 
 def split(dg, st) -> list[PlantDifference] | None:

@@ -26,8 +26,10 @@ A bare table or a rigid block has no storey: where an effect stood a structure o
 platen in an undeclared specimen's place (`Assembly.add_structure`: platen_resonator), its
 spring degrades the same way, its unit of energy that at 10 mm of deformation
 (`UNDECLARED_HEIGHT`). Where no run's x_t/x_c notch (the specimen's
-fixed-base frequency) moves within the run (`vtable.diagnose.stationarity`), the runs show
-no change to fit, and the effect is not tried.
+fixed-base frequency) moves within the run (`vtable.diagnose.stationarity`) and the
+time-invariant model's residual, as a transfer function from the command, is the same in
+a run's two halves (`vtable.diagnose.screen.residual_change`), the runs show no change to
+fit, and the effect is not tried.
 """
 
 from __future__ import annotations
@@ -94,11 +96,17 @@ class SpecimenDegradation(Effect):
 
     def unsupported(self, campaign):
         """Not tried where no run's x_t/x_c notch moves within the run
-        (`Campaign.notches`): the runs show no change of the specimen to fit."""
-        if getattr(campaign, "notches", None):
+        (`Campaign.notches`) and the time-invariant model's residual does not change
+        between a run's halves (`Campaign.residual_change`, asked where that model leaves
+        more than the noise explains): the runs show no change of the specimen to fit. A
+        softening too small for the notch's resolution (a short run, a low-amplitude one)
+        still changes the residual."""
+        change = getattr(campaign, "residual_change", None)
+        if getattr(campaign, "notches", None) or (change is not None and change.present):
             return None
         return ("no run's x_t/x_c notch (the specimen's fixed-base frequency) moves within "
-                "the run: the runs show no change of the specimen")
+                "the run" + (f", and {change.text()}" if change is not None else "") +
+                ": the runs show no change of the specimen")
 
     def apply(self, m, p):
         spec = m.specimen
