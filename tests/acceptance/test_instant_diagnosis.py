@@ -304,6 +304,39 @@ def test_the_workers_compile_the_first_rounds_candidates_as_the_start_is_fitted(
         fits.close()
 
 
+def test_no_thread_is_writing_a_log_record_when_the_workers_fork():
+    """While this process forks (its workers), every log handler's lock is held
+    (`workers.hold_logs`, before the fork; `let_logs_go` after it, in this process): no
+    other thread is inside a stream's write then, whose lock the child would inherit held
+    (a worker hung on its first log line so). A record another thread emits meanwhile waits
+    and is written after."""
+    import io
+    import logging
+    import threading
+
+    from vtable.diagnose import workers
+
+    stream = io.StringIO()
+    h = logging.StreamHandler(stream)
+    lg = logging.getLogger("vtable-test-fork")
+    lg.addHandler(h)
+    lg.setLevel(logging.INFO)
+    try:
+        workers.hold_logs()
+        assert h in workers._HELD
+        t = threading.Thread(target=lg.info, args=("written after the fork",))
+        t.start()
+        t.join(0.3)
+        assert t.is_alive() and stream.getvalue() == ""
+        workers.let_logs_go()
+        t.join(10)
+        assert not t.is_alive() and stream.getvalue() == "written after the fork\n"
+        assert not workers._HELD
+    finally:
+        workers.let_logs_go()
+        lg.removeHandler(h)
+
+
 def test_the_heap_is_frozen_for_the_workers_fork_until_they_end(monkeypatch):
     """The local workers are forked with this process's objects out of the collector's
     sight (`gc.freeze`: the imports' and the campaign's, tens of thousands), given back

@@ -165,5 +165,25 @@ def test_a_short_run_alone_is_found_by_its_residual_not_its_notch(tmp_path_facto
     steady = Diagnoser([_runs(tmp, 0.0)[0]])
     plain = steady.diagnose()
     assert steady.campaign.residual_change is None  # within the noise: nothing to explain
+    assert "no change of the specimen" in effect("specimen_degradation").unsupported(
+        steady.campaign)
+    assert plain.final_effects == []
     ev = residual_change(steady.campaign, plain.stages[-1].predictions)
     assert ev.runs == 1 and ev.change < 0.5 * Z_SCREEN and not ev.present
+
+
+def test_only_a_steady_command_s_halves_are_compared():
+    """A run's halves are compared where its command is at one amplitude with one spectrum:
+    a random command is; one whose second half is a third as strong (an earthquake's coda)
+    is not, nor a sweep (its band powers differ), so neither reads as a change."""
+    from vtable.diagnose.screen import _steady
+
+    fs, n = 200.0, 6000
+    rng = np.random.default_rng(3)
+    white = np.convolve(rng.standard_normal(n), np.ones(4) / 4, mode="same")
+    t = np.arange(n) / fs
+    sweep = np.sin(2 * np.pi * (0.5 * t + 0.5 * (20.0 / t[-1]) * t ** 2))
+    coda = white * np.where(t < t[-1] / 2, 1.0, 1.0 / 3.0)
+    assert _steady(white, n // 2, fs)
+    assert not _steady(sweep, n // 2, fs)
+    assert not _steady(coda, n // 2, fs)

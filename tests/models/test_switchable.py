@@ -13,6 +13,7 @@ from vtable.hydraulics.stage import Stage
 from vtable.models import reduced
 from vtable.models.physics import Physics, nominal_open_loop
 from vtable.models.reduced import ReducedModel
+from vtable.models.reduced_kernel import simulate_reduced
 from vtable.params import presets
 
 #: stage sets that exercise each kind behind its flag: a force stage alone; two flow
@@ -105,3 +106,15 @@ def test_a_users_stage_named_as_a_catalog_one_is_its_own_not_the_catalogs():
     assert law.vector(comp)[-len(stock):].tolist() == [0.0] * len(stock)
     with pytest.raises(VtableError, match="needs its parameters"):
         comp.vector(law.hydraulics, [None] * len(comp.stages))
+    # stepped: the user's law, as the element of its own stages steps it, not the catalog's
+    t, x = _command()
+    m = base
+    stepped = []
+    for c in (comp, law.composition(reduced.KERNELS), m.element):
+        sp = law.vector(c) if c is not m.element else m.sp
+        stepped.append(simulate_reduced(c.module, x, t[1] - t[0], m.M.shape[0], m.Minv, m.K,
+                                        m.C, m.c2, m.bF, m.ax, sp, m.T, m.Tp, m.g, m.kp, m.kv,
+                                        m.Aw, m.Wq, m.Wv, m.Fw)[3])
+    assert np.array_equal(stepped[0], stepped[1])
+    # the catalog's friction (1 kip) differs from the user's doubled 5 kN by several kN
+    assert np.max(np.abs(stepped[0] - stepped[2])) > 0.1 * 2.0 * 5e3

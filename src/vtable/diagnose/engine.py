@@ -91,6 +91,7 @@ class Diagnoser:
         for e in start_effects:
             effect(e)
         self.notes, self.vt = self.campaign.notes, self.campaign.table
+        self.campaign.residual_change = None  # asked by this diagnosis (`states.unexplained`)
         self.specimen = self.runs[0].specimen()
         self.start = Physics(nominal_open_loop(self.vt), self.specimen,
                              {e: {} for e in start_effects})
@@ -99,8 +100,7 @@ class Diagnoser:
             effect(e)
         # the effects' defaults and what the runs show of them (`SELECTION`'s prior)
         self.table_view = evidence_view(self.vt, self.catalog, self.campaign, self.notes)
-        self.progress = progress or (lambda i, n, s: None)
-        self.max_rounds = max_rounds
+        self.progress, self.max_rounds = progress or (lambda i, n, s: None), max_rounds
         self.floor, self._spectra = self.campaign.floor, {}  # `compare`'s memo of the runs
         self.calibration = calibration or Calibration()
         self.fits = Fits(self.campaign, self.catalog, self.workers, self.calibration,

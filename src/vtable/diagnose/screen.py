@@ -60,6 +60,12 @@ Z_SCREEN = 12.0
 AMPLITUDES = 1.2
 #: a line is read where the command has at least this share of its peak power
 COMMAND_SHARE = 1e-4
+#: a run's halves are compared (`residual_change`) where the command is steady: at one
+#: amplitude (`AMPLITUDES`) and with each analysis band holding this share of its power ...
+BAND_SHARE = 0.01
+#: ... within this factor in both halves (a random command's bands scatter by up to 1.5
+#: between 15 s halves; a sweep's or an earthquake's differ by far more)
+BAND_SPREAD = 2.0
 
 
 @dataclass
@@ -129,7 +135,7 @@ def nonlinearity_evidence(campaign: Campaign,
         if pred is None:
             ev.why_not = f"{run.name} has no prediction"
             return ev
-        est[run.name] = _estimates(run, pred, slice(None), nper)
+        est[run.name] = _estimates(run, pred, slice(None), nper, fs)
     for (a, ea), (b, eb) in itertools.combinations(est.items(), 2):
         for g in ea.keys() & eb.keys():
             z = _z(ea[g], eb[g])
@@ -143,11 +149,11 @@ def nonlinearity_evidence(campaign: Campaign,
     return ev
 
 
-def _estimates(run, pred: dict[str, np.ndarray], part: slice, nper: int
+def _estimates(run, pred: dict[str, np.ndarray], part: slice, nper: int, fs: float
                ) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """Per channel group of `run`, on the samples `part`: the lines read (`BAND_HZ`, where
+    """Per channel group of `run`, on the samples `part` at the rate `fs` (one for every
+    estimate compared: their lines are matched exactly): the lines read (`BAND_HZ`, where
     the command has power), the residual's H1 R from the command and its variance."""
-    fs = run.fs
     x = run.channel("h_span")[part]
     f, s_xx = scipy.signal.welch(x, fs, nperseg=nper)
     band = (f >= BAND_HZ[0]) & (f <= min(BAND_HZ[1], 0.45 * fs)) & \
@@ -186,9 +192,10 @@ def _z(ea: tuple, eb: tuple) -> float | None:
 @dataclass
 class ChangeEvidence:
     """Whether a run's residual changes between its halves: the largest statistic z (as
-    the amplitude screen's) over the runs whose command is steady (the halves' RMS within
-    `AMPLITUDES`: else a nonlinearity's amplitude dependence would read as a change) and
-    their channel groups, where, and how many runs were compared."""
+    the amplitude screen's) over the runs whose command is steady (`_steady`: else a
+    nonlinearity's amplitude dependence, or the estimator's bias between different
+    spectra, would read as a change)
+    and their channel groups, where, and how many runs were compared."""
 
     change: float = 0.0
     change_at: str = ""
@@ -200,7 +207,8 @@ class ChangeEvidence:
 
     def text(self) -> str:
         if not self.runs:
-            return "no run has a steady command long enough to compare its halves"
+            return ("no run has a steady command and a prediction long enough to compare "
+                    "its halves")
         return (f"the time-invariant model's residual, as a transfer function from the "
                 f"command, differs between the halves of a run by at most {self.change:.1f} "
                 f"standard deviations of its estimates" +
@@ -211,21 +219,38 @@ def residual_change(campaign: Campaign, predictions: dict[str, dict[str, np.ndar
                     ) -> ChangeEvidence:
     """The residual's H1 from the command on the first half of each run against its second
     half (`ChangeEvidence`), on `predictions` (whole runs) of a time-invariant model: a
-    specimen that changes during the run changes it, the noise alone by z ≈ 0."""
+    specimen that changes during the run changes it; the noise alone leaves z near 0 (3-4
+    measured on the truth's steady random runs)."""
     ev = ChangeEvidence()
     for run in campaign.runs:
         pred = predictions.get(run.name)
         x = run.channel("h_span")
         h = len(x) // 2
-        nper = 1 << math.floor(math.log2(2 * h / (MIN_AVERAGES + 1))) if h > 0 else 0
-        a, b = float(np.std(x[:h])), float(np.std(x[h:2 * h]))
-        if pred is None or nper < 64 or not min(a, b) > 0 or max(a, b) / min(a, b) > AMPLITUDES:
+        if pred is None or 2 * h / (MIN_AVERAGES + 1) < 64 or not _steady(x, h, run.fs):
             continue
-        first = _estimates(run, pred, slice(0, h), nper)
-        last = _estimates(run, pred, slice(h, 2 * h), nper)
-        ev.runs += 1
-        for g in first.keys() & last.keys():
-            z = _z(first[g], last[g])
-            if z is not None and z > ev.change:
+        nper = 1 << math.floor(math.log2(2 * h / (MIN_AVERAGES + 1)))
+        first = _estimates(run, pred, slice(0, h), nper, run.fs)
+        last = _estimates(run, pred, slice(h, 2 * h), nper, run.fs)
+        zs = [(z, g) for g in first.keys() & last.keys()
+              if (z := _z(first[g], last[g])) is not None]
+        ev.runs += bool(zs)
+        for z, g in zs:
+            if z > ev.change:
                 ev.change, ev.change_at = z, f"{run.name}, {g}"
     return ev
+
+
+def _steady(x: np.ndarray, h: int, fs: float) -> bool:
+    """Whether the command `x`'s two halves (`h` samples each) are at one amplitude (RMS
+    within `AMPLITUDES`) with one spectrum (the power of each analysis band holding
+    `BAND_SHARE` of the whole within `BAND_SPREAD`)."""
+    p = []
+    for part in (x[:h], x[h:2 * h]):
+        f, s = scipy.signal.welch(part, fs, nperseg=min(len(part), 256))
+        p.append(np.array([float(np.sum(s[(f >= lo) & (f < hi)])) for lo, hi in BANDS]))
+    a, b = p
+    if not min(a.sum(), b.sum()) > 0 or max(a.sum(), b.sum()) > AMPLITUDES ** 2 * min(
+            a.sum(), b.sum()):
+        return False
+    used = (a > BAND_SHARE * a.sum()) | (b > BAND_SHARE * b.sum())
+    return bool(np.all(np.maximum(a, b)[used] <= BAND_SPREAD * np.minimum(a, b)[used]))

@@ -41,8 +41,9 @@ def mixed(dg, st) -> bool:
 def unexplained(dg, st) -> ChangeEvidence | None:
     """What the current (time-invariant) model's residual says of a change within the runs
     (`screen.residual_change`), where its held-out error is above `NOISE_FACTOR` x the noise
-    floor and the runs hold one plant (`mixed`: else the states explain it first); None
-    where neither: nothing left to explain by a change."""
+    floor and the runs hold one plant; None otherwise. Runs that differ as plants (`mixed`)
+    are the states' to explain (`split`, after the rounds), not a change within a run: a
+    campaign whose specimen changes from run to run is read so, not as degrading."""
     if not st.err > NOISE_FACTOR * dg.floor or mixed(dg, st):
         return None
     return residual_change(dg.campaign, st.stages[-1].predictions)

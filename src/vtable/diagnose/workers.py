@@ -227,8 +227,34 @@ def _fork_safe() -> None:
             max_workers=1, thread_name_prefix="Dask-Offload")
         if _FORKING.is_set():
             signal.signal(signal.SIGINT, signal.SIG_IGN)
+        _HELD.clear()  # logging gives the child fresh handler locks
 
-    os.register_at_fork(after_in_child=fresh)
+    os.register_at_fork(before=hold_logs, after_in_parent=let_logs_go, after_in_child=fresh)
+
+
+#: the log handlers whose locks this process holds while it forks (`hold_logs`)
+_HELD: list = []
+
+
+def hold_logs() -> None:
+    """Take every log handler's lock before this process forks, so that no other thread is
+    writing a record at that moment: a stream's own lock, held then, would be held for ever
+    in the child, and a worker's first log line would wait for it (a test run hung so:
+    a forked worker in `StreamHandler.flush`, the scheduler's thread logging as the nanny
+    forked). logging renews the handlers' locks in the child; `let_logs_go` releases them
+    here."""
+    loggers = [logging.getLogger(), *(v for v in list(logging.Logger.manager.loggerDict.values())
+                                      if isinstance(v, logging.Logger))]
+    handlers = list(dict.fromkeys(h for lg in loggers for h in lg.handlers))
+    for h in handlers:
+        h.acquire()
+        _HELD.append(h)
+
+
+def let_logs_go() -> None:
+    """Release what `hold_logs` took (in the forking process, after the fork)."""
+    while _HELD:
+        _HELD.pop().release()
 
 
 def running():

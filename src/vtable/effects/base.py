@@ -196,8 +196,9 @@ class Effect:
     accumulates: bool = False
     #: the hydraulic stages (`vtable.hydraulics.stage.Stage`) `apply` may add: a catalog
     #: effect's ride, switched off, in every nonlinear reduced model's compiled element
-    #: (`vtable.effects.registry.stock_stages`), so that models with and without it share
-    #: one integrator; a user's effect may leave it empty (its model compiles its own)
+    #: (`vtable.effects.registry.stock_stages`, read from the catalog's effects only), so
+    #: that models with and without it share one integrator; a user's stage is compiled
+    #: into each set of stages it joins, whatever this says
     stages: tuple = ()
 
     def apply(self, m: Assembly, p: dict[str, float]) -> None:
