@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from vtable.diagnose.noise import NOISE_FACTOR
+from vtable.diagnose.noise import NOISE_FACTOR, within_noise
 from vtable.effects.registry import get as effect
 from vtable.effects.registry import names
 
@@ -40,7 +40,7 @@ def headline(added: list[str], start: float | None, final: float | None, floor: 
         return ("interrupted before the starting model was fitted" if interrupted
                 else "no model was fitted")[:HEADLINE_MAX]
     errors = f"{_pct(start)} -> {_pct(final)}" if added else _pct(final)
-    verdict = ("within the noise" if floor > 0 and final <= NOISE_FACTOR * floor
+    verdict = ("within the noise" if within_noise(final, floor)
                else f"{final / floor:.1f} x the floor" if floor > 0 else "")
     lead = "interrupted; " if interrupted else ""
     names = list(added)

@@ -28,6 +28,12 @@ UNEXPLAINED_RULE = (f"unexplained is null when the final error <= {NOISE_FACTOR:
                     "2 s window)")
 
 
+def within_noise(error: float, floor: float) -> bool:
+    """Whether a held-out `error` is consistent with the noise `floor` alone
+    (`UNEXPLAINED_RULE`: at most `NOISE_FACTOR` x a positive floor)."""
+    return floor > 0 and error <= NOISE_FACTOR * floor
+
+
 #: redundant sensors measuring the same quantity (their difference is noise)
 PAIRS = (("h1_disp", "h3_disp"), ("acc_n_ne", "acc_n_nw"), ("pot_n_sw", "pot_n_se"))
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 from typing import Any
 
 from vtable.diagnose.groups import short
-from vtable.diagnose.noise import NOISE_FACTOR
+from vtable.diagnose.noise import within_noise
 from vtable.diagnose.statistics import Comparison
 from vtable.display import amplitude
 from vtable.params.specimen import NoSpecimen
@@ -53,7 +53,7 @@ def unexplained(cmp: Comparison) -> dict[str, Any] | None:
     """None when cmp.error <= NOISE_FACTOR x the noise floor, else the ratio and where the
     residual lives (UNEXPLAINED_RULE)."""
     floor = cmp.noise_floor
-    if floor > 0 and cmp.error <= NOISE_FACTOR * floor:
+    if within_noise(cmp.error, floor):
         return None
     ratio = cmp.error / floor if floor > 0 else float("inf")
     return {"ratio_to_floor": ratio, "where": residual_location(cmp)}

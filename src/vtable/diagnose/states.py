@@ -16,7 +16,7 @@ from __future__ import annotations
 from typing import Any
 
 from vtable.diagnose.compare import compare
-from vtable.diagnose.noise import NOISE_FACTOR
+from vtable.diagnose.noise import within_noise
 from vtable.diagnose.plants import PlantDifference, plant_differences
 from vtable.diagnose.result import DiagnosisStage
 from vtable.diagnose.screen import ChangeEvidence, residual_change
@@ -29,22 +29,26 @@ from vtable.diagnose.statistics import held_out_gain
 STATES_SHARE = 0.5
 
 
-def mixed(dg, st) -> bool:
-    """Whether diagnoser `dg`'s campaign declares no states and its runs do not hold one
-    plant the current model describes (`plant_differences`): what `split` then tries. A
-    residual this leaves is the states' to explain before a change within the runs."""
+def differences(dg, st) -> list[PlantDifference] | None:
+    """The pairs of diagnoser `dg`'s runs that do not hold one plant the current model
+    describes (`plant_differences` of its stage's predictions, worked out once for them),
+    or None where not asked: the campaign declares its states, has one run, or no model
+    is fitted yet."""
     if dg.campaign.states or len(dg.runs) < 2 or st.current is None:
-        return False
-    return bool(plant_differences(dg.runs, st.stages[-1].predictions))
+        return None
+    pred = st.stages[-1].predictions
+    if st.plant_pairs is None or st.plant_pairs[0] is not pred:
+        st.plant_pairs = (pred, plant_differences(dg.runs, pred))
+    return st.plant_pairs[1]
 
 
 def unexplained(dg, st) -> ChangeEvidence | None:
     """What the current (time-invariant) model's residual says of a change within the runs
     (`screen.residual_change`), where its held-out error is above `NOISE_FACTOR` x the noise
-    floor and the runs hold one plant; None otherwise. Runs that differ as plants (`mixed`)
+    floor and the runs hold one plant; None otherwise. Runs that differ as plants
     are the states' to explain (`split`, after the rounds), not a change within a run: a
     campaign whose specimen changes from run to run is read so, not as degrading."""
-    if not st.err > NOISE_FACTOR * dg.floor or mixed(dg, st):
+    if within_noise(st.err, dg.floor) or differences(dg, st):
         return None
     return residual_change(dg.campaign, st.stages[-1].predictions)
 
@@ -56,11 +60,9 @@ def split(dg, st) -> list[PlantDifference] | None:
     runs that differed before it (empty: none), None when not looked for (the campaign
     declares its states, has one run, or the model is not calibrated)."""
     camp = dg.campaign
-    if camp.states or len(dg.runs) < 2 or st.current is None or not dg.calibration.enabled:
-        return None
-    pairs = plant_differences(dg.runs, st.stages[-1].predictions)
+    pairs = differences(dg, st) if dg.calibration.enabled else None
     if not pairs:
-        return []
+        return pairs
     per_run = camp.with_states({r.name: r.name for r in dg.runs})
     m = dg.model(st.current, choose=False).fit(per_run)
     pred = m.predictions(per_run)

@@ -11,7 +11,7 @@ from typing import Any
 from vtable.diagnose.bounds import base_at_bounds, bounds_verdict
 from vtable.diagnose.findings import findings, headline
 from vtable.diagnose.limits import limits
-from vtable.diagnose.noise import NOISE_FACTOR
+from vtable.diagnose.noise import NOISE_FACTOR, within_noise
 from vtable.diagnose.plants import plant_differences
 from vtable.diagnose.prose import unexplained
 from vtable.diagnose.result import Diagnosis, DiagnosisStage, Round
@@ -41,6 +41,9 @@ class State:
     #: and whether the campaign was then fitted with a specimen state per run
     plants: list | None = None
     split: bool = False
+    #: (predictions, the pairs of runs they leave differing as plants): worked out once
+    #: for a stage's predictions (`states.differences`)
+    plant_pairs: tuple | None = None
 
 
 
@@ -55,7 +58,7 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
     unexp = None
     if final_cmp is not None:
         unexp = unexplained(final_cmp)
-    elif err is not None and not (floor > 0 and err <= NOISE_FACTOR * floor):
+    elif err is not None and not within_noise(err, floor):
         unexp = {"ratio_to_floor": err / floor if floor > 0 else float("inf"),
                  "where": "not localised (the diagnosis was interrupted)"}
     parts = []

@@ -336,8 +336,8 @@ def _source(stages: tuple[Stage, ...], templates: list[Callable], key: str,
         else:
             calls[s.kind] += block
         o, so, li = o + len(s.params), so + s.states, li + 1 + (s.rate is not None)
-    if not fed or fed[-1].startswith("        "):  # no feedback stage, or one switched off
-        fed.append("    return z[o]")
+    if not any(s.kind == "feedback" and s.name not in switched for s in stages):
+        fed.append("    return z[o]")  # no feedback stage, or one switched off
     drive = (["    if not ctl:", "        return dof_error(qc, q, p, qd, g, kp, kv)",
               "    u = dof_error(qc, q, p, qd, 1.0, kp, kv)", *calls["control"],
               "    return g * u"] if calls["control"] else
