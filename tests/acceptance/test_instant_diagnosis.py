@@ -230,6 +230,47 @@ def test_the_round_frame_is_refitted_on_the_screening_share():
     assert frame.J.shape == (share.n_target, len(lay))
 
 
+def test_a_backward_refit_far_above_the_model_stops_after_its_first_steps(monkeypatch):
+    """A backward step's refit, the model without one effect, under a ceiling of
+    `BACKWARD_FACTOR` times the model's cost. The pitch campaign's model without its pitch:
+    after `SCREEN_STEPS` least-squares iterations, far above the ceiling, it stops there,
+    screened, within 1.5 x what the refit reaches in full (itself ~1000 x the model's: the
+    same call), in under half its simulations. The friction campaign's without its
+    friction comes below the ceiling (3.5 x): refitted as without one, to the bit."""
+    from vtable.diagnose.model import BACKWARD_FACTOR, refit_without
+
+    evals = [0]
+    cost = TableModel._cost
+
+    def counted(self, *a, **kw):
+        evals[0] += 1
+        return cost(self, *a, **kw)
+
+    monkeypatch.setattr(TableModel, "_cost", counted)
+
+    def refit(c, **kw):
+        evals[0] = 0
+        return TableModel(**kw).fit(c), evals[0]
+
+    c = Campaign.of(truth_campaign(*PITCH))
+    fitted = TableModel(["pitch_flexibility"]).fit(c)
+    job = refit_without(fitted.physics_, "pitch_flexibility", fitted.cost_, c)
+    assert job["ceiling"] == BACKWARD_FACTOR * fitted.cost_
+    screened, n_screened = refit(c, **job)
+    full, n_full = refit(c, start=job["start"], choose=False)
+    assert screened.screened_ and not full.screened_
+    assert full.cost_ > 10 * BACKWARD_FACTOR * fitted.cost_, (full.cost_, fitted.cost_)
+    assert full.cost_ <= screened.cost_ <= 1.5 * full.cost_, (screened.cost_, full.cost_)
+    assert n_screened < n_full / 2, (n_screened, n_full)
+    c, fitted, _, _ = friction_fitted()
+    job = refit_without(fitted.physics_, "actuator_friction", fitted.cost_, c)
+    under, _ = refit(c, **job)
+    full, _ = refit(c, start=job["start"], choose=False)
+    assert 2 * fitted.cost_ < full.cost_ < BACKWARD_FACTOR * fitted.cost_
+    assert not under.screened_ and under.cost_ == full.cost_
+    assert under.physics_ == full.physics_
+
+
 def test_the_declared_loop_is_linearised_once_a_round_for_every_candidates_start(monkeypatch):
     """Where the fitted servo loop is `FAR` from the declared one, `Frame.of` also takes the
     current model's Jacobian with its loop as declared (the other parameters as fitted):

@@ -223,8 +223,7 @@ class Diagnoser:
         progress(done, steps, "fitting the starting model")
         late = {e for e in self.catalog if effect(e).accumulates}
         drift = not set(self.catalog) - late  # the round of what accumulates over a run
-        # the first round's candidates compiled by the workers meanwhile: nonlinear first
-        # (their integrators take longest to compile)
+        # the first round's candidates compiled by the workers meanwhile, nonlinear first
         first = [self.start.with_effect(e) for e in self._todo(self.start, late, drift)[0]]
         self.fits.warm(sorted(first, key=self._linear))
         fitted = self.fit(self.start)
@@ -296,7 +295,8 @@ class Diagnoser:
                 drift, reason = True, why  # now what accumulates over a run
         if backward:  # the rounds ran out right after an addition
             left = dict((name, fitted) for (_, name), fitted in self.fits.dispatch(
-                [(("without", e), refit_without(current, e)) for e in backward]))
+                [(("without", e), refit_without(current, e, cost, self.campaign))
+                 for e in backward]))
             self._backward(st, backward, left, progress, done, steps, k)
         reason = reason or f"stopped after {self.max_rounds} rounds"
         progress(steps - 1, steps, "testing whether the runs hold one plant")
@@ -402,7 +402,7 @@ class Diagnoser:
             return job(e, frame=None) if apart(current.with_effect(e)) else \
                 job(e, baseline=cost, screen_only=True)
 
-        jobs = [(("without", e), refit_without(current, e)) for e in backward]
+        jobs = [(("without", e), refit_without(current, e, cost, self.campaign)) for e in backward]
         if lean is not None:  # the starting model refitted with its leaning bounds widened
             jobs.insert(0, (("widened", ""), {"start": self.start, "calibration": lean[0]}))
         jobs += [(("screen", e), screened(e)) for e in todo]
@@ -466,7 +466,7 @@ class Diagnoser:
         pred_cur = st.stages[-1].predictions
         for name in names:
             physics, pred = fitted[name].physics, fitted[name].predictions
-            if isinstance(pred, Exception):
+            if isinstance(pred, Exception) or fitted[name].screened:  # screened: kept
                 continue
             fails = failing(held_out_gain(pred, pred_cur, self.runs, self.campaign.noise),
                             st.current, name, self.table_view)
