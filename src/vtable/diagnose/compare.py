@@ -112,6 +112,7 @@ def _localise(cmp: Comparison, pred, runs: list[Run], memo: dict) -> None:
         measured = memo.setdefault(r.name, {})
         if "G_xx" not in measured:
             measured["G_xx"] = scipy.signal.welch(x, **kw)[1]
+        yhats = {}
         for g in run_groups(r):
             yhat = group_prediction(pred[r.name], r, g)
             if yhat is None:
@@ -122,11 +123,15 @@ def _localise(cmp: Comparison, pred, runs: list[Run], memo: dict) -> None:
             if g not in measured:
                 y = group_signal(r, g)
                 measured[g] = None if y is None else transfer_function(x, y, r.fs, n)
-            tm = measured[g]
-            if tm is None:
-                continue
+            if measured[g] is not None:
+                yhats[g] = yhat
+        Hs: np.ndarray | list = []
+        if yhats:  # the model's H1 of every group in one call (scipy's cost is per call)
             with np.errstate(divide="ignore", invalid="ignore"):
-                H = scipy.signal.csd(x, yhat, **kw)[1] / measured["G_xx"]  # the model's H1
+                Hs = scipy.signal.csd(x, np.array(list(yhats.values())), **kw)[1] \
+                    / measured["G_xx"]
+        for g, H in zip(yhats, Hs, strict=True):
+            tm = measured[g]
             for lo, hi in BANDS:
                 sel = (tm.f > max(lo, 0.2)) & (tm.f <= hi) & np.isfinite(tm.H) & \
                       np.isfinite(H)

@@ -159,14 +159,20 @@ def _estimates(run, pred: dict[str, np.ndarray], part: slice, nper: int, fs: flo
     band = (f >= BAND_HZ[0]) & (f <= min(BAND_HZ[1], 0.45 * fs)) & \
         (s_xx > COMMAND_SHARE * s_xx.max())
     n_d = (len(x) - nper) // (nper // 2) + 1
-    out = {}
+    res = {}
     for g in run_groups(run):
         y, yh = group_signal(run, g), group_prediction(pred, run, g)
         if y is None or yh is None or not np.all(np.isfinite(yh[part])):
             continue
-        r = y[part] - yh[part]
-        _, s_rr = scipy.signal.welch(r, fs, nperseg=nper)
-        _, s_xr = scipy.signal.csd(x, r, fs, nperseg=nper)
+        res[g] = y[part] - yh[part]
+    if not res:
+        return {}
+    # every group's residual in one call (scipy's cost is mostly per call)
+    R = np.array(list(res.values()))
+    _, S_rr = scipy.signal.welch(R, fs, nperseg=nper)
+    _, S_xr = scipy.signal.csd(x, R, fs, nperseg=nper)
+    out = {}
+    for g, s_rr, s_xr in zip(res, S_rr, S_xr, strict=True):
         k = band & (s_rr > 0)
         if k.sum() < 4:
             continue

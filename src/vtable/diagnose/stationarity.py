@@ -124,8 +124,7 @@ class CoherentSplit:
         """(coherent, incoherent) on `n`-sample frames."""
         if n not in self._sxx:
             self._sxx[n] = scipy.signal.welch(self.x, self.fs, nperseg=n)[1]
-        f, s_rr = scipy.signal.welch(r, self.fs, nperseg=n)
-        _, s_yy = scipy.signal.welch(y, self.fs, nperseg=n)
+        f, (s_rr, s_yy) = scipy.signal.welch(np.array([r, y]), self.fs, nperseg=n)  # one call
         _, s_xr = scipy.signal.csd(self.x, r, self.fs, nperseg=n)
         s_xx = self._sxx[n]
         k = (f > 0) & (s_xx > 0) & (s_rr > 0)
