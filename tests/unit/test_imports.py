@@ -45,6 +45,9 @@ LATE_IMPORTS = {
         "start-up of every spawned diagnosis worker (vtable.diagnose imports the result)",
     ("vtable.drive.result", "vtable.viz.drive_report"):
         "start-up: matplotlib (~0.9 s) for a drive without --report",
+    ("vtable.runs.hdf5", "h5py"):
+        "start-up: h5py (~0.05 s) for every verb and diagnosis worker, only a run in HDF5 "
+        "needs it",
     ("vtable.drive.result", "vtable.viz.figures"):
         "start-up: matplotlib (~0.9 s) only when a drive's figure is asked for",
 }
@@ -209,6 +212,17 @@ def test_verbs_load_only_the_verb_asked_for():
     at_start, after = r.stdout.splitlines()
     assert at_start == "[]"
     assert after == "['vtable.verbs.effects']"
+
+
+def test_a_diagnosis_loads_h5py_only_for_a_run_in_hdf5():
+    """h5py (~0.05 s) is imported by the HDF5 reader and writer when they run, not by the
+    diagnosis, its workers or the CLI (`LATE_IMPORTS`)."""
+    code = ("import sys, vtable.cli, vtable.diagnose.engine, vtable.verbs.diagnosis\n"
+            "print('h5py' in sys.modules)\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.strip() == "False"
 
 
 def test_no_circles_in_runs_and_ident():

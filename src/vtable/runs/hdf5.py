@@ -9,7 +9,6 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 
 from vtable import fileio
@@ -34,6 +33,8 @@ def write_hdf5(run: Run, path: str | Path) -> Path:
     names = check_writable(run)
     meta = {**file_meta(run), "units": {h: run.units.get(h, "1") for h in names}}
     text = dumps_toml(meta)
+    import h5py  # start-up: only a run in HDF5 needs it
+
     with fileio.atomic_path(p) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs["toml"] = text
@@ -52,6 +53,8 @@ def read_hdf5(path: str | Path) -> Run:
     p = Path(path)
     if not p.is_file():
         raise VtableError(f"{p}: no such file" if not p.exists() else f"{p}: not a file")
+    import h5py  # start-up: only a run in HDF5 needs it
+
     try:
         f = h5py.File(p, "r")
     except OSError:
@@ -115,6 +118,8 @@ def _stem_h5(p: Path) -> Path:
 
 def _dataset(ds: Any, name: str, p: Path, n: int | None) -> int:
     """Check a dataset is 1-D, numeric and (for a channel) as long as /time; its length."""
+    import h5py  # loaded by the reader already
+
     if not isinstance(ds, h5py.Dataset) or ds.ndim != 1 or ds.dtype.kind not in "fiu":
         raise VtableError(f"{p}: {name!r} must be a one-dimensional numeric dataset")
     if n is not None and ds.shape[0] != n:
