@@ -10,6 +10,7 @@ import argparse
 import json
 import os
 import sys
+from collections.abc import Callable
 
 from vtable import units, verbs
 from vtable.cli_args import parser
@@ -164,11 +165,16 @@ def _emit(a: argparse.Namespace, result: Result) -> None:
     sys.stdout.flush()
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, loaded: Callable[[], None] | None = None) -> int:
     """Run one command; exit codes: 0 ok, 2 bad input (one line on stderr), 3 unstable
-    configuration, 130 interrupted (Ctrl-C), 141 output pipe closed (quietly)."""
+    configuration, 130 interrupted (Ctrl-C), 141 output pipe closed (quietly). `loaded`
+    is called once the command's modules are imported, before it runs."""
     try:
         a = parser().parse_args(argv)
+        if (verb := a.command.replace("-", "_")) in verbs.VERBS:
+            getattr(verbs, verb)  # its modules imported (`vtable.verbs.__getattr__`)
+        if loaded is not None:
+            loaded()
         result = _COMMANDS[a.command](a)
         if sigint_seen():  # swallowed on the way (an import's callback): still interrupted
             raise KeyboardInterrupt

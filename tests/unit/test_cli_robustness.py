@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import signal
 import subprocess
+import sys
 import time
 
 import numpy as np
@@ -138,6 +139,28 @@ def test_a_command_ends_as_python_would_without_the_teardown(tmp_path):
     time.sleep(0.5)
     with pytest.raises(ProcessLookupError):  # the workers ended with it
         os.killpg(p.pid, 0)
+
+
+def test_the_collector_is_off_while_the_command_loads_and_on_when_it_runs():
+    """`vtable diagnose`'s libraries load with the collector off (no full collection walks
+    the growing heap: there were several), then what they made is frozen and the
+    collector is on when the command runs."""
+    code = ("import gc, os, sys\n"
+            "import vtable.cli as cli\n"
+            "full = gc.get_stats()[2]['collections']\n"
+            "def probe(a):\n"
+            "    print(gc.isenabled(), gc.get_freeze_count() > 100_000,\n"
+            "          gc.get_stats()[2]['collections'] - full, 'dask' in sys.modules,\n"
+            "          flush=True)\n"
+            "    os._exit(0)\n"
+            "cli._COMMANDS['diagnose'] = probe\n"
+            "sys.argv = ['vtable', 'diagnose', 'x.toml']\n"
+            "from vtable.__main__ import run\n"
+            "run()\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.split() == ["True", "True", "0", "True"], r.stdout
 
 
 _ENDS = {
