@@ -237,6 +237,18 @@ def vtable_exe() -> list[str]:
     return [exe] if exe else [sys.executable, "-m", "vtable.cli"]
 
 
+def python_output(code: str, timeout: float = 300) -> str:
+    """What `code` prints, run by this Python in a process of its own (asserted to exit 0,
+    its stderr's tail shown when it does not)."""
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=timeout)
+    assert r.returncode == 0, r.stderr[-2000:]
+    return r.stdout
+
+
 def nonlinear_controllers(vt, air_ratio: float = 0.0, friction: float = 0.0) -> list:
     """The multibody table `vt`'s controllers with appendix C valves on H1-H3: the stages
     of the valve_flow_nonlinearity (orifice flow from the table's supply pressure) and

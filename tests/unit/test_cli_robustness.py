@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 import pytest
-from conftest import vtable_exe
+from conftest import python_output, vtable_exe
 
 from vtable.cli import main
 
@@ -117,7 +117,6 @@ def test_a_command_ends_as_python_would_without_the_teardown(tmp_path):
     workers), the JSON on stdout is whole, the exit code is the command's, and no process
     of the command's session is left."""
     import os
-    import sys
 
     from conftest import effect_campaign
 
@@ -157,10 +156,8 @@ def test_the_collector_is_off_while_the_command_loads_and_on_when_it_runs():
             "sys.argv = ['vtable', 'diagnose', 'x.toml']\n"
             "from vtable.__main__ import run\n"
             "run()\n")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                       timeout=300)
-    assert r.returncode == 0, r.stderr[-2000:]
-    assert r.stdout.split() == ["True", "True", "0", "True"], r.stdout
+    out = python_output(code)
+    assert out.split() == ["True", "True", "0", "True"], out
 
 
 _ENDS = {
@@ -200,7 +197,6 @@ def test_the_command_ends_with_python_s_exit_codes(case):
     closed pipe found by the last flush is exit 141 and silent, a Ctrl-C while the exit
     handlers run is 130 and one line, and a live thread pool's idle workers do not hold the
     exit (a review of this stop's first version found all three)."""
-    import sys
 
     code, want, err = _ENDS[case]
     p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,

@@ -14,9 +14,9 @@ module importing itself).
 from __future__ import annotations
 
 import ast
-import subprocess
-import sys
 from pathlib import Path
+
+from conftest import python_output
 
 ROOT = Path(__file__).parents[2]
 #: where each package's files are: (folder, dotted name of that folder)
@@ -206,10 +206,7 @@ def test_verbs_load_only_the_verb_asked_for():
             "verbs.load_effects([])\n"
             "print(sorted(m for m in sys.modules if m.startswith(heavy)))\n"
             "assert verbs.__all__ == sorted(verbs.VERBS) and callable(verbs.study)\n")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                       timeout=300)
-    assert r.returncode == 0, r.stderr[-2000:]
-    at_start, after = r.stdout.splitlines()
+    at_start, after = python_output(code).splitlines()
     assert at_start == "[]"
     assert after == "['vtable.verbs.effects']"
 
@@ -219,10 +216,7 @@ def test_a_diagnosis_loads_h5py_only_for_a_run_in_hdf5():
     diagnosis, its workers or the CLI (`LATE_IMPORTS`)."""
     code = ("import sys, vtable.cli, vtable.diagnose.engine, vtable.verbs.diagnosis\n"
             "print('h5py' in sys.modules)\n")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                       timeout=300)
-    assert r.returncode == 0, r.stderr[-2000:]
-    assert r.stdout.strip() == "False"
+    assert python_output(code).strip() == "False"
 
 
 def test_no_circles_in_runs_and_ident():
