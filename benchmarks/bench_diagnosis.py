@@ -67,6 +67,10 @@ class Clock:
     def wall(self) -> float:
         return time.perf_counter() - self.w
 
+    @property
+    def cpu(self) -> float:
+        return _cpu() - self.c
+
 
 def diagnose(label: str, runs, target: float, compile_first: bool = False) -> None:
     n = sum(len(r.time) for r in runs)
@@ -181,7 +185,7 @@ def campaign_readme(folder: Path, repeat: int = 5) -> None:
             out = subprocess.run([*exe, "diagnose", *paths, "--json", str(folder / "d.json"),
                                   *extra], env=env, capture_output=True, text=True)
             walls.append(c.wall)
-            cpus.append(_cpu() - c.c)
+            cpus.append(c.cpu)
             if out.returncode != 0:
                 break
         import json

@@ -156,6 +156,11 @@ class Campaign:
             return self.whole_training()
         return self
 
+    def apart(self, a, b) -> bool:
+        """Whether models `a` and `b` (`Physics`) are fitted on different training windows
+        (`training_for`): their training costs do not compare."""
+        return self.training_for(a) is not self.training_for(b)
+
     def whole_training(self) -> Campaign:
         """This campaign with training targets over each run's whole first 60 % (a model
         holding an effect that `accumulates`); kept, built once."""

@@ -396,7 +396,7 @@ class Diagnoser:
                     "frame": frame, **kw}
 
         def apart(ph: Physics) -> bool:  # trained on another window (what accumulates)
-            return self.campaign.training_for(ph) is not self.campaign.training_for(current)
+            return self.campaign.apart(ph, current)
 
         def screened(e: str) -> dict:  # apart, fitted in full: costs would not compare
             return job(e, frame=None) if apart(current.with_effect(e)) else \

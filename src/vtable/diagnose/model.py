@@ -488,9 +488,8 @@ def refit_without(current: Physics, name: str, cost: float | None = None,
     effect `name`, the others' discrete choices kept (`TableModel`'s `choose`); given the
     training `cost` of `current` on `campaign`, under a `ceiling` of `BACKWARD_FACTOR`
     times it where both models train on the same window (not when `name` is what
-    accumulates over a run: `Campaign.training_for`)."""
+    accumulates over a run: `Campaign.apart`)."""
     job: dict[str, Any] = {"start": current.without(name), "choose": False}
-    if cost is not None and campaign is not None and \
-            campaign.training_for(job["start"]) is campaign.training_for(current):
+    if cost is not None and campaign is not None and not campaign.apart(job["start"], current):
         job["ceiling"] = BACKWARD_FACTOR * cost
     return job
