@@ -27,7 +27,7 @@ import scipy.signal
 
 from vtable.diagnose.groups import group_signal
 from vtable.diagnose.sampling import BANDS
-from vtable.effects.sensor import mount_ba
+from vtable.effects.sensor import mount_response
 from vtable.runs.model import Run
 
 #: the two channels are compared where their coherence is at least this
@@ -74,10 +74,9 @@ class SensorCheck:
 
 
 def mount_ratio(f: np.ndarray, f_m: float, z_m: float, f_c: float) -> np.ndarray:
-    """R(f) of the module docstring (`vtable.effects.sensor.mount_ba`: the law the
+    """R(f) of the module docstring (`vtable.effects.sensor.mount_response`: the law the
     sensor_mount effect applies)."""
-    w = 2 * math.pi * np.asarray(f, dtype=float)
-    return scipy.signal.freqs(*mount_ba(f_m, z_m, f_c), worN=w)[1]
+    return mount_response(2 * math.pi * np.asarray(f, dtype=float), f_m, z_m, f_c)
 
 
 def sensor_check(run: Run) -> SensorCheck | None:
