@@ -29,7 +29,7 @@ from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.engine import Diagnoser
 from vtable.diagnose.model import TableModel
 from vtable.diagnose.screen import Z_SCREEN, nonlinearity_evidence
-from vtable.diagnose.secant import Secant
+from vtable.diagnose.secant import Families, Secant
 from vtable.effects.registry import BUILT_IN
 from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
@@ -124,6 +124,46 @@ def test_secant_jacobian():
     assert s.evals == n
     s.at_end(sol.x + 0.1)  # elsewhere: taken there
     assert s.evals == n + 3
+
+
+def test_rivals_share_their_family_jacobian():
+    """`Families`: a family's first start takes its own forward-difference Jacobian, the
+    same `least_squares`' first `jac` takes (the same steps, to the bit); a later start
+    of the family takes the others' columns from there and differences only its own
+    parameters' (one evaluation each, beside its residual); another family its own in
+    full. On a nonlinear map the shared columns are the first start's, not the new
+    point's; the own columns are the new point's."""
+    def f(x):  # nonlinear in every parameter: columns differ from point to point
+        return np.array([x[0] ** 2 + x[1], np.sin(x[1]) * x[2], x[0] * x[2] ** 2, x[2] - x[0]])
+
+    lo, hi = np.full(3, -5.0), np.full(3, 5.0)
+    own = np.array([2])
+    fam = Families(own)
+    x1, x2, x3 = np.array([0.3, 0.7, 1.1]), np.array([0.5, 0.2, 1.6]), np.array([1, 1, 1.0])
+
+    def fit(x, seeded):
+        s = Secant(f, lo, hi)
+        if seeded:
+            fam.seed(s, x, "fitted" if x is not x3 else "declared")
+        sol = scipy.optimize.least_squares(s.fun, x, jac=s.jac, bounds=(lo, hi), max_nfev=3)
+        return s, sol
+
+    s, sol = fit(x1, True)
+    ref_s, ref = fit(x1, False)
+    np.testing.assert_array_equal(sol.x, ref.x)  # the family's first: as unseeded
+    # (its residual at the start asked twice: a fit's `_cost` keeps it, no simulation)
+    assert s.evals == ref_s.evals + 1
+    s = Secant(f, lo, hi)
+    fam.seed(s, x2, "fitted")
+    assert s.evals == 1 + len(own)  # its residual, and its own column
+    J, J1, J2 = s._J, Secant(f, lo, hi).at(x1), Secant(f, lo, hi).at(x2)
+    np.testing.assert_array_equal(J[:, :2], J1[:, :2])  # the family's columns
+    np.testing.assert_array_equal(J[:, 2], J2[:, 2])  # its own, where it is
+    assert np.abs(J1[:, :2] - J2[:, :2]).max() > 0.1  # (they differ on this map)
+    s = Secant(f, lo, hi)
+    fam.seed(s, x3, "declared")  # another family: its own Jacobian, in full
+    assert s.evals == 1 + 3
+    np.testing.assert_array_equal(s._J, Secant(f, lo, hi).at(x3))
 
 
 def test_a_point_asked_again_is_not_simulated_again(monkeypatch):

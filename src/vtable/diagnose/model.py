@@ -35,7 +35,7 @@ from vtable.diagnose.layout import with_states
 from vtable.diagnose.projected import Frame, declared_loop, projected_start
 from vtable.diagnose.residuals import Residuals
 from vtable.diagnose.reuse import model_at
-from vtable.diagnose.secant import REFRESH, Secant
+from vtable.diagnose.secant import REFRESH, Families, Secant
 from vtable.diagnose.statistics import correlations
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
@@ -342,10 +342,12 @@ class TableModel(Residuals):
         else:
             rivals = []
 
-        def solve(x, nfev, refresh=REFRESH, ftol=1e-8):
+        def solve(x, nfev, refresh=REFRESH, ftol=1e-8, families=None):
             x = np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
             secant = Secant(lambda x: self._cost(x, start, lay, campaign), lo, hi,
                             refresh=refresh)
+            if families is not None:  # a rival: its loop's family's Jacobian
+                families.seed(secant, x, bool(np.allclose(x[base][loop], declared[loop])))
             sol = scipy.optimize.least_squares(secant.fun, x, jac=secant.jac,
                                                bounds=(lo, hi), xtol=1e-6, ftol=ftol,
                                                max_nfev=nfev)
@@ -355,7 +357,8 @@ class TableModel(Residuals):
         if len(rivals) > 1 and self.baseline is not None and projected is None:
             # screening: `SCREEN_STEPS` from every rival first; only a candidate that lowers
             # the cost by `SCREEN` there has its longer starts run to the end
-            first = [(solve(x, min(n, SCREEN_STEPS)), n) for x, n in rivals]
+            shared = Families(idx)
+            first = [(solve(x, min(n, SCREEN_STEPS), families=shared), n) for x, n in rivals]
             sol = min((f for f, _ in first), key=lambda s: float(np.sum(s.fun**2)))
             if float(np.sum(sol.fun**2)) >= self.baseline * (1 - SCREEN):
                 return self._done(campaign, start, lay, sol.x, sol.fun, sol.jac, screened=True)
@@ -363,7 +366,8 @@ class TableModel(Residuals):
                        for f, n in first], key=lambda s: float(np.sum(s.fun**2)))
             x0 = sol.x
         elif len(rivals) > 1:  # a few steps from each rival; the best goes on
-            sol = min((solve(x, n) for x, n in rivals),
+            shared = Families(idx)
+            sol = min((solve(x, n, families=shared) for x, n in rivals),
                       key=lambda s: float(np.sum(s.fun**2)))
             x0 = sol.x
         elif self.baseline is not None:  # screening: a few steps first

@@ -97,3 +97,29 @@ class Secant:
         self._calls += 1
         self._J, self._x, self._f = J, x.copy(), f
         return J
+
+
+class Families:
+    """Forward-difference Jacobians shared by a fit's starts (`TableModel`'s rivals), one
+    per family (starts with the same servo loop: as fitted, or as declared), taken in full
+    at the family's first start. A later start of the family takes from there the columns
+    of every parameter but `own` (the effect's), and forward differences for those: one
+    simulation each, where a Jacobian of its own costs one per parameter (the starts near
+    the fitted loop share its sensitivities as `projected`'s share the current model's;
+    Broyden's updates carry each start on from its seed)."""
+
+    def __init__(self, own: np.ndarray) -> None:
+        self.own = np.asarray(own, dtype=int)
+        self._J: dict = {}
+
+    def seed(self, secant: Secant, x: np.ndarray, family) -> None:
+        """Seed `secant` at `x` with its family's Jacobian (the family's first: its own,
+        in full, as `least_squares`' first `jac` would take it)."""
+        J0 = self._J.get(family)
+        if J0 is None:
+            J = secant.at(x)
+            self._J[family] = J.copy()
+        else:
+            J = J0.copy()
+            J[:, self.own] = secant.at(x, self.own)[:, self.own]
+        secant.seed(x, J)
