@@ -343,11 +343,12 @@ class TableModel(Residuals):
             rivals = []
 
         def solve(x, nfev, refresh=REFRESH, ftol=1e-8, families=None):
+            as_declared = families is not None and np.allclose(x[base][loop], declared[loop])
             x = np.clip(x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
             secant = Secant(lambda x: self._cost(x, start, lay, campaign), lo, hi,
                             refresh=refresh)
             if families is not None:  # a rival: its loop's family's Jacobian
-                families.seed(secant, x, bool(np.allclose(x[base][loop], declared[loop])))
+                families.seed(secant, x, as_declared)
             sol = scipy.optimize.least_squares(secant.fun, x, jac=secant.jac,
                                                bounds=(lo, hi), xtol=1e-6, ftol=ftol,
                                                max_nfev=nfev)
