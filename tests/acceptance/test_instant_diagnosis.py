@@ -385,6 +385,50 @@ def test_the_workers_compile_the_first_rounds_candidates_as_the_start_is_fitted(
         fits.close()
 
 
+def test_a_freed_core_takes_the_next_fit_in_line_and_one_never_asked_for_is_stopped():
+    """`Fits.dispatch(..., ahead=...)`: when one of the fits asked for ends while another
+    still runs, the freed core takes the next fit in line at once; a later `dispatch`
+    asking for it takes that same run (not submitted again), its result the fit's own to
+    the bit; `drop_ahead` sets the stop flag of one never asked for (its own event, which
+    a fit reads with the diagnosis's: `StopFlag`) and cancels it."""
+    from distributed import Event
+
+    from vtable.diagnose.calibration import Calibration
+    from vtable.diagnose.pool import Fits
+    from vtable.diagnose.workers import StopFlag
+
+    c = Campaign.of(truth_campaign(*FRICTION))
+    start = Physics(nominal_open_loop(c.table), c.specimen, {})
+
+    def long(e: str) -> dict:  # a candidate's multistart fit: seconds
+        return {"start": start.with_effect(e), "multistart": e}
+
+    short = {"start": start, "ceiling": 0.0}  # a few steps, then screened
+    fits = Fits(c, [], 2, Calibration(), TableModel)
+    try:
+        done = dict(fits.dispatch([("long", long("actuator_friction")), ("short", short)],
+                                  ahead=[("next", long("valve_dynamics")),
+                                         ("later", long("oil_column_air"))]))
+        assert set(done) == {"long", "short"}
+        assert set(fits._ahead) == {"next"}  # one core freed while the other ran: one
+        submitted = len(fits.tasks._futures)
+        nxt = dict(fits.dispatch([("next", long("valve_dynamics"))]))["next"]
+        assert len(fits.tasks._futures) == submitted and not fits._ahead  # the same run
+        own = fits.here(long("valve_dynamics"))
+        assert nxt.cost == own.cost and nxt.train_error == own.train_error  # to the bit
+        # one never asked for: its own event set (the fit stops at its next look), cancelled
+        dict(fits.dispatch([("long", long("actuator_friction")), ("short", short)],
+                           ahead=[("dropped", long("oil_column_air"))]))
+        fut, flag = fits._ahead["dropped"]
+        assert not StopFlag(*flag.names).is_set()
+        fits.drop_ahead()
+        assert not fits._ahead and fut.cancelled()
+        assert StopFlag(*flag.names).is_set() and not StopFlag(flag.names[0]).is_set()
+        assert Event(flag.names[-1]).is_set()  # its own, not the diagnosis's
+    finally:
+        fits.close()
+
+
 def test_no_thread_is_writing_a_log_record_when_the_workers_fork():
     """While this process forks (its workers), every log handler's lock is held
     (`workers.hold_logs`, before the fork; `let_logs_go` after it, in this process): no

@@ -369,11 +369,11 @@ class Diagnoser:
         (`projected`): a fit that does not lower the training cost by `SCREEN` cannot
         gain the 5 % of the noise's cost SELECTION asks (criterion 3). A nonlinear one is
         not even tried where the runs show no amplitude dependence (`screen`). Those that
-        pass are refined (fitted in full) best first, the costliest first on the cores;
-        one whose screened training cost is above `REFINE_FACTOR` times that of an
-        admissible refined candidate cannot win the round and is kept as screened."""
-        frame = Frame.of(self._model(), current,
-                         self.campaign.training_for(current).screening())
+        pass are refined (fitted in full) best first, the costliest first on the cores (a
+        core the shorter of a pair frees takes the next: `Fits.dispatch`'s `ahead`); one
+        whose screened training cost is above `REFINE_FACTOR` times that of an admissible
+        refined candidate cannot win the round and is kept as screened."""
+        frame = Frame.of(self._model(), current, self.campaign.training_for(current).screening())
         ranking: list[Candidate] = []
         screen = nonlinearity_evidence(self.campaign, st.stages[-1].predictions)
         self.screens.append(screen)
@@ -395,19 +395,17 @@ class Diagnoser:
             return {"start": current.with_effect(e), "multistart": e, "seed": seeds.get(e),
                     "frame": frame, **kw}
 
-        def apart(ph: Physics) -> bool:  # trained on another window (what accumulates)
-            return self.campaign.apart(ph, current)
-
-        def screened(e: str) -> dict:  # apart, fitted in full: costs would not compare
-            return job(e, frame=None) if apart(current.with_effect(e)) else \
-                job(e, baseline=cost, screen_only=True)
+        def screened(e: str) -> dict:  # trained on another window (what accumulates):
+            # fitted in full, costs would not compare
+            return job(e, frame=None) if self.campaign.apart(current.with_effect(e), current) \
+                else job(e, baseline=cost, screen_only=True)
 
         jobs = [(("without", e), refit_without(current, e, cost, self.campaign)) for e in backward]
         if lean is not None:  # the starting model refitted with its leaning bounds widened
             jobs.insert(0, (("widened", ""), {"start": self.start, "calibration": lean[0]}))
         jobs += [(("screen", e), screened(e)) for e in todo]
         left: dict[str, CandidateFit] = {}
-        passed: dict[str, CandidateFit] = {}
+        passed: dict[str, CandidateFit] = {}  # screens that passed: refined if they can win
         fitted_now: list[Candidate] = []
         # the current model's detailed comparison (the evidence's) while the fits run
         for (kind, name), fitted in self.fits.dispatch(jobs, meanwhile=lambda: self._detail(st)):
@@ -432,8 +430,8 @@ class Diagnoser:
         order = sorted(passed, key=lambda e: passed[e].cost)
         best: Candidate | None = None
         for c in fitted_now:  # a candidate refined in its screen's task may have won
-            if not c.screened and not apart(c.physics) and self._admissible(c, self.widened) and \
-                    (best is None or c.score < best.score):
+            if not c.screened and not self.campaign.apart(c.physics, current) and \
+                    self._admissible(c, self.widened) and (best is None or c.score < best.score):
                 best = c
         while order:
             if best is not None and passed[order[0]].cost > REFINE_FACTOR * best.cost:
@@ -441,13 +439,15 @@ class Diagnoser:
             batch, order = order[:max(1, self.workers)], order[max(1, self.workers):]
             batch.sort(key=lambda e: -spent.get(e, 0.0))
             refits = [(("add", e), job(e, begin=passed[e].passed)) for e in batch]
-            for (_, name), fitted in self.fits.dispatch(refits):
+            for (_, name), fitted in self.fits.dispatch(refits, ahead=[  # the next in line
+                    (("add", e), job(e, begin=passed[e].passed)) for e in order]):
                 c = self._judged(st, name, fitted, spent)
                 ranking.append(c)
                 progress(done, steps, f"round {k}: tried {name}")
                 if self._admissible(c, self.widened) and \
                         (best is None or c.score < best.score):
                     best = c
+        self.fits.drop_ahead()  # those started ahead that cannot win: stopped
         for e in order:  # cannot win: kept where their screen left them
             ranking.append(self._judged(
                 st, e, passed[e], spent,

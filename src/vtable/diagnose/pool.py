@@ -5,7 +5,9 @@ tasks (`vtable.diagnose.workers`: a local cluster of forked worker processes, on
 or a lab's scheduler, `scheduler`), to threads when a user's effect or controller kind was
 registered from code rather than a file (another process could not load it), or runs them
 one after the other in the calling thread with `workers=1`. It owns the stop flag every
-fit checks between simulations.
+fit checks between simulations. On Dask a core that would wait for a longer fit of its
+batch takes the next fit in line (`dispatch`'s `ahead`), which the next batch then takes
+over: every result the same, sooner.
 
 `in_thread` runs the loop in a thread of its own while the caller's thread only waits and
 reports progress: an interrupt there (Ctrl-C, or a progress callback raising) sets the stop
@@ -53,6 +55,7 @@ class Fits:
         self.stop = threading.Event()
         self.tasks: Tasks | None = None  # this diagnosis's tasks on Dask, once started
         self.on_dask = False  # whether its fits ran as Dask tasks
+        self._ahead: dict[Any, tuple] = {}  # fits started ahead of their turn: (future, flag)
 
     def here(self, job: dict[str, Any]) -> tuple:
         """`workers.fitted` of `job` (the estimator's keywords) in this process."""
@@ -100,14 +103,21 @@ class Fits:
         if tasks is not None:
             tasks.warm(models)
 
-    def dispatch(self, jobs: list[tuple[Any, tuple]], meanwhile: Callable[[], Any] | None = None
-                 ) -> Iterator[tuple[Any, tuple]]:
+    def dispatch(self, jobs: list[tuple[Any, tuple]], meanwhile: Callable[[], Any] | None = None,
+                 ahead: Sequence[tuple[Any, tuple]] = ()) -> Iterator[tuple[Any, tuple]]:
         """Run fits (key, the estimator's keywords: start, multistart, ...) on every core and
         yield (key, `workers.fitted`'s tuple) as each finishes: as Dask tasks, or in
         threads when a user's effect cannot be loaded in another process; `meanwhile`, the
         caller's work that needs no fit, runs in this thread once they are submitted (first,
         when they run here). On a stop, pending fits are cancelled and running ones end at
-        their next simulation."""
+        their next simulation.
+
+        `ahead`: fits that may be asked for next, in order. On Dask, a core that one of
+        `jobs` frees while others still run takes the next of them at once; a later
+        `dispatch` asking for it takes its result (the same fit, started sooner), and
+        `drop_ahead` stops those never asked for. What is fitted, and so every result, is
+        the same as without: only idle time is used (a round's refinements, run two by two,
+        waited on the longer of each pair)."""
         if not jobs:
             if meanwhile is not None:
                 meanwhile()
@@ -120,10 +130,17 @@ class Fits:
             return
         tasks = self.start()
         if tasks is not None:
-            futures = {tasks.submit(job, self.calibration): key for key, job in jobs}
+            futures = {(self._ahead.pop(key)[0] if key in self._ahead else
+                        tasks.submit(job, self.calibration)): key for key, job in jobs}
             if meanwhile is not None:
                 meanwhile()
+            spare = [(k, j) for k, j in ahead if k not in self._ahead]
+            left = len(futures)
             for fut in dask_completed(list(futures)):
+                left -= 1
+                if left and spare:  # a core is free while the others run: the next on it
+                    key, job = spare.pop(0)
+                    self._ahead[key] = tasks.ahead(job, self.calibration)
                 yield futures[fut], fut.result()
             return
         with ThreadPoolExecutor(max_workers=self.workers) as threads:
@@ -137,6 +154,12 @@ class Fits:
                 for fut in pending:
                     fut.cancel()
 
+    def drop_ahead(self) -> None:
+        """Stop the fits started ahead of their turn that no `dispatch` asked for."""
+        for fut, flag in self._ahead.values():
+            self.tasks.drop(fut, flag)
+        self._ahead.clear()
+
     def halt(self) -> None:
         """Stop the fits: this process's and the workers' (at their next look)."""
         self.stop.set()
@@ -145,6 +168,7 @@ class Fits:
 
     def close(self) -> None:
         """Release what the workers hold for this diagnosis (its campaign, its results)."""
+        self.drop_ahead()
         if self.tasks is not None:
             self.tasks.close()
             self.tasks = None

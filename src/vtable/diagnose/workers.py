@@ -59,14 +59,19 @@ POLL_S = 0.2
 
 
 class StopFlag:
-    """A Dask `Event` read as a `threading.Event` by the fits (`is_set`), looked at no more
-    often than every `POLL_S` seconds (each look is a message to the scheduler)."""
+    """Dask `Event`s read as one `threading.Event` by the fits (`is_set`: any of them set),
+    looked at no more often than every `POLL_S` seconds (each look is a message to the
+    scheduler): the diagnosis's, and a task's own when it may be dropped (`Tasks.ahead`)."""
 
-    def __init__(self, name: str) -> None:
-        self.name = name
-        self._event = None
+    def __init__(self, *names: str) -> None:
+        self.names = names
+        self._events: list = []
         self._next = 0.0
         self._set = False
+
+    @property
+    def name(self) -> str:
+        return self.names[0]
 
     def is_set(self) -> bool:
         if self._set:
@@ -74,16 +79,16 @@ class StopFlag:
         now = time.monotonic()
         if now >= self._next:
             self._next = now + POLL_S
-            if self._event is None:
-                self._event = Event(self.name)
-            self._set = bool(self._event.is_set())
+            if not self._events:
+                self._events = [Event(n) for n in self.names]
+            self._set = any(e.is_set() for e in self._events)
         return self._set
 
     def __getstate__(self) -> dict:
-        return {"name": self.name}
+        return {"names": self.names}
 
     def __setstate__(self, state: dict) -> None:
-        self.__init__(state["name"])
+        self.__init__(*state["names"])
 
 
 # -- in the worker ----------------------------------------------------------------------
@@ -299,18 +304,32 @@ class Tasks:
         self._futures: list = []
         self._frame: tuple[Any, Any] | None = None  # the round's frame and its future
 
-    def submit(self, job: dict[str, Any], calibration: Calibration):
-        """A fit (`_fit`) of `job`; its frame, new to this round, scattered once."""
+    def submit(self, job: dict[str, Any], calibration: Calibration, stop: StopFlag | None = None):
+        """A fit (`_fit`) of `job` (stopped by `stop`, default this diagnosis's flag); its
+        frame, new to this round, scattered once."""
         frame = job.get("frame")
         if frame is not None:
             if self._frame is None or self._frame[0] is not frame:
                 self._frame = (frame, self.client.scatter(frame, broadcast=True, hash=False))
                 self._futures.append(self._frame[1])
             job = {**job, "frame": self._frame[1]}
-        fut = self.client.submit(_fit, self._campaign, job, calibration, self.stop,
+        fut = self.client.submit(_fit, self._campaign, job, calibration, stop or self.stop,
                                  self.files, pure=False)
         self._futures.append(fut)
         return fut
+
+    def ahead(self, job: dict[str, Any], calibration: Calibration) -> tuple[Any, StopFlag]:
+        """A fit submitted ahead of its turn (`pool.Fits.dispatch`'s `ahead`): (its future,
+        its stop flag: this diagnosis's event and one of its own, `drop`)."""
+        flag = StopFlag(self.stop.name, f"{self.stop.name}-{uuid.uuid4().hex}")
+        return self.submit(job, calibration, flag), flag
+
+    def drop(self, fut, flag: StopFlag) -> None:
+        """Stop a fit submitted `ahead` at its next look at its flag, and cancel it."""
+        with contextlib.suppress(Exception):
+            Event(flag.names[-1], client=self.client).set()
+        with contextlib.suppress(Exception):
+            self.client.cancel([fut])
 
     def warm(self, models: list) -> None:
         """Have the workers compile (or load) the kernels of `models` (`Physics`), one task
