@@ -389,8 +389,9 @@ def test_a_freed_core_takes_the_next_fit_in_line_and_one_never_asked_for_is_stop
     """`Fits.dispatch(..., ahead=...)`: when one of the fits asked for ends while another
     still runs, the freed core takes the next fit in line at once; a later `dispatch`
     asking for it takes that same run (not submitted again), its result the fit's own to
-    the bit; `drop_ahead` sets the stop flag of one never asked for (its own event, which
-    a fit reads with the diagnosis's: `StopFlag`) and cancels it."""
+    the bit (`ahead` a list, or a function asked again as results come); `drop_ahead`
+    sets the stop flag of one never asked for (its own event, which a fit reads with the
+    diagnosis's: `StopFlag`) and cancels it."""
     from distributed import Event
 
     from vtable.diagnose.calibration import Calibration
@@ -406,10 +407,15 @@ def test_a_freed_core_takes_the_next_fit_in_line_and_one_never_asked_for_is_stop
     short = {"start": start, "ceiling": 0.0}  # a few steps, then screened
     fits = Fits(c, [], 2, Calibration(), TableModel)
     try:
+        asked = []  # `ahead` as a function: asked again after each result
+
+        def ahead() -> list:
+            asked.append(1)
+            return [("next", long("valve_dynamics")), ("later", long("oil_column_air"))]
+
         done = dict(fits.dispatch([("long", long("actuator_friction")), ("short", short)],
-                                  ahead=[("next", long("valve_dynamics")),
-                                         ("later", long("oil_column_air"))]))
-        assert set(done) == {"long", "short"}
+                                  ahead=ahead))
+        assert set(done) == {"long", "short"} and len(asked) == 1  # once: one core freed
         assert set(fits._ahead) == {"next"}  # one core freed while the other ran: one
         submitted = len(fits.tasks._futures)
         nxt = dict(fits.dispatch([("next", long("valve_dynamics"))]))["next"]

@@ -124,12 +124,6 @@ class Diagnoser:
         `flags_`, `cost_`, `screened_`)."""
         return self.model(ph, **kw).fit(self.campaign)
 
-    def _pushed_beyond(self, st: State) -> list[dict[str, Any]]:
-        """`bounds.pushed_beyond` of the final model."""
-        if st.current is None or not self.calibration.enabled:
-            return []
-        return pushed_beyond(self, st.current, st.err, st.stages[-1].predictions)
-
     def _inapplicable(self, ph: Physics) -> str:
         """Why a model cannot be built for this campaign's table (an effect needing a
         motion the platen has not, say), or ''."""
@@ -303,7 +297,8 @@ class Diagnoser:
         st.plants = split(self, st)
         final_cmp = self._detail(st)
         progress(steps - 1, steps, "testing the declarations the final model leans on")
-        st.pushed = self._pushed_beyond(st)
+        st.pushed = pushed_beyond(self, st.current, st.err, st.stages[-1].predictions) \
+            if st.current is not None and self.calibration.enabled else []
         progress(steps, steps, "done")
         return self._diagnosis(st, final_cmp, reason)
 
@@ -395,6 +390,9 @@ class Diagnoser:
             return {"start": current.with_effect(e), "multistart": e, "seed": seeds.get(e),
                     "frame": frame, **kw}
 
+        def refit(e: str) -> tuple:  # a screen that passed, refined from where it stopped
+            return ("add", e), job(e, begin=passed[e].passed)
+
         def screened(e: str) -> dict:  # trained on another window (what accumulates):
             # fitted in full, costs would not compare
             return job(e, frame=None) if self.campaign.apart(current.with_effect(e), current) \
@@ -407,8 +405,11 @@ class Diagnoser:
         left: dict[str, CandidateFit] = {}
         passed: dict[str, CandidateFit] = {}  # screens that passed: refined if they can win
         fitted_now: list[Candidate] = []
-        # the current model's detailed comparison (the evidence's) while the fits run
-        for (kind, name), fitted in self.fits.dispatch(jobs, meanwhile=lambda: self._detail(st)):
+        # the current model's detailed comparison (the evidence's) while the fits run; a core
+        # the last screens leave idle refines the best that passed so far
+        for (kind, name), fitted in self.fits.dispatch(jobs, meanwhile=lambda: self._detail(st),
+                                                       ahead=lambda: [refit(e) for e in sorted(
+                                                           passed, key=lambda e: passed[e].cost)]):
             if kind == "without":
                 left[name] = fitted
                 continue
@@ -438,9 +439,8 @@ class Diagnoser:
                 break
             batch, order = order[:max(1, self.workers)], order[max(1, self.workers):]
             batch.sort(key=lambda e: -spent.get(e, 0.0))
-            refits = [(("add", e), job(e, begin=passed[e].passed)) for e in batch]
-            for (_, name), fitted in self.fits.dispatch(refits, ahead=[  # the next in line
-                    (("add", e), job(e, begin=passed[e].passed)) for e in order]):
+            for (_, name), fitted in self.fits.dispatch([refit(e) for e in batch],
+                                                        ahead=[refit(e) for e in order]):
                 c = self._judged(st, name, fitted, spent)
                 ranking.append(c)
                 progress(done, steps, f"round {k}: tried {name}")

@@ -104,7 +104,8 @@ class Fits:
             tasks.warm(models)
 
     def dispatch(self, jobs: list[tuple[Any, tuple]], meanwhile: Callable[[], Any] | None = None,
-                 ahead: Sequence[tuple[Any, tuple]] = ()) -> Iterator[tuple[Any, tuple]]:
+                 ahead: Sequence[tuple[Any, tuple]] | Callable[[], Sequence] = ()
+                 ) -> Iterator[tuple[Any, tuple]]:
         """Run fits (key, the estimator's keywords: start, multistart, ...) on every core and
         yield (key, `workers.fitted`'s tuple) as each finishes: as Dask tasks, or in
         threads when a user's effect cannot be loaded in another process; `meanwhile`, the
@@ -112,12 +113,13 @@ class Fits:
         when they run here). On a stop, pending fits are cancelled and running ones end at
         their next simulation.
 
-        `ahead`: fits that may be asked for next, in order. On Dask, a core that one of
-        `jobs` frees while others still run takes the next of them at once; a later
+        `ahead`: fits that may be asked for next, in order (or a function giving them, asked
+        again after each result). On Dask, a core that one of `jobs` frees while fewer of
+        them than cores still run takes the first of those not started at once; a later
         `dispatch` asking for it takes its result (the same fit, started sooner), and
         `drop_ahead` stops those never asked for. What is fitted, and so every result, is
         the same as without: only idle time is used (a round's refinements, run two by two,
-        waited on the longer of each pair)."""
+        waited on the longer of each pair, and on the last screens)."""
         if not jobs:
             if meanwhile is not None:
                 meanwhile()
@@ -134,14 +136,15 @@ class Fits:
                         tasks.submit(job, self.calibration)): key for key, job in jobs}
             if meanwhile is not None:
                 meanwhile()
-            spare = [(k, j) for k, j in ahead if k not in self._ahead]
-            left = len(futures)
+            asked, left = set(futures.values()), len(futures)
             for fut in dask_completed(list(futures)):
                 left -= 1
-                if left and spare:  # a core is free while the others run: the next on it
-                    key, job = spare.pop(0)
-                    self._ahead[key] = tasks.ahead(job, self.calibration)
                 yield futures[fut], fut.result()
+                if 0 < left < max(1, self.workers):  # a core is free while others run
+                    spare = [(k, j) for k, j in (ahead() if callable(ahead) else ahead)
+                             if k not in self._ahead and k not in asked]
+                    if spare:
+                        self._ahead[spare[0][0]] = tasks.ahead(spare[0][1], self.calibration)
             return
         with ThreadPoolExecutor(max_workers=self.workers) as threads:
             pending = {threads.submit(self.here, job): key for key, job in jobs}
