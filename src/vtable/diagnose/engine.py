@@ -407,9 +407,9 @@ class Diagnoser:
         fitted_now: list[Candidate] = []
         # the current model's detailed comparison (the evidence's) while the fits run; a core
         # the last screens leave idle refines the best that passed so far
-        for (kind, name), fitted in self.fits.dispatch(jobs, meanwhile=lambda: self._detail(st),
-                                                       ahead=lambda: [refit(e) for e in sorted(
-                                                           passed, key=lambda e: passed[e].cost)]):
+        for (kind, name), fitted in self.fits.dispatch(
+                jobs, meanwhile=lambda: self._detail(st),
+                ahead=lambda: [refit(e) for e in sorted(passed, key=lambda e: passed[e].cost)]):
             if kind == "without":
                 left[name] = fitted
                 continue
