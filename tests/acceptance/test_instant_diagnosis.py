@@ -67,9 +67,10 @@ FRICTION = ((("actuator_friction", 3.0),), "none")  # 3 kip of friction
 
 @pytest.mark.parametrize("effects", sorted(e for e in BUILT_IN if e != "storey_yield"))
 def test_modal_outputs_equal_the_integrator(effects):
-    """Every linear model the catalog makes: the channels the targets need, at every other
-    sample, equal `simulate`'s to 1e-9 of their peak (the same first-order hold, mode by
-    mode); a nonlinear one is simulated whole."""
+    """Every model the catalog makes: the channels the targets need, at every other
+    sample, equal `simulate`'s to 1e-9 of their peak (a linear one: the same first-order
+    hold, mode by mode; a nonlinear one: its channels from the integrator's histories at
+    those samples, or, behind an output filter, filtered whole)."""
     runs = truth_campaign(*PITCH)
     c = Campaign.of(runs)
     m = ReducedModel(Physics(nominal_open_loop(c.table), c.specimen, {effects: {}}), c.table)

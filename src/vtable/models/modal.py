@@ -26,21 +26,29 @@ from vtable.models.reduced_kernel import simulate_modal
 
 class ModalOutputs:
     """`ReducedModel`'s fast outputs (the module docstring); it provides `simulate`,
-    `linear`, `_linear` (A, B, f_y, f_u), `element` (None: structure only, `simulate`
-    says so), `M`, `max_step`, `assembly`, `_channels`,
-    `_aliased`."""
+    `histories`, `linear`, `_linear` (A, B, f_y, f_u), `element` (None: structure only,
+    `simulate` says so), `M`, `max_step`, `assembly`, `_channels`, `_aliased`."""
 
     def outputs(self, t: np.ndarray, x_c: np.ndarray, names: Sequence[str],
                 step: int = 1) -> dict[str, np.ndarray]:
         """The channels `names` (those of `simulate`) at every `step`-th sample of `t`
         (the same values as `simulate`'s, to rounding). A linear model computes only these
         (`reduced_kernel.simulate_modal`: the modal coordinates stepped exactly, the output
-        rows of `_output_map`); any other is simulated whole and sampled."""
+        rows of `_output_map`); any other is integrated whole, and its channels computed
+        from the histories at the samples asked when no output filter needs them all."""
         fast = self._modal() if self.linear and self.element is not None else None
         if fast is None:
-            full = self.simulate(t, x_c)
+            if self.assembly.filters:  # a filter reads the whole signal
+                full = self.simulate(t, x_c)
+                every = step
+            else:  # the channels are linear in the histories, sample by sample
+                _h, up, _xc, Q, Qd, Qdd, F, PL = self.histories(t, x_c)
+                k = up * step
+                full = self._aliased(self._channels(Q[::k], Qd[::k], Qdd[::k], F[::k],
+                                                    PL[::k]))
+                every = 1
             once: dict[int, np.ndarray] = {}  # a lumped quantity once, as the fast path
-            return {c: once.setdefault(id(full[c]), full[c][::step])
+            return {c: once.setdefault(id(full[c]), full[c][::every])
                     for c in names if c in full}
         alias = self._aliases(tuple(names))
         names = list(dict.fromkeys(alias.values()))  # a lumped quantity once
