@@ -210,20 +210,23 @@ def projected_start(model, full, start, lay, x0: np.ndarray, frame: Frame,
     # not yet: a few steps in every parameter from the effect at its defaults and the
     # current parameters (an effect the fitted base absorbed is given back only when both
     # move together, over several steps: the linearised move cannot see it)
-    starts = [x, base]  # from where the projection points, and from the effect's defaults
-    if declared is not None:  # and from the loop as declared, the effect at its best there
+    def at_declared() -> np.ndarray:  # the loop as declared, the effect at its best there
         trials = []
         for v in points:
             z = declared.copy()
             z[idx] = v
             f = model._cost(np.clip(z, lo, hi), start, lay, campaign)
             trials.append((float(f @ f), z))
-        starts.append(min(trials, key=lambda t: t[0])[1])
+        return min(trials, key=lambda t: t[0])[1]
+
+    # from where the projection points, from the effect's defaults, and from the loop as
+    # declared (its grid simulated only when the first two did not pass)
+    starts = [lambda: x, lambda: base] + ([at_declared] if declared is not None else [])
     best = None
     others = np.setdiff1d(np.arange(len(x0)), ci)  # the effect's own, and any new ones
     prior_J = _prior_jacobian(model, lay, campaign, x0)[:, ci]  # the priors are linear
-    for k, z in enumerate(starts):
-        z = np.clip(z, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+    for k, start_k in enumerate(starts):
+        z = np.clip(start_k(), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         secant = Secant(lambda q: model._cost(q, start, lay, campaign), lo, hi,
                         refresh=1 << 30)
         base_J = frame.J if k < 2 else frame.J_declared
