@@ -200,7 +200,13 @@ def cluster(n: int, scheduler: str | None = None):
             try:
                 with dask.config.set({"distributed.worker.multiprocessing-method": "fork",
                                       "distributed.worker.daemon": True,
-                                      "distributed.scheduler.work-stealing": False}):
+                                      "distributed.scheduler.work-stealing": False,
+                                      # no statistical profiler sampling the fits' stacks
+                                      # every 10 ms, fewer ticks and system samples: each
+                                      # takes the interpreter lock from a fit
+                                      "distributed.worker.profile.enabled": False,
+                                      "distributed.admin.tick.interval": "500ms",
+                                      "distributed.admin.system-monitor.interval": "2s"}):
                     lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                       dashboard_address=":0", silence_logs=logging.CRITICAL)
                     client = Client(lc)
