@@ -436,6 +436,31 @@ def test_a_freed_core_takes_the_next_fit_in_line_and_one_never_asked_for_is_stop
         fits.close()
 
 
+def test_a_fit_asked_to_stop_returns_none_and_its_dispatch_stops():
+    """A worker's fit whose stop flag is set returns None (no traceback pickled and sent);
+    `Fits.dispatch` meeting one raises `StopRequestedError`, as a fit here does."""
+    import threading
+
+    from vtable.diagnose.calibration import Calibration
+    from vtable.diagnose.pool import Fits
+    from vtable.diagnose.residuals import StopRequestedError
+    from vtable.diagnose.workers import _fit
+
+    c = Campaign.of(truth_campaign(*FRICTION))
+    start = Physics(nominal_open_loop(c.table), c.specimen, {})
+    stop = threading.Event()
+    stop.set()
+    assert _fit(c, {"start": start}, Calibration(), stop, ()) is None
+    fits = Fits(c, [], 2, Calibration(), TableModel)
+    try:
+        fits.start()
+        fits.halt()  # the diagnosis's event set: every worker's fit stops at its first look
+        with pytest.raises(StopRequestedError):
+            dict(fits.dispatch([("a", {"start": start}), ("b", {"start": start})]))
+    finally:
+        fits.close()
+
+
 def test_no_thread_is_writing_a_log_record_when_the_workers_fork():
     """While this process forks (its workers), every log handler's lock is held
     (`workers.hold_logs`, before the fork; `let_logs_go` after it, in this process): no

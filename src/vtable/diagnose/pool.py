@@ -32,6 +32,7 @@ from vtable.controllers import kinds
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.model import TableModel
+from vtable.diagnose.residuals import StopRequestedError
 from vtable.diagnose.workers import Tasks, cluster, fitted
 from vtable.effects.registry import is_user, source_file
 
@@ -139,7 +140,10 @@ class Fits:
             asked, left = set(futures.values()), len(futures)
             for fut in dask_completed(list(futures)):
                 left -= 1
-                yield futures[fut], fut.result()
+                fit = fut.result()
+                if fit is None:  # a worker's fit stopped (`workers._fit`)
+                    raise StopRequestedError
+                yield futures[fut], fit
                 if 0 < left < max(1, self.workers):  # a core is free while others run
                     spare = [(k, j) for k, j in (ahead() if callable(ahead) else ahead)
                              if k not in self._ahead and k not in asked]

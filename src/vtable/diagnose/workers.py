@@ -20,7 +20,9 @@ A diagnosis scatters its campaign to every worker once (`Tasks.campaign`) and su
 and controller kinds registered with `--effects-from`, `--controller-from`) are sent to
 the workers as text and loaded there (`_load_files`), so a remote worker needs vtable
 installed, not the user's files. A stop (Ctrl-C) sets a Dask `Event` each fit polls
-between simulations (`StopFlag`), and cancels what has not started.
+between simulations (`StopFlag`), and cancels what has not started; a fit stopped so
+returns None (a task that raised would have its traceback pickled and sent, every module's
+path resolved the first time: ~16,000 file-system calls in each worker).
 """
 
 from __future__ import annotations
@@ -49,6 +51,7 @@ from vtable.controllers import kinds
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.model import TableModel
+from vtable.diagnose.residuals import StopRequestedError
 from vtable.effects import registry as effects_registry
 from vtable.effects.registry import get as effect
 from vtable.errors import VtableError
@@ -121,11 +124,15 @@ def _load_files(files: tuple[tuple[str, str, str], ...]) -> None:
 
 
 def _fit(campaign: Campaign, job: dict[str, Any], calibration: Calibration, stop: StopFlag,
-         files: tuple[tuple[str, str, str], ...]) -> tuple:
-    """`TableModel(**job)` fitted on `campaign` (the module docstring's tuple); `job` holds
-    the estimator's keywords (start, multistart, baseline, seed, frame, ...)."""
+         files: tuple[tuple[str, str, str], ...]) -> tuple | None:
+    """`TableModel(**job)` fitted on `campaign` (the module docstring's tuple), None when
+    asked to stop; `job` holds the estimator's keywords (start, multistart, baseline, seed,
+    frame, ...)."""
     _load_files(files)
-    return fitted(TableModel(**{"calibration": calibration, **job}, stop=stop), campaign)
+    try:
+        return fitted(TableModel(**{"calibration": calibration, **job}, stop=stop), campaign)
+    except StopRequestedError:  # asked to stop (the module docstring)
+        return None
 
 
 def _warm(campaign: Campaign, physics: Any, files: tuple[tuple[str, str, str], ...]) -> bool:
