@@ -220,13 +220,14 @@ def projected_start(model, full, start, lay, x0: np.ndarray, frame: Frame,
         return min(trials, key=lambda t: t[0])[1]
 
     # from where the projection points, from the effect's defaults, and from the loop as
-    # declared (its grid simulated only when the first two did not pass)
-    starts = [lambda: x, lambda: base] + ([at_declared] if declared is not None else [])
+    # declared (None: its grid simulated only when the first two did not pass)
+    starts = [x, base] + ([None] if declared is not None else [])
     best = None
     others = np.setdiff1d(np.arange(len(x0)), ci)  # the effect's own, and any new ones
     prior_J = _prior_jacobian(model, lay, campaign, x0)[:, ci]  # the priors are linear
-    for k, start_k in enumerate(starts):
-        z = np.clip(start_k(), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+    for k, z in enumerate(starts):
+        z = np.clip(at_declared() if z is None else z, lo + 1e-9 * (hi - lo),
+                    hi - 1e-9 * (hi - lo))
         secant = Secant(lambda q: model._cost(q, start, lay, campaign), lo, hi,
                         refresh=1 << 30)
         base_J = frame.J if k < 2 else frame.J_declared
