@@ -99,3 +99,24 @@ def test_virtual_table_force_is_a_dp_or_the_net_force():
                         ).predict(dp)
     y = dp.channel("h1_force")
     assert np.sqrt(np.mean((pred["h1_force"] - y) ** 2) / np.mean(y**2)) < 0.02
+
+
+def test_a_model_holds_a_reading_of_its_own_and_runs_made_say_theirs():
+    """`Physics.force_measured` (what a diagnosis found, `vtable.diagnose.reading`) reads
+    the force channels as a table declaring it does; runs the virtual table makes declare
+    what their force channels measured."""
+    ph = _physics()
+    lc, dp = _runs()
+    t, xc = dp.time, dp.channel("h_span")
+    on_table = ReducedModel(ph, dataclasses.replace(virtual_table(), force_measured="delta_p"))
+    held = ReducedModel(dataclasses.replace(ph, force_measured="delta_p"))
+    a, b = on_table.simulate(t, xc), held.simulate(t, xc)
+    for ch in ("h1_force", "avg_hdisp", "avg_hacc"):
+        assert np.array_equal(a[ch], b[ch]), ch
+    assert not np.allclose(b["h1_force"], ReducedModel(ph).simulate(t, xc)["h1_force"])
+    assert held.vt.force_measured == "delta_p" and ph.on_table(virtual_table()) \
+        .force_measured == "load_cell"
+    assert lc.meta["table"]["horizontal"]["force_measured"] == "load_cell"
+    assert dp.meta["table"]["horizontal"]["force_measured"] == "delta_p"
+    # read back, the declaration is the table's
+    assert lab_table(table_from_dict(dp.meta["table"])).force_measured == "delta_p"

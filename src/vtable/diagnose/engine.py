@@ -36,6 +36,7 @@ from vtable.diagnose.model import BASE_PARAMS, TableModel, one_blas_thread, refi
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
 from vtable.diagnose.projected import Frame
 from vtable.diagnose.prose import nothing_added
+from vtable.diagnose.reading import force_reading
 from vtable.diagnose.residuals import StopRequestedError
 from vtable.diagnose.result import (
     ERROR_DEFINITION,
@@ -229,6 +230,8 @@ class Diagnoser:
         done += 1
         st.cmp0 = self._detail(st)
         st.err = st.start_err = err = st.cmp0.error
+        if (read := force_reading(self, st)) is not None:  # started from a force stage
+            current, err, cost = read
         self.widened = None  # the starting model refitted with its leaning bounds widened
         lean = leaning_start(self, current)
         reason = ""
@@ -277,6 +280,8 @@ class Diagnoser:
                 progress(done, steps, f"round {k} done: added {best.effect}")
                 backward = [e for e in current.effects
                             if e != best.effect and e not in self.start.effects]
+                if (read := force_reading(self, st)) is not None:  # what the forces read
+                    current, err, cost = read
                 if drift:  # what accumulates is tried once, last
                     break
             else:
@@ -300,7 +305,7 @@ class Diagnoser:
         st.pushed = pushed_beyond(self, st.current, st.err, st.stages[-1].predictions) \
             if st.current is not None and self.calibration.enabled else []
         progress(steps, steps, "done")
-        return self._diagnosis(st, final_cmp, reason)
+        return diagnosis_of(self, st, final_cmp, reason)
 
     def _todo(self, current: Physics, late: set[str], drift: bool
               ) -> tuple[list[str], dict[str, str]]:
@@ -485,15 +490,10 @@ class Diagnoser:
             return physics, err, fitted[name].cost
         return None
 
-    def _diagnosis(self, st: State, final_cmp: Comparison | None, reason: str,
-                   interrupted: bool = False) -> Diagnosis:
-        """The `Diagnosis` of the loop's state (`verdict.diagnosis_of`)."""
-        return diagnosis_of(self, st, final_cmp, reason, interrupted)
-
     def _partial(self, st: State) -> Diagnosis:
         """The diagnosis of the rounds that finished, without another simulation."""
-        return self._diagnosis(st, st.cmp if st.current is not None else None, "",
-                               interrupted=True)
+        return diagnosis_of(self, st, st.cmp if st.current is not None else None, "",
+                            interrupted=True)
 
 
 def diagnose(runs: Sequence[Run], start_effects: Sequence[str] = (), **kw) -> Diagnosis:

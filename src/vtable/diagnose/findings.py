@@ -9,6 +9,7 @@ from __future__ import annotations
 from typing import Any
 
 from vtable.diagnose.noise import NOISE_FACTOR, within_noise
+from vtable.diagnose.reading import SAID
 from vtable.effects.registry import get as effect
 from vtable.effects.registry import names
 
@@ -74,7 +75,10 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
     if d.interrupted:
         out.append(finding("interrupted", f"the diagnosis was interrupted after round "
                            f"{len(d.rounds)}", "run it again to the end"))
-    for r in d.rounds:
+    read = _reading_finding(getattr(d, "force_reading", None))
+    for i, r in enumerate(d.rounds):
+        if read is not None and read[0] == i:  # before the rounds after it
+            out.append(read[1])
         if r.added:
             c = next((c for c in r.ranking if c.effect == r.added), None)
             params = {} if c is None else {k: float(v) for k, v in c.params.items()
@@ -85,6 +89,8 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
                 numbers={"error_before": r.before, "error_after": r.error, **params}))
         for e, why in r.removed.items():
             out.append(finding("effect_removed", f"{e} removed: {why}", "leave it out"))
+    if read is not None and read[0] >= len(d.rounds):
+        out.append(read[1])
     lim = d.limits
     if lim is not None and d.final_error is not None:
         out += _limit_findings(d, lim)
@@ -203,3 +209,17 @@ def _part(lim, name: str, above: float, lead: str, action: str,
     what = lead + ", ".join(f"{g.run} {g.group} {_pct(getattr(g, name))}" for g in groups[:4])
     return [finding(name, what, action, runs=sorted({g.run for g in groups}),
                     numbers={name: getattr(lim, name), **numbers})]
+
+
+def _reading_finding(reading: dict[str, Any] | None) -> tuple[int, dict[str, Any]] | None:
+    """(the rounds before it, the finding) of the force channels' other reading where a
+    diagnosis kept it (`reading.force_reading`); None otherwise."""
+    if not reading or reading["found"] == reading["assumed"]:
+        return None
+    found = reading["found"]
+    return reading["after_round"], finding(
+        "force_measured", f"the force channels measure {SAID[found]}, not "
+        f"{SAID[reading['assumed']]} as assumed (the runs do not declare it): held-out error "
+        f"{_pct(reading['error_before'])} -> {_pct(reading['error_after'])}",
+        f"declare force_measured = \"{found}\" in the runs' [table.horizontal]",
+        numbers={k: reading[k] for k in ("error_before", "error_after", "z")})

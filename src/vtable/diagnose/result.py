@@ -136,6 +136,9 @@ class Diagnosis:
     #: empty: one), declared by the runs or (not `states_declared`) one per run
     states: dict[str, dict[str, Any]] = field(default_factory=dict)
     states_declared: bool = False
+    #: the force channels' other reading where the runs do not declare it, tried once
+    #: (`reading.force_reading`); None: not tried
+    force_reading: dict[str, Any] | None = None
     #: a comparison's one model drawn as a diagnosis (`ModelComparison.as_diagnosis`): the
     #: report names "the model", not start and final
     compared: bool = False
@@ -148,9 +151,15 @@ class Diagnosis:
         if self.start_error is None:
             return []
         h = [("start", self.start_error)]
-        for r in self.rounds:
+        fr = self.force_reading
+        kept = fr is not None and fr["found"] != fr["assumed"]
+        for i, r in enumerate(self.rounds):
+            if kept and fr["after_round"] == i:
+                h.append((f"force read as {fr['found']}", fr["error_after"]))
             if r.added:
                 h.append((r.added + "".join(f" - {e}" for e in r.removed), r.error))
+        if kept and fr["after_round"] >= len(self.rounds):
+            h.append((f"force read as {fr['found']}", fr["error_after"]))
         return h
 
     @property
@@ -195,6 +204,7 @@ class Diagnosis:
             "findings": self.findings,
             "states": self.states,
             "states_declared": self.states_declared,
+            "force_reading": self.force_reading,
             "verdict": self.verdict,
             "interrupted": self.interrupted,
             "notes": self.notes,

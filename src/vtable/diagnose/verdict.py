@@ -44,6 +44,8 @@ class State:
     #: (predictions, the pairs of runs they leave differing as plants): worked out once
     #: for a stage's predictions (`states.differences`)
     plant_pairs: tuple | None = None
+    #: the force channels' other reading, tried once (`reading.force_reading`); None: not
+    reading: dict[str, Any] | None = None
 
 
 
@@ -113,7 +115,10 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
     resolved = lim is not None and any(g.resolved for g in lim.groups)
     diag.states = state_rows(base, d.campaign.states)
     diag.states_declared = bool(diag.states) and not st.split
-    diag.headline = headline(added + (["a specimen state per run"] if st.split else []),
+    diag.force_reading = st.reading
+    kept = st.reading is not None and st.reading["found"] != st.reading["assumed"]
+    diag.headline = headline(added + (["a specimen state per run"] if st.split else [])
+                             + ([f"force read as {st.reading['found']}"] if kept else []),
                              st.start_err, err, floor,
                              lim.bound if resolved else None,
                              None if lim is None else lim.reference, interrupted)

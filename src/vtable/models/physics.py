@@ -38,6 +38,10 @@ class Physics:
     #: shared)
     states: dict[str, Specimen] = field(default_factory=dict)
     base_state: str | None = None
+    #: what the horizontal force channels measure ("load_cell" or "delta_p") where the
+    #: runs leave it undeclared and a diagnosis found it (`diagnose.reading`); None: the
+    #: table's (`VirtualTable.force_measured`)
+    force_measured: str | None = None
 
     def __post_init__(self) -> None:
         checked = {name: get(name).check(p, name) for name, p in self.effects.items()}
@@ -74,7 +78,10 @@ class Physics:
 
     def on_table(self, vt: VirtualTable) -> VirtualTable:
         """`vt` with this model's calibrated table values (the base servo constants follow
-        through `base_hydraulics`: eq 6.16 with the calibrated mass)."""
+        through `base_hydraulics`: eq 6.16 with the calibrated mass), and the force
+        channels' reading when this model holds one."""
+        if self.force_measured is not None and self.force_measured != vt.force_measured:
+            vt = dataclasses.replace(vt, force_measured=self.force_measured)
         if not self.table:
             return vt
         t = self.table

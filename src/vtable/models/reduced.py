@@ -262,7 +262,7 @@ def _mechanics(ph: phys.Physics, vt: VirtualTable):
         spec = (hash(ph.specimen), ph.specimen)
     except TypeError:
         spec = id(ph.specimen)
-    key = (id(vt), tuple(sorted(ph.table.items())), spec)
+    key = (id(vt), tuple(sorted(ph.table.items())), ph.force_measured, spec)
     hit = _MECHANICS.get(key)
     if hit is not None and hit[0] is vt and (hit[1] is ph.specimen or hit[1] == ph.specimen):
         return hit[2], hit[3]

@@ -143,7 +143,7 @@ def simulate(physics: phys.Physics, command: Command, rate: float = OUTPUT_FS, *
         spec, _ = realised(spec, vt.pivot_depth)  # the model as data, for the run's readers
     meta = {"title": title or f"{command.name}, {physics.specimen.title} (vtable virtual "
                               f"table: {physics.label})",
-            "table": built.vt.declared or {"preset": built.vt.name},
+            "table": declared_table(built.vt),
             **({"control": {d: s.to_dict() for d, s in vt.settings.items()}} if vt.knobs
                else {}),
             "specimen": specimen_table(spec), "command": command.table}
@@ -160,6 +160,15 @@ def simulate(physics: phys.Physics, command: Command, rate: float = OUTPUT_FS, *
     out = SimulatedRun(**{f.name: getattr(run, f.name) for f in dataclasses.fields(Run)},
                        result=res)
     return with_noise(out, noise, seed) if noise else out
+
+
+def declared_table(vt) -> dict:
+    """The run-format [table] a run made on `vt` writes: its declaration (a preset's name
+    when it has none) with what its force channels measured (`force_measured`: the
+    virtual table knows, so its runs say it)."""
+    d = dict(vt.declared or {"preset": vt.name})
+    d["horizontal"] = {**d.get("horizontal", {}), "force_measured": vt.force_measured}
+    return d
 
 
 def every(res: SimResult, k: int) -> SimResult:
