@@ -140,7 +140,7 @@ def plain_run(made) -> Path:
 
 
 def test_an_unknown_knob_is_said_by_tf(plain_run, tmp_path):
-    text = re.sub(r"^horizontal = \{ (.*) \}", r"horizontal = { \1, boost = 11 }",
+    text = re.sub(r"^horizontal = \{ (gain .*) \}", r"horizontal = { \1, boost = 11 }",
                   plain_run.read_text(), count=1, flags=re.M)
     assert "boost = 11" in text
     p = tmp_path / "boost.toml"
