@@ -6,7 +6,7 @@ diagnosed with the full catalog; one line per case and the acceptance totals.
     python benchmarks/bench_diagnosis_scorecard.py --quick          # 3 cases, one per kind
     python benchmarks/bench_diagnosis_scorecard.py --cases backlash_1,null_sdof_elcentro
     python benchmarks/bench_diagnosis_scorecard.py --list
-    python benchmarks/bench_diagnosis_scorecard.py --set 18         # issue 18's 30 cases
+    python benchmarks/bench_diagnosis_scorecard.py --set 18         # issue 18's 32 cases
     python benchmarks/bench_diagnosis_scorecard.py --set all        # all three (88 cases)
     python benchmarks/bench_diagnosis_scorecard.py --set 21         # issue 21's yielding set
 
@@ -174,7 +174,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", help="write every result to this file")
     ap.add_argument("--list", action="store_true", help="list the cases and exit")
     ap.add_argument("--set", choices=("12", "18", "21", "32", "all"), default="12",
-                    help="issue 12's 40 cases (default), issue 18's 30, issue 21's yielding "
+                    help="issue 12's 40 cases (default), issue 18's 32, issue 21's yielding "
                          "set, issue 32's (degradation, mount, two states), or 12, 18 and "
                          "21 (all)")
     a = ap.parse_args(argv)

@@ -657,6 +657,17 @@ def _cases_18() -> list[Case18]:
     # outside the catalog, on a digital controller
     add("lnec_pid_backlash", "outside",
         Ln(controller=lnec_pid, effects={"backlash": {"gap_in": 0.01}}), l_sdof, UNEXPLAINED)
+    # a yielding storey on the LNEC-like table under PID (issue 31), declared elastic
+    add("lnec_pid_yield_sdof", "in_catalog", Ln(controller=lnec_pid),
+        truth.sdof(4.4, 40.0, 8.3, 0.02, hysteresis={"yield_drift_in": 0.2,
+                                                      "post_yield_ratio": 0.1}),
+        ["storey_yield"], declared=within(l_sdof, 200 + len(out) + 1000))
+    add("lnec_pid_yield_building", "in_catalog", Ln(controller=lnec_pid),
+        truth.building([1.5, 1.5, 1.5], [30.0, 60.0, 90.0], frequencies_hz=[4.0, 11.0, 16.0],
+                       rayleigh=((4.0, 0.02), (16.0, 0.04)),
+                       hysteresis={"yield_drift_in": 0.4, "post_yield_ratio": 0.05,
+                                   "storeys": [1]}),
+        ["storey_yield"], declared=within(l_ray, 200 + len(out) + 1000))
     return out
 
 
@@ -714,6 +725,14 @@ def judge18(case: Case18, r: dict) -> dict:
     else:
         ok = found == list(case.expected)
         why = "" if ok else f"found {found or 'nothing'}, expected {list(case.expected)}"
+        h = case.specimen.hysteresis
+        p = r.get("storey_yield") or {}
+        if ok and h is not None and p:  # issue 21's rule: the storey and the yield drift
+            if yielding_storeys(p) != list(h.storeys):
+                ok, why = False, f"storeys {yielding_storeys(p)}, the truth's {list(h.storeys)}"
+            elif abs(p["yield_drift"] / h.yield_drift_in[0] - 1) > 0.2:
+                ok, why = False, (f"yield drift {p['yield_drift']:.3g} in, the truth's "
+                                  f"{h.yield_drift_in[0]:g}")
     return {"ok": ok, "why": why, "false_positive": fp}
 
 

@@ -204,7 +204,7 @@ def test_issue_21_yielding_cases_and_their_rule():
 
 def test_issue_18_cases_have_keys_and_expectations():
     keys = {c.key() for c in sc.CASES_18}
-    assert len(keys) == len(sc.CASES_18) == 30  # every definition hashes apart
+    assert len(keys) == len(sc.CASES_18) == 32  # every definition hashes apart
     for c in sc.CASES_18:
         assert c.kind in sc.KINDS_18, c.name
         if c.kind == "beyond_bounds":
@@ -214,7 +214,17 @@ def test_issue_18_cases_have_keys_and_expectations():
         elif c.kind == "null":
             assert c.expected == () and c.hidden == [], c.name
         else:
-            assert c.hidden == sorted(c.table.effects), c.name
+            yields = ["storey_yield"] if c.specimen.hysteresis is not None else []
+            assert c.hidden == sorted([*c.table.effects, *yields]), c.name
+    # a yielding storey on the LNEC-like table under PID: issue 21's rule (storey, drift)
+    case = sc.BY_NAME_18["lnec_pid_yield_building"]
+    assert case.table.preset == "lnec-st1d" and case.declared.hysteresis is None
+    right = {"found": ["storey_yield"], "storey_yield": {"storey": 1, "storeys": 1,
+                                                         "yield_drift": 0.43}}
+    assert sc.judge18(case, right)["ok"]
+    for wrong in ({"storey": 2, "storeys": 1, "yield_drift": 0.4},
+                  {"storey": 1, "storeys": 1, "yield_drift": 0.5}):
+        assert not sc.judge18(case, {**right, "storey_yield": wrong})["ok"], wrong
 
 
 # ---------------------------------------------------------------------------------------------
