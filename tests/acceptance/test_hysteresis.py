@@ -410,16 +410,21 @@ def test_a_candidates_fit_chooses_its_own_storeys_and_keeps_the_models(monkeypat
     held = base.with_effect("storey_yield", {"storey": 2, "storeys": 1})
     tried = []
 
+    seeds = []
+
     def fit_from(self, campaign, start):  # the combination tried, no fit: 1-2 costs least
         p = start.effects["storey_yield"]
         tried.append((p["storey"], p["storeys"]))
+        seeds.append(self.seed)
         self.cost_ = abs(p["storey"] - 1) + abs(p["storeys"] - 2)
         self.physics_ = start
         return self
 
     monkeypatch.setattr(TableModel, "_fit_from", fit_from)
     grown = [(1, 1), (2, 1), (3, 1), (1, 2), (1, 3)]
-    runs = [(dict(start=held, multistart="storey_yield"), grown, (1, 2)),
+    # the candidate's own fit: a later proposal won, so the first that fitted best (1 alone)
+    # is fitted once more from the winner's values (`choices.fit_choices`)
+    runs = [(dict(start=held, multistart="storey_yield"), [*grown, (1, 1)], (1, 2)),
             (dict(start=held.with_effect("pitch_flexibility"), multistart="pitch_flexibility"),
              [(2, 1)], (2, 1)),
             (dict(start=held), grown, (1, 2)), (dict(start=held, choose=False), [(2, 1)], (2, 1)),
@@ -428,6 +433,12 @@ def test_a_candidates_fit_chooses_its_own_storeys_and_keeps_the_models(monkeypat
              [(2, 1)], (2, 1))]  # a refit adding the pitch keeps the storeys
     for kw, want, kept in runs:
         tried.clear()
+        seeds.clear()
         m = TableModel(**kw).fit(c)
         p = m.physics_.effects["storey_yield"]
         assert tried == want and (p["storey"], p["storeys"]) == kept, (kw, tried, p)
+        again = [s for s in seeds if s is not None]
+        if kw.get("multistart") == "storey_yield":  # seeded from the winner, 1-2
+            assert len(again) == 1 and (again[0]["storey"], again[0]["storeys"]) == (1, 2)
+        else:
+            assert not again

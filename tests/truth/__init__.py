@@ -27,9 +27,18 @@ from .linearize import jacobian, modes, response
 from .runfile import campaign, write_run
 from .simulate import Result, simulate
 from .specimens import Specimen, building, misdeclare, none, perturb, rigid, sdof
-from .tables import EFFECTS, NEW_EFFECTS, OUTSIDE_CATALOG, Table, eerc_table, lnec_table
+from .tables import (
+    CATALOG_NAME,
+    EFFECTS,
+    NEW_EFFECTS,
+    OUTSIDE_CATALOG,
+    Table,
+    eerc_table,
+    lnec_table,
+)
 
-__all__ = ["EFFECTS", "NEW_EFFECTS", "OUTSIDE_CATALOG", "Command", "Result", "Specimen",
+__all__ = ["CATALOG_NAME", "EFFECTS", "NEW_EFFECTS", "OUTSIDE_CATALOG", "Command", "Result",
+           "Specimen",
            "Table", "TruthError", "building", "campaign", "controllers", "earthquake_command",
            "eerc_table", "jacobian", "lnec_table", "misdeclare", "modes", "none", "perturb",
            "random_command", "response", "rigid", "sdof", "simulate", "sine_command",

@@ -25,8 +25,9 @@ def bouc_wen(d: float, v: float, z, p, dz) -> float:
     az = abs(zz)
     if p.n == 2.0:  # the usual exponent (storey_yield's): products, not powers
         az_n1, az_n = az, az * az
-    else:
-        az_n1, az_n = az ** (p.n - 1.0), az ** p.n
+    else:  # a fitted sharpness (storey_yield's): one power
+        az_n1 = az ** (p.n - 1.0)
+        az_n = az_n1 * az
     dz[0] = (v - p.beta * abs(v) * az_n1 * zz - p.gamma * v * az_n) / p.u_y
     return (1.0 - p.alpha) * p.k * (d - p.u_y * zz)
 

@@ -15,10 +15,7 @@ from the base.
 
 from __future__ import annotations
 
-import copy
-import dataclasses
 import functools
-import itertools
 import math
 import threading
 from collections.abc import Mapping, Sequence
@@ -30,6 +27,7 @@ from threadpoolctl import ThreadpoolController
 
 from vtable.diagnose.calibration import LOOP, Calibration
 from vtable.diagnose.campaign import Campaign
+from vtable.diagnose.choices import fit_choices
 from vtable.diagnose.compare import Comparison, compare
 from vtable.diagnose.layout import with_states
 from vtable.diagnose.projected import Frame, declared_loop, projected_start
@@ -38,7 +36,6 @@ from vtable.diagnose.reuse import model_at
 from vtable.diagnose.secant import REFRESH, Families, Secant
 from vtable.diagnose.statistics import correlations
 from vtable.effects.registry import get as effect
-from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
 from vtable.models.reduced import ReducedModel
 from vtable.runs.model import Run
@@ -207,55 +204,9 @@ class TableModel(Residuals):
         return self._fit_choices(campaign, start, choices)
 
     def _fit_choices(self, campaign: Campaign, start: Physics, choices) -> TableModel:
-        """Fit once for every combination of the discrete parameters' whole values that the
-        effects propose (`Effect.choices`) and the model can be built with, keeping the
-        lowest training cost; `choice_costs_` holds each combination's. One effect
-        choosing may propose more after seeing the costs of those fitted (storey_yield
-        grows the best run of storeys), until it proposes nothing new."""
-        names = list(dict.fromkeys(n for n, _ in choices))
-
-        def proposed(name: str, tried: list) -> list[dict]:
-            own = [p for n, p in choices if n == name]
-            allowed = effect(name).choices(start.specimen, tried)
-            if allowed is None:  # every combination of the ranges, at once
-                allowed = [] if tried else [
-                    dict(zip([p.name for p in own], vs, strict=True))
-                    for vs in itertools.product(*(range(int(p.lower), int(p.upper) + 1)
-                                                  for p in own))]
-            return [{(name, k): v for k, v in a.items()} for a in allowed]
-
-        batch: list[dict] = [{}]
-        for name in names:
-            batch = [{**c, **a} for c in batch for a in proposed(name, [])]
-        best, costs, seen, tried = None, {}, set(), []
-        while batch:
-            for combo in batch:
-                key = tuple(combo.values())
-                seen.add(key)
-                ph = start
-                for (name, pname), v in combo.items():
-                    ph = dataclasses.replace(ph, effects={**ph.effects,
-                                                          name: {**ph.effects[name], pname: v}})
-                try:
-                    ReducedModel(ph, self.vt, kernels=False)
-                except VtableError:  # e.g. a storey the specimen does not have
-                    continue
-                sub = copy.copy(self)
-                sub.clear_caches()
-                sub._fit_from(campaign, ph)
-                costs[key] = sub.cost_
-                tried.append(({k: v for (_, k), v in combo.items()}, sub.cost_))
-                if best is None or sub.cost_ < best.cost_:
-                    best = sub
-            if len(names) != 1:  # several effects choosing: their first proposals only
-                break
-            batch = [c for c in proposed(names[0], tried) if tuple(c.values()) not in seen]
-        if best is None:
-            raise VtableError(f"no value of {', '.join(f'{n}.{p.name}' for n, p in choices)} "
-                              "gives a model of these runs")
-        self.__dict__.update(best.__dict__)
-        self.choice_costs_ = costs
-        return self
+        """Fit once for every combination of the discrete parameters' whole values the
+        effects propose, keeping the lowest training cost (`choices.fit_choices`)."""
+        return fit_choices(self, campaign, start, choices)
 
     def _fit_from(self, campaign: Campaign, start: Physics) -> TableModel:
         """The fit from `start` (its discrete parameters as they are)."""

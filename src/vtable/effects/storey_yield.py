@@ -1,7 +1,7 @@
 """storey_yield: storeys of the specimen yield — the Bouc–Wen storey of
 `vtable.analytic.hysteresis` (Wen 1976; Baber & Wen 1981) on storey `storey` and the
-`storeys` − 1 above it, with their yield drift u_y and post-yield stiffness ratio α fitted
-(one pair for them all; n = 2, β = γ = 0.5, the usual shape).
+`storeys` − 1 above it, with their yield drift u_y, post-yield stiffness ratio α and the
+sharpness n of the transition fitted (one set for them all; β = γ = 0.5).
 
 A default candidate of `diagnose` like every catalog effect: it is fitted only where the
 runs show amplitude dependence the current model misses (`vtable.diagnose.screen`). Which
@@ -28,7 +28,8 @@ from vtable.units import from_si
 class StoreyYield(Effect):
     name = "storey_yield"
     physics = ("storeys of the specimen yield: a Bouc–Wen storey force (yield drift u_y, "
-               "post-yield stiffness ratio α) on a storey, or on adjacent storeys alike")
+               "post-yield stiffness ratio α, sharpness n) on a storey, or on adjacent "
+               "storeys alike")
     section = "ch. 3, §5.3 (amplitude-dependent fixed-base parameters; loops)"
     signature = ("the structure's response softens and damps more at large spans than at "
                  "small ones; storey shear flattens at a yield level; residual drift")
@@ -42,7 +43,11 @@ class StoreyYield(Effect):
                     source="assumed (a drift ratio of a few tenths of a %)",
                     doc="u_y, the drift at which it yields"),
               Param("post_yield_ratio", "1", 0.1, 0.0, 1.0,
-                    source="assumed", doc="α, the post-yield stiffness over the elastic one"))
+                    source="assumed", doc="α, the post-yield stiffness over the elastic one"),
+              Param("sharpness", "1", 2.0, 1.0, 20.0, log=True,
+                    source="Wen 1976's usual shape (n = 2)",
+                    doc="n, how sharp the transition to yield is: 2 a rounded knee, 8 or "
+                        "more nearly elastic-perfectly-plastic"))
 
     def apply(self, m, p):
         n = len(storey_masses(m.specimen))
@@ -56,7 +61,8 @@ class StoreyYield(Effect):
             if declared is not None and i in declared.storeys:
                 raise VtableError(f"storey_yield: storey {i} is declared yielding already "
                                   "([specimen.hysteresis])")
-            add_yielding_storey(m, m.specimen, i, p["yield_drift"], p["post_yield_ratio"])
+            add_yielding_storey(m, m.specimen, i, p["yield_drift"], p["post_yield_ratio"],
+                                p["sharpness"])
 
     def choices(self, specimen, tried=()):
         """Each storey of `specimen` alone first; then the best run tried so far grown by
