@@ -10,12 +10,13 @@ nothing where the runs declare the reading or the model holds no force stage.
 from __future__ import annotations
 
 import dataclasses
-import functools
+import json
 from pathlib import Path
 
 import pytest
 import truth
 
+from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.engine import Diagnoser
 from vtable.diagnose.reading import force_stage, undeclared
 from vtable.models.physics import Physics, nominal_open_loop
@@ -50,13 +51,15 @@ def _runs(folder: Path, force_measured: str | None, strip: bool) -> list:
     return out
 
 
-@functools.cache
-def _diagnosis(folder: str, force_measured: str | None):
-    return Diagnoser(_runs(Path(folder), force_measured, force_measured is not None)).diagnose()
+@pytest.fixture(scope="module")
+def pressure(tmp_path_factory):
+    """The A·ΔP campaign (undeclared) and its diagnosis."""
+    runs = _runs(tmp_path_factory.mktemp("dp"), None, False)
+    return runs, Diagnoser(runs).diagnose()
 
 
-def test_undeclared_pressure_forces_are_found(tmp_path_factory):
-    d = _diagnosis(str(tmp_path_factory.mktemp("dp")), None)
+def test_undeclared_pressure_forces_are_found(pressure):
+    _, d = pressure
     r = d.force_reading
     assert r is not None and (r["assumed"], r["tried"], r["found"]) == \
         ("load_cell", "delta_p", "delta_p"), r
@@ -82,7 +85,7 @@ def test_undeclared_pressure_forces_are_found(tmp_path_factory):
 
 
 def test_undeclared_load_cells_are_kept(tmp_path_factory):
-    d = _diagnosis(str(tmp_path_factory.mktemp("lc")), "load_cell")
+    d = Diagnoser(_runs(tmp_path_factory.mktemp("lc"), "load_cell", True)).diagnose()
     r = d.force_reading
     assert r is not None and (r["tried"], r["found"]) == ("delta_p", "load_cell"), r
     assert r["error_after"] > r["error_before"] and r["why_not"]
@@ -109,3 +112,18 @@ def test_declared_readings_and_models_without_a_force_stage_are_not_tried(tmp_pa
     assert not force_stage(base, vt)
     assert not force_stage(base.with_effect("valve_dynamics"), vt)
     assert force_stage(base.with_effect("actuator_friction"), vt)
+
+
+def test_a_drive_from_the_diagnosis_reads_the_forces_as_it_found(pressure, tmp_path):
+    """`vtable drive --from` reuses the reading a diagnosis kept, where the runs still do
+    not declare it (and not where they do)."""
+    from vtable.verbs.compensation import calibrated, diagnosis_reading
+
+    runs, d = pressure
+    path = tmp_path / "d.json"
+    path.write_text(json.dumps(d.to_json()))
+    assert diagnosis_reading(str(path), runs) == "delta_p"
+    declared = _runs(tmp_path / "declared", "delta_p", strip=False)
+    assert diagnosis_reading(str(path), declared) is None
+    model, how = calibrated(runs, [], Calibration(), str(path), [])
+    assert model.physics_.force_measured == "delta_p" and "as fitted" in how

@@ -23,9 +23,9 @@ def bouc_wen(d: float, v: float, z, p, dz) -> float:
     A = 1). p: k (N/m), alpha, u_y (m), beta, gamma, n."""
     zz = z[0]
     az = abs(zz)
-    if p.n == 2.0:  # the usual exponent (storey_yield's): products, not powers
+    if p.n == 2.0:  # the usual exponent (a declared hysteresis's default): products
         az_n1, az_n = az, az * az
-    else:  # a fitted sharpness (storey_yield's): one power
+    else:  # any other exponent (storey_yield fits it): one power
         az_n1 = az ** (p.n - 1.0)
         az_n = az_n1 * az
     dz[0] = (v - p.beta * abs(v) * az_n1 * zz - p.gamma * v * az_n) / p.u_y

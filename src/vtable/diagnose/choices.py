@@ -7,8 +7,9 @@ continuous parameters start from a grid across their ranges (`TableModel`'s mult
 a combination fitted before a better one was found had only that grid, and a threshold
 law's grid can miss its valley (a sharp yield at the wrong drift): where a later proposal
 wins, the first proposal that fitted best is fitted once more from the winner's continuous
-values (`TableModel`'s `seed`, one more start), so that the storey that yields alone is not
-lost to a run of storeys that absorbed the misfit of its poor start.
+values (`TableModel`'s `seed`, one more start; in a candidate's own fit, the `multistart`
+effect choosing alone), so that the storey that yields alone is not lost to a run of
+storeys that absorbed the misfit of its poor start.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ def fit_choices(model, campaign, start, choices):
     """`model` (a `TableModel`) fitted once for every combination of the discrete
     parameters' whole values that the effects propose (`Effect.choices`) and the model can
     be built with, keeping the lowest training cost; `choice_costs_` holds each
-    combination's (the last fit's, for the one fitted again from a later winner's values).
+    combination's (the lower of its two fits, for the one fitted again from a later
+    winner's values).
     `choices`: (effect name, `Param`) of the discrete parameters chosen."""
     names = list(dict.fromkeys(n for n, _ in choices))
 
@@ -85,10 +87,11 @@ def fit_choices(model, campaign, start, choices):
         # the first proposal that fitted best, again from the winner's continuous values
         combo = min(firsts, key=lambda c: costs[tuple(c.values())])
         sub = fitted(combo, dict(best.physics_.effects[name]))
-        if sub is not None:
+        if sub is not None and sub.cost_ < costs[tuple(combo.values())]:
             costs[tuple(combo.values())] = sub.cost_
             if sub.cost_ < best.cost_:
                 best = sub
+    seed = model.seed
     model.__dict__.update(best.__dict__)
-    model.choice_costs_ = costs
+    model.seed, model.choice_costs_ = seed, costs
     return model

@@ -71,7 +71,7 @@ def force_reading(dg, st) -> tuple[Any, float, float] | None:
     pred = m.predictions(dg.campaign)
     err = compare(pred, dg.runs, scored="held", floor=dg.floor).error
     g = held_out_gain(st.stages[-1].predictions, pred, dg.runs, dg.campaign.noise)
-    why = failing(g)
+    why = failing(g, m.physics_)  # the resolution of the model with the reading (no prior)
     st.reading = {"declared": None, "assumed": assumed, "tried": other,
                   "found": assumed if why else other, "error_before": st.err,
                   "error_after": err, "z": g.z if g is not None else None,

@@ -238,8 +238,8 @@ class Diagnosis:
                 if c.get("flags"):
                     out.append(f"  {'':>4}  {'':<28} {'':>9}  flags: " + "; ".join(c["flags"]))
         out.append("\nerror history: " + " -> ".join(
-            [f"{d['start_error']:.2%}"] + [f"{r['error']:.2%} (+{r['added']})"
-                                            for r in d["rounds"] if r["added"]]))
+            f"{e:.2%}" + ("" if step == "start" else f" (+{step})")
+            for step, e in self.history()))
         out += base_lines(d["base"])
         for b in d["base_at_bounds"]:
             where = ("beyond its bound (the final model refitted with it widened)"

@@ -5,6 +5,7 @@ the command can fit, the declarations the model leans on, why the search stopped
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -14,6 +15,7 @@ from vtable.diagnose.limits import limits
 from vtable.diagnose.noise import NOISE_FACTOR, within_noise
 from vtable.diagnose.plants import plant_differences
 from vtable.diagnose.prose import unexplained
+from vtable.diagnose.reading import force_stage
 from vtable.diagnose.result import Diagnosis, DiagnosisStage, Round
 from vtable.diagnose.states import state_rows
 from vtable.diagnose.stationarity import stationarity_check
@@ -115,8 +117,13 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
     resolved = lim is not None and any(g.resolved for g in lim.groups)
     diag.states = state_rows(base, d.campaign.states)
     diag.states_declared = bool(diag.states) and not st.split
-    diag.force_reading = st.reading
     kept = st.reading is not None and st.reading["found"] != st.reading["assumed"]
+    if kept and not force_stage(current, d.vt):  # friction removed later: the same reading
+        st.reading.update(found=st.reading["assumed"],
+                          why_not="the final model holds no force stage (the readings agree)")
+        diag.final = dataclasses.replace(current, force_measured=None)
+        kept = False
+    diag.force_reading = st.reading
     diag.headline = headline(added + (["a specimen state per run"] if st.split else [])
                              + ([f"force read as {st.reading['found']}"] if kept else []),
                              st.start_err, err, floor,

@@ -3,6 +3,7 @@ on the lab's runs (`vtable.drive`), and the lab loop (`--update`)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Sequence
 from pathlib import Path
@@ -12,6 +13,7 @@ import numpy as np
 from vtable import units
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.model import TableModel
+from vtable.diagnose.reading import OTHER, undeclared
 from vtable.drive import DRIVE_FS, DriveResult, compensate, read_target
 from vtable.drive.compensate import BAND_HZ, CAP, REGULARISATION
 from vtable.drive.target import REST_S, Target
@@ -58,6 +60,16 @@ def diagnosis_values(path: str) -> dict[str, float] | None:
     return values
 
 
+def diagnosis_reading(path: str, runs: list[Run]) -> str | None:
+    """What a diagnosis found its runs' force channels measure (`force_reading`, a reading
+    it kept), where `runs` do not declare it either; None otherwise."""
+    r = _diagnosis_json(path).get("force_reading")
+    if not isinstance(r, dict) or r.get("found") not in OTHER or r.get("found") == \
+            r.get("assumed") or not undeclared(runs):
+        return None
+    return r["found"]
+
+
 def calibrated(runs: list[Run], effects: list[str], calibration: Calibration,
                from_: str | None, measured_runs: list[Run]) -> tuple[TableModel, str]:
     """The model a drive is computed on and how it was had: the diagnosis's final model
@@ -77,6 +89,8 @@ def calibrated(runs: list[Run], effects: list[str], calibration: Calibration,
             why = (f"{from_} holds no fitted values (base, final_params)"
                    if reused is None else "")
         if reused is not None:
+            if (found := diagnosis_reading(from_, runs)) is not None:  # as it read them
+                reused.physics_ = dataclasses.replace(reused.physics_, force_measured=found)
             extra = [e for e in effects if e not in diag_effects]
             if not extra and not measured_runs:
                 return reused, f"the diagnosis's final model as fitted ({from_})"
