@@ -13,6 +13,7 @@ import re
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import run_cli
 
@@ -194,3 +195,22 @@ def test_time_declared_in_ms_asks(plain_run, tmp_path):
     said = [n for n in run.reports if "is 'time' in ms?" in n]
     assert len(said) == 1 and "200 Hz" in said[0], run.reports
     assert not [n for n in read_run(plain_run).reports if "is 'time' in" in n]
+
+
+def test_a_run_shipped_compressed_is_read_and_said(plain_run, tmp_path):
+    """RUN.csv.gz beside RUN.toml (no RUN.csv) is read as RUN.csv would be, with a note;
+    a broken one is one line naming it."""
+    import gzip
+
+    p = tmp_path / "packed.toml"
+    p.write_text(plain_run.read_text())
+    p.with_suffix(".csv.gz").write_bytes(gzip.compress(plain_run.with_suffix(".csv")
+                                                       .read_bytes()))
+    a, b = read_run(plain_run), read_run(p)
+    assert a.channels.keys() == b.channels.keys()
+    for c in a.channels:
+        np.testing.assert_array_equal(a.channel(c), b.channel(c))
+    assert any("packed.csv.gz: read compressed (gzip)" in n for n in b.reports), b.reports
+    p.with_suffix(".csv.gz").write_bytes(b"\x1f\x8b\x08\x00broken")
+    code, _, err = run_cli(["tf", str(p), "--in", "h_span", "--out", "avg_hdisp"])
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "packed.csv.gz" in err, err

@@ -11,8 +11,10 @@ file, the line and the column.
 from __future__ import annotations
 
 import csv
+import gzip
 import math
 import re
+import zlib
 from pathlib import Path
 from typing import IO
 
@@ -175,19 +177,29 @@ def read_csv(path: Path) -> tuple[list[str], np.ndarray, list[str]]:
     """Header and values of RUN.csv as a (columns x rows) array, NaN for missing samples,
     and notes (a last line without a line end).
 
+    Where RUN.csv is absent and RUN.csv.gz is there (a run shipped compressed), that is
+    read instead, and a note says so.
+
     Memory: the array plus one block of text (`BLOCK` bytes and its cells)."""
+    gz = path.with_name(path.name + ".gz")
     try:
-        fh = path.open("rb")
+        fh: IO[bytes] = path.open("rb")
+        notes: list[str] = []
     except FileNotFoundError:
-        raise VtableError(f"{path}: no such file") from None
+        if not gz.is_file():
+            raise VtableError(f"{path}: no such file") from None
+        fh, notes = gzip.open(gz, "rb"), [f"{gz}: read compressed (gzip), as {path.name}"]
     except OSError as e:
         raise VtableError(f"{path}: cannot read: {e.strerror or type(e).__name__}") from None
+    where = gz if notes else path
     with fh:
         try:
-            return _read_csv(fh, path)
-        except OSError as e:
-            raise VtableError(f"{path}: cannot read: {e.strerror or type(e).__name__}") \
+            header, data, more = _read_csv(fh, where)
+        except (OSError, EOFError, zlib.error) as e:
+            raise VtableError(f"{where}: cannot read: "
+                              f"{getattr(e, 'strerror', None) or e or type(e).__name__}") \
                 from None
+    return header, data, notes + more
 
 
 def _read_csv(fh: IO[bytes], path: Path) -> tuple[list[str], np.ndarray, list[str]]:
