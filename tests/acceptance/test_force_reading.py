@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 import truth
+from conftest import run_cli
 
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.engine import Diagnoser
@@ -54,12 +55,13 @@ def _runs(folder: Path, force_measured: str | None, strip: bool) -> list:
 @pytest.fixture(scope="module")
 def pressure(tmp_path_factory):
     """The A·ΔP campaign (undeclared) and its diagnosis."""
-    runs = _runs(tmp_path_factory.mktemp("dp"), None, False)
-    return runs, Diagnoser(runs).diagnose()
+    folder = tmp_path_factory.mktemp("dp")
+    runs = _runs(folder, None, False)
+    return runs, Diagnoser(runs).diagnose(), folder
 
 
 def test_undeclared_pressure_forces_are_found(pressure):
-    _, d = pressure
+    _, d, _ = pressure
     r = d.force_reading
     assert r is not None and (r["assumed"], r["tried"], r["found"]) == \
         ("load_cell", "delta_p", "delta_p"), r
@@ -119,7 +121,7 @@ def test_a_drive_from_the_diagnosis_reads_the_forces_as_it_found(pressure, tmp_p
     not declare it (and not where they do)."""
     from vtable.verbs.compensation import calibrated, diagnosis_reading
 
-    runs, d = pressure
+    runs, d, _ = pressure
     path = tmp_path / "d.json"
     path.write_text(json.dumps(d.to_json()))
     assert diagnosis_reading(str(path), runs) == "delta_p"
@@ -127,3 +129,13 @@ def test_a_drive_from_the_diagnosis_reads_the_forces_as_it_found(pressure, tmp_p
     assert diagnosis_reading(str(path), declared) is None
     model, how = calibrated(runs, [], Calibration(), str(path), [])
     assert model.physics_.force_measured == "delta_p" and "as fitted" in how
+
+
+def test_compare_says_the_reading_it_assumed(pressure):
+    _, _, folder = pressure
+    paths = [str(folder / f"{n}.toml") for n in ("random_0", "random_1", "earthquake")]
+    code, out, err = run_cli(["compare", *paths, "--with", "actuator_friction"])
+    assert code == 0, err
+    assert "do not declare what their force channels measure" in out, out
+    code, out, err = run_cli(["compare", *paths, "--with", "valve_dynamics"])
+    assert code == 0 and "force channels measure" not in out, err  # no force stage

@@ -8,6 +8,7 @@ from collections.abc import Callable, Sequence
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.engine import Diagnoser
 from vtable.diagnose.model import TableModel
+from vtable.diagnose.reading import SAID, force_stage, undeclared
 from vtable.diagnose.result import Diagnosis, DiagnosisInterrupted, ModelComparison
 from vtable.errors import VtableError
 from vtable.ident.drive import align
@@ -22,8 +23,13 @@ def compare(paths: Sequence[str], effects: Sequence[str] = (), calibrate: str = 
     scored on the held-out ones; the base calibrated as `calibrate` says, see
     `vtable.diagnose.calibration.Calibration.parse`); writes the Rerun recording
     (`rerun`) and HTML report (`report`) asked for (`ModelComparison.plot`)."""
-    c = ModelComparison.of(TableModel(effects, calibration=Calibration.parse(calibrate))
-                           .fit([align(r) for r in campaign(paths)]))
+    runs = [align(r) for r in campaign(paths)]
+    m = TableModel(effects, calibration=Calibration.parse(calibrate)).fit(runs)
+    c = ModelComparison.of(m)
+    if undeclared(runs) and force_stage(m.physics_, m.vt):  # the two readings differ
+        c.notes.append(f"the runs do not declare what their force channels measure "
+                       f"([table.horizontal] force_measured): read as {SAID[m.vt.force_measured]}"
+                       f" (the table's); declare it, or let `vtable diagnose` try the other")
     c.plot(report=report, rerun=rerun)
     return c
 
