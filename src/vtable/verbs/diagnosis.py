@@ -23,8 +23,9 @@ def compare(paths: Sequence[str], effects: Sequence[str] = (), calibrate: str = 
     scored on the held-out ones; the base calibrated as `calibrate` says, see
     `vtable.diagnose.calibration.Calibration.parse`); writes the Rerun recording
     (`rerun`) and HTML report (`report`) asked for (`ModelComparison.plot`)."""
+    cal = Calibration.parse(calibrate)  # a bad setting said before the runs are read
     runs = [align(r) for r in campaign(paths)]
-    m = TableModel(effects, calibration=Calibration.parse(calibrate)).fit(runs)
+    m = TableModel(effects, calibration=cal).fit(runs)
     c = ModelComparison.of(m)
     if undeclared(runs) and force_stage(m.physics_, m.vt):  # the two readings differ
         c.notes.append(f"the runs do not declare what their force channels measure "
