@@ -274,9 +274,7 @@ class Diagnoser:
             if best is not None:
                 st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
                 current, err, cost = best.physics, best.error_after, best.cost
-                st.current, st.err, st.cmp = current, err, None
-                st.stages.append(DiagnosisStage(f"{len(st.stages)}_{best.effect}", current,
-                                       best.predictions))
+                st.adopt(best.effect, current, err, best.predictions)
                 progress(done, steps, f"round {k} done: added {best.effect}")
                 backward = [e for e in current.effects
                             if e != best.effect and e not in self.start.effects]
@@ -484,8 +482,7 @@ class Diagnoser:
                 f"recalibrated) the held-out error is {err:.2%}; keeping it is not a gain "
                 "the noise cannot produce: " + "; ".join(fails))
             rnd.error = err
-            st.current, st.err, st.cmp = physics, err, None
-            st.stages.append(DiagnosisStage(f"{len(st.stages)}_without_{name}", physics, pred))
+            st.adopt(f"without_{name}", physics, err, pred)
             progress(done, steps, f"round {k}: removed {name}")
             return physics, err, fitted[name].cost
         return None

@@ -75,10 +75,10 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
     if d.interrupted:
         out.append(finding("interrupted", f"the diagnosis was interrupted after round "
                            f"{len(d.rounds)}", "run it again to the end"))
-    read = _reading_finding(getattr(d, "force_reading", None))
-    for i, r in enumerate(d.rounds):
-        if read is not None and read[0] == i:  # before the rounds after it
-            out.append(read[1])
+    for r in d.steps():
+        if isinstance(r, dict):  # the force reading kept
+            out.append(_reading_finding(r))
+            continue
         if r.added:
             c = next((c for c in r.ranking if c.effect == r.added), None)
             params = {} if c is None else {k: float(v) for k, v in c.params.items()
@@ -89,8 +89,6 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
                 numbers={"error_before": r.before, "error_after": r.error, **params}))
         for e, why in r.removed.items():
             out.append(finding("effect_removed", f"{e} removed: {why}", "leave it out"))
-    if read is not None and read[0] >= len(d.rounds):
-        out.append(read[1])
     lim = d.limits
     if lim is not None and d.final_error is not None:
         out += _limit_findings(d, lim)
@@ -211,13 +209,11 @@ def _part(lim, name: str, above: float, lead: str, action: str,
                     numbers={name: getattr(lim, name), **numbers})]
 
 
-def _reading_finding(reading: dict[str, Any] | None) -> tuple[int, dict[str, Any]] | None:
-    """(the rounds before it, the finding) of the force channels' other reading where a
-    diagnosis kept it (`reading.force_reading`); None otherwise."""
-    if not reading or reading["found"] == reading["assumed"]:
-        return None
+def _reading_finding(reading: dict[str, Any]) -> dict[str, Any]:
+    """The finding of the force channels' other reading a diagnosis kept
+    (`reading.force_reading`)."""
     found = reading["found"]
-    return reading["after_round"], finding(
+    return finding(
         "force_measured", f"the force channels measure {SAID[found]}, not "
         f"{SAID[reading['assumed']]} as assumed (the runs do not declare it): held-out error "
         f"{_pct(reading['error_before'])} -> {_pct(reading['error_after'])}",

@@ -119,3 +119,17 @@ def nothing_added(ranking: list, err: float, widened: tuple | None) -> str:
         reason += ("; the candidates whose gain would count are not sound fits: "
                    + "; ".join(f"{c.effect}: {'; '.join(c.blocking)}" for c in passing))
     return reason + " (the base recalibrated with every candidate)"
+
+
+def base_lines(base: dict[str, Any], indent: str = "") -> list[str]:
+    """The calibrated base: declared -> fitted within its bounds, one line each."""
+    if not base:
+        return []
+    out = [f"{indent}base (declared -> fitted, bounds):"]
+    for k, v in base.items():
+        u = "" if v["unit"] == "1" else f" {v['unit']}"
+        lo, hi = v["bounds"]
+        moved = (v["fitted"] / v["declared"] - 1) if v["declared"] else float("nan")
+        out.append(f"{indent}  {k:<28} {v['declared']:.4g} -> {v['fitted']:.4g}{u} "
+                   f"({moved:+.1%}; bounds {lo:.4g}-{hi:.4g})")
+    return out

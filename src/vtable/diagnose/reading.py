@@ -20,7 +20,6 @@ from typing import Any
 
 from vtable.diagnose.compare import compare
 from vtable.diagnose.groups import GROUPS
-from vtable.diagnose.result import DiagnosisStage
 from vtable.diagnose.selection import failing
 from vtable.diagnose.statistics import held_out_gain
 from vtable.errors import VtableError
@@ -81,7 +80,6 @@ def force_reading(dg, st) -> tuple[Any, float, float] | None:
                         f"{SAID[assumed]}; {SAID[other]} would change the held-out error "
                         f"{st.err:.2%} -> {err:.2%}, not kept: {'; '.join(why)}")
         return None
-    st.current, st.err, st.cmp = m.physics_, err, None
-    st.stages.append(DiagnosisStage(f"{len(st.stages)}_force_{other}", m.physics_, pred))
+    st.adopt(f"force_{other}", m.physics_, err, pred)
     return m.physics_, err, m.cost_
 

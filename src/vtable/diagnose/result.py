@@ -20,7 +20,7 @@ from vtable import display
 from vtable.diagnose.limits import Limits, limits
 from vtable.diagnose.model import SCREEN, TableModel
 from vtable.diagnose.noise import UNEXPLAINED_RULE
-from vtable.diagnose.prose import linear_model, localisation_text, unexplained
+from vtable.diagnose.prose import base_lines, linear_model, localisation_text, unexplained
 from vtable.diagnose.selection import SELECTION, failing
 from vtable.diagnose.statistics import Comparison, Gain
 from vtable.effects.registry import get as effect
@@ -35,6 +35,10 @@ ERROR_DEFINITION = ("mean over runs and channel groups of the normalised RMS err
                     "resampled to 200 Hz); the noise floor is the same measure for the sensor "
                     "noise alone")
 
+
+
+#: how the headline and the error history name a force reading kept (`force_reading`)
+READING_STEP = "force read as {}"
 
 
 @dataclass
@@ -147,19 +151,28 @@ class Diagnosis:
     def final_effects(self) -> list[str]:
         return list(self.final.effects)
 
+    @property
+    def reading_kept(self) -> bool:
+        """Whether the force channels' other reading was kept (`force_reading`)."""
+        fr = self.force_reading
+        return fr is not None and fr["found"] != fr["assumed"]
+
+    def steps(self) -> list[Round | dict[str, Any]]:
+        """The rounds, and the force reading kept after the round it followed."""
+        out: list[Round | dict[str, Any]] = list(self.rounds)
+        if self.reading_kept:
+            out.insert(self.force_reading["after_round"], self.force_reading)
+        return out
+
     def history(self) -> list[tuple[str, float]]:
         if self.start_error is None:
             return []
         h = [("start", self.start_error)]
-        fr = self.force_reading
-        kept = fr is not None and fr["found"] != fr["assumed"]
-        for i, r in enumerate(self.rounds):
-            if kept and fr["after_round"] == i:
-                h.append((f"force read as {fr['found']}", fr["error_after"]))
-            if r.added:
-                h.append((r.added + "".join(f" - {e}" for e in r.removed), r.error))
-        if kept and fr["after_round"] >= len(self.rounds):
-            h.append((f"force read as {fr['found']}", fr["error_after"]))
+        for s in self.steps():
+            if isinstance(s, dict):  # the force reading kept
+                h.append((READING_STEP.format(s["found"]), s["error_after"]))
+            elif s.added:
+                h.append((s.added + "".join(f" - {e}" for e in s.removed), s.error))
         return h
 
     @property
@@ -353,20 +366,6 @@ def params_text(name: str, params: dict[str, float], fam: str, spec: str = ".4g"
 def localise(d: Diagnosis) -> str:
     """`Diagnosis.localisation`."""
     return d.localisation
-
-
-def base_lines(base: dict[str, Any], indent: str = "") -> list[str]:
-    """The calibrated base: declared -> fitted within its bounds, one line each."""
-    if not base:
-        return []
-    out = [f"{indent}base (declared -> fitted, bounds):"]
-    for k, v in base.items():
-        u = "" if v["unit"] == "1" else f" {v['unit']}"
-        lo, hi = v["bounds"]
-        moved = (v["fitted"] / v["declared"] - 1) if v["declared"] else float("nan")
-        out.append(f"{indent}  {k:<28} {v['declared']:.4g} -> {v['fitted']:.4g}{u} "
-                   f"({moved:+.1%}; bounds {lo:.4g}-{hi:.4g})")
-    return out
 
 
 @dataclass

@@ -18,7 +18,6 @@ from typing import Any
 from vtable.diagnose.compare import compare
 from vtable.diagnose.noise import within_noise
 from vtable.diagnose.plants import PlantDifference, plant_differences
-from vtable.diagnose.result import DiagnosisStage
 from vtable.diagnose.screen import ChangeEvidence, residual_change
 from vtable.diagnose.selection import failing
 from vtable.diagnose.statistics import held_out_gain
@@ -77,8 +76,7 @@ def split(dg, st) -> list[PlantDifference] | None:
                         f"{st.err:.2%} -> {err:.2%}, not kept: {'; '.join(why)}")
         return pairs
     dg.campaign = per_run
-    st.current, st.err, st.cmp = m.physics_, err, None
-    st.stages.append(DiagnosisStage(f"{len(st.stages)}_states", m.physics_, pred))
+    st.adopt("states", m.physics_, err, pred)
     st.split = True
     return pairs
 

@@ -16,7 +16,7 @@ from vtable.diagnose.noise import NOISE_FACTOR, within_noise
 from vtable.diagnose.plants import plant_differences
 from vtable.diagnose.prose import unexplained
 from vtable.diagnose.reading import force_stage
-from vtable.diagnose.result import Diagnosis, DiagnosisStage, Round
+from vtable.diagnose.result import READING_STEP, Diagnosis, DiagnosisStage, Round
 from vtable.diagnose.states import state_rows
 from vtable.diagnose.stationarity import stationarity_check
 from vtable.diagnose.statistics import Comparison
@@ -48,6 +48,12 @@ class State:
     plant_pairs: tuple | None = None
     #: the force channels' other reading, tried once (`reading.force_reading`); None: not
     reading: dict[str, Any] | None = None
+
+    def adopt(self, name: str, physics: Physics, err: float, predictions) -> None:
+        """`physics` (held-out error `err`, its `predictions`) becomes the current model,
+        the stage `name` (numbered); its detailed comparison is made when asked."""
+        self.current, self.err, self.cmp = physics, err, None
+        self.stages.append(DiagnosisStage(f"{len(self.stages)}_{name}", physics, predictions))
 
 
 
@@ -117,15 +123,14 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
     resolved = lim is not None and any(g.resolved for g in lim.groups)
     diag.states = state_rows(base, d.campaign.states)
     diag.states_declared = bool(diag.states) and not st.split
-    kept = st.reading is not None and st.reading["found"] != st.reading["assumed"]
-    if kept and not force_stage(current, d.vt):  # friction removed later: the same reading
-        st.reading.update(found=st.reading["assumed"],
+    diag.force_reading = st.reading
+    if diag.reading_kept and not force_stage(current, d.vt):  # friction removed later:
+        st.reading.update(found=st.reading["assumed"],  # the two readings agree
                           why_not="the final model holds no force stage (the readings agree)")
         diag.final = dataclasses.replace(current, force_measured=None)
-        kept = False
-    diag.force_reading = st.reading
     diag.headline = headline(added + (["a specimen state per run"] if st.split else [])
-                             + ([f"force read as {st.reading['found']}"] if kept else []),
+                             + ([READING_STEP.format(st.reading["found"])] if diag.reading_kept
+                                else []),
                              st.start_err, err, floor,
                              lim.bound if resolved else None,
                              None if lim is None else lim.reference, interrupted)
