@@ -46,8 +46,9 @@ from vtable.params.table import ServoConstants
 
 _LAWS: dict[str, list[Callable]] = {}  # key -> the stages' laws, for the generated module
 _MODULES: dict[str, Composition] = {}
-#: compositions by the identity of their stages and kernels (held, so ids stay theirs) and
-#: their element laws: hashing the laws' source is slower than building a reduced model
+#: compositions by the identity of the stages and kernels as given (held, so ids stay theirs)
+#: and their element laws: hashing the laws' source, even ordering and checking the stages,
+#: is slower than the rest of building a reduced model
 _SEEN: dict[tuple, tuple[tuple, Composition]] = {}
 #: keys of the compositions whose laws need numba's reference counting (`counted`)
 _COUNTED: dict[str, Composition] = {}
@@ -130,15 +131,15 @@ def composition(stages: Sequence[Stage], extra: Sequence[Callable] = (),
     ia, ib)` on the relative motion of coordinates ia[k] and ib[k] (−1: none), given at run
     time (one compiled module serves every coordinate, every storey); `switchable`: more
     stages, each written behind a flag (the module docstring)."""
+    held = (*stages, *switchable, *extra)  # as given: a model built again is looked up
+    elements = tuple(elements)  # before its stages are ordered and checked (frozen,
+    ident = (tuple(map(id, held)), len(switchable), len(extra), elements)  # by value)
+    seen = _SEEN.get(ident)
+    if seen is not None and all(a is b for a, b in zip(seen[0], held, strict=True)):
+        return _COUNTED.get(seen[1].key, seen[1])
     stages = checked([*stages, *switchable])
     switched = frozenset(s.name for s in switchable)
     templates = [element.servo_rates, element.servo_step, *extra]
-    held = (*stages, *templates, *switchable)
-    elements = tuple(elements)  # frozen, compared by value: each model builds its own
-    ident = (tuple(map(id, held)), len(switchable), elements)
-    seen = _SEEN.get(ident)
-    if seen is not None and seen[0] == held:  # a model built again
-        return _COUNTED.get(seen[1].key, seen[1])
     key = _key(stages, templates, elements, switched)
     hit = _MODULES.get(key)
     if hit is not None:

@@ -35,7 +35,6 @@ from vtable.hydraulics.stage import Stage, add_stage
 from vtable.hydraulics.table_stages import table_stages
 from vtable.interpolate import upsampled
 from vtable.models import physics as phys
-from vtable.models.linear_table import mechanics
 from vtable.models.modal import ModalOutputs
 from vtable.models.reduced_kernel import (
     KERNELS,
@@ -46,6 +45,7 @@ from vtable.models.reduced_kernel import (
     simulate_reduced,
     simulate_reduced_python,
 )
+from vtable.models.reduced_parts import base_servo, lumped_law, mechanics_on, pitch_loop
 from vtable.models.stiffness import needed_stiffness
 from vtable.params.virtual import VirtualTable
 from vtable.runs.model import Run
@@ -95,7 +95,7 @@ class ReducedAssembly:
     slides ("x_s", "x_s1", ...), and what effects add."""
 
     def __init__(self, ph: phys.Physics, vt: VirtualTable) -> None:
-        vt, (M, K, C, _, names, slides, pos) = _mechanics(ph, vt)
+        vt, (M, K, C, _, names, slides, pos) = mechanics_on(ph, vt)
         self.vt, self.specimen = vt, ph.specimen
         self._full = (M, K, C, list(names))
         self.storeys = [names[5 + i] for i in range(len(slides))]
@@ -112,7 +112,7 @@ class ReducedAssembly:
         self.filters: list[tuple[Callable, frozenset | None]] = []
         self.moving, self.reaction = "x", None
         self.max_step = SIM_DT
-        self.servo = phys.base_hydraulics(ph, vt)
+        self.servo = base_servo(ph, vt)
         self.stages: list[tuple[Stage, dict[str, float]]] = []
         self.table = TableView.of(vt, piston_area=self.servo.area)
         self.n_actuators = len(vt.group("horizontal"))
@@ -141,7 +141,7 @@ class ReducedAssembly:
         k_s, c_s = split_rocking(k_theta, c_theta, vt)
         d_p = vt.table.geometry.stabilizer_square
         self.add_spring("pitch", None, k_s * d_p**2, c_s * d_p**2)
-        a, b_q, b_v, f = group_law(vt, "vertical").dof_loop("pitch")
+        a, b_q, b_v, f = pitch_loop(vt)
         self.loops.append(("pitch", a, b_q, b_v, f))
 
     def add_dof(self, name: str, mass: float) -> None:
@@ -248,34 +248,6 @@ def switchable(law) -> tuple[Stage, ...]:
     return tuple(s for s in stock if s.name not in names and s.kind not in single)
 
 
-_MECHANICS: dict = {}
-
-
-def _mechanics(ph: phys.Physics, vt: VirtualTable):
-    """(`ph.on_table(vt)`, its `mechanics` with `ph`'s specimen), kept for the last few
-    (table, calibrated table values, specimen): a fit builds the model hundreds of times,
-    most of them with the same table and specimen values (a Jacobian's columns in the
-    servo loop's or an effect's parameters). The specimen is a key by its value (each
-    fitted point unpacks a new one), by its id when it cannot be hashed; the table by its
-    id (held with the result, so that it stays its own). The matrices are read-only."""
-    try:
-        spec = (hash(ph.specimen), ph.specimen)
-    except TypeError:
-        spec = id(ph.specimen)
-    key = (id(vt), tuple(sorted(ph.table.items())), ph.force_measured, spec)
-    hit = _MECHANICS.get(key)
-    if hit is not None and hit[0] is vt and (hit[1] is ph.specimen or hit[1] == ph.specimen):
-        return hit[2], hit[3]
-    vt_on = ph.on_table(vt)
-    mech = mechanics(vt_on, ph.specimen)
-    for a in mech[:3]:
-        a.flags.writeable = False
-    if len(_MECHANICS) >= 16:
-        _MECHANICS.pop(next(iter(_MECHANICS)))
-    _MECHANICS[key] = (vt, ph.specimen, vt_on, mech)
-    return vt_on, mech
-
-
 class ReducedModel(ModalOutputs):
     """Predicts a run's channels from its command for a given `Physics`."""
 
@@ -307,7 +279,7 @@ class ReducedModel(ModalOutputs):
         self.M, self.K, self.C, self.c2, self.ax, self.bF = M, K, C, c2, ax, ax.copy()
         self.Aw, self.Wq, self.Wv, self.Fw = Aw, Wq, Wv, Fw
         self.Minv = np.linalg.inv(M)
-        law = group_law(self.vt, "horizontal", m.servo, stages=m.stages).lumped("x")
+        law = lumped_law(self.vt, m.servo, m.stages)
         self.T, self.Tp, self.g, self.kp, self.kv = law.kernel()
         if self.T.shape != (1, 1):  # the kernel steps one lumped actuator on one DOF
             raise RuntimeError(f"the reduced model's actuator law is {self.T.shape}, not 1 x 1")

@@ -1,0 +1,95 @@
+"""The parts of a reduced model that a fit builds again and again with the same values, kept
+for the last few: a fit builds the model hundreds of times, and each of a Jacobian's
+columns moves one parameter (a servo-loop, specimen, table or effect value), so most of
+the parts are the same as last time.
+
+- `mechanics_on`: the model's table (`Physics.on_table`) and its rigid-body matrices with
+  the specimen (`linear_table.mechanics`), by table, calibrated table values and specimen;
+- `base_servo`: one horizontal actuator's constants for the base loop
+  (`Physics.base_hydraulics`), by that table and the open loop;
+- `pitch_loop`: the vertical actuators' pitch loop of that table
+  (`ServoLaw.dof_loop`, the pitch effect's `set_rocking`);
+- `lumped_law`: the horizontal actuators lumped into one (`ServoLaw.lumped`), by that
+  table, those constants and the stages with their values.
+
+Every key holds the objects it names by identity (kept with the result, so that an id
+stays theirs) and the values by value; what is kept is never changed (frozen dataclasses,
+read-only arrays).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from vtable.hydraulics import group_law
+from vtable.models import physics as phys
+from vtable.models.linear_table import mechanics
+
+#: entries kept by each cache
+KEPT = 16
+
+_MECHANICS: dict = {}
+_SERVOS: dict = {}
+_PITCH: dict = {}
+_LAWS: dict = {}
+
+
+def _kept(cache: dict, key: tuple, held: tuple, make: Callable[[], Any]) -> Any:
+    """`cache`'s value for `key` whose held objects are `held` (by identity), else
+    `make()` kept there (the oldest entry dropped beyond `KEPT`)."""
+    hit = cache.get(key)
+    if hit is not None and len(hit[0]) == len(held) and \
+            all(a is b for a, b in zip(hit[0], held, strict=True)):
+        return hit[1]
+    value = make()
+    if len(cache) >= KEPT:
+        cache.pop(next(iter(cache)))
+    cache[key] = (held, value)
+    return value
+
+
+def mechanics_on(ph: phys.Physics, vt) -> tuple:
+    """(`ph.on_table(vt)`, its `mechanics` with `ph`'s specimen). The specimen is a key by
+    its value (each fitted point unpacks a new one), by its identity when it cannot be
+    hashed; the matrices are read-only."""
+    try:
+        spec: Any = (hash(ph.specimen), ph.specimen)
+    except TypeError:
+        spec = id(ph.specimen)
+    key = (id(vt), tuple(sorted(ph.table.items())), ph.force_measured, spec)
+    hit = _MECHANICS.get(key)
+    if hit is not None and hit[0][0] is vt and (hit[0][1] is ph.specimen or
+                                                hit[0][1] == ph.specimen):
+        return hit[1]
+
+    def make() -> tuple:
+        vt_on = ph.on_table(vt)
+        mech = mechanics(vt_on, ph.specimen)
+        for a in mech[:3]:
+            a.flags.writeable = False
+        return vt_on, mech
+
+    value = make()
+    if len(_MECHANICS) >= KEPT:
+        _MECHANICS.pop(next(iter(_MECHANICS)))
+    _MECHANICS[key] = ((vt, ph.specimen), value)
+    return value
+
+
+def base_servo(ph: phys.Physics, vt):
+    """`Physics.base_hydraulics(ph, vt)`, kept by table and open loop."""
+    return _kept(_SERVOS, (id(vt), ph.open_loop), (vt,), lambda: phys.base_hydraulics(ph, vt))
+
+
+def pitch_loop(vt) -> tuple[float, float, float, float]:
+    """(a, b_q, b_v, f) of the vertical actuators' pitch loop of `vt` (`ServoLaw.dof_loop`)."""
+    return _kept(_PITCH, (id(vt),), (vt,), lambda: group_law(vt, "vertical").dof_loop("pitch"))
+
+
+def lumped_law(vt, servo, stages: Sequence[tuple[Any, dict[str, float]]]):
+    """The horizontal group's law of `vt` with the constants `servo` and `stages` (stage,
+    its values), lumped into one actuator on x (`ServoLaw.lumped`)."""
+    key = (id(vt), servo, tuple((id(s), tuple(sorted(p.items()))) for s, p in stages))
+    return _kept(_LAWS, key, (vt, *(s for s, _ in stages)),
+                 lambda: group_law(vt, "horizontal", servo, stages=stages).lumped("x"))
