@@ -36,9 +36,9 @@ SIAM J. Numer. Anal. 10, 1973). So, with J worked out once per round for every c
    this start (the effect's best values, the current parameters moved by δb within their
    bounds) one of the fit's starts (`TableModel`'s `multistart`).
 
-Steps 1-3 run on the first 35 % of each run's training segment (`Campaign.screening`,
+Steps 1-3 run on the first half of each run's training segment (`Campaign.screening`,
 `sampling.SCREEN_SHARE`): a gain of 1 % of the training cost shows there as on the whole
-segment, at a third of the simulated time, and a candidate that passes is fitted on the whole
+segment, at half the simulated time, and a candidate that passes is fitted on the whole
 segment (step 4); one screened out has its cost and training error taken on the whole
 segment where its steps ended (one simulation). The current model, fitted on the whole
 segments, is not at its minimum on the half: its parameters take `BASE_STEPS` there

@@ -31,12 +31,10 @@ HELD_OUT = 0.4  # the last 40 % of every run is held out from fitting ...
 #: ... and the fits use at most the first 30 s of each run: a few parameters do not need
 #: more, and every simulated second costs the fits time (a 165 s run trains on 30 s)
 TRAIN_MAX_S = 30.0
-#: a candidate's screen (`vtable.diagnose.projected`) fits on the first 35 % of each run's
-#: training segment: whether an effect lowers the training cost by 1 % shows there at a third
-#: of the simulations, and a candidate that passes is fitted on the whole segment (the
-#: scorecard's 92 cases found the same at 0.35 as at 0.5, their final errors within
-#: 0.1 %: the README campaign 10 % faster; 0.25 was no faster)
-SCREEN_SHARE = 0.35
+#: a candidate's screen (`vtable.diagnose.projected`) fits on the first half of each run's
+#: training segment: whether an effect lowers the training cost by 1 % shows there at half
+#: the simulations, and a candidate that passes is fitted on the whole segment
+SCREEN_SHARE = 0.5
 ANALYSIS_FS = 200.0  # Hz: faster runs are anti-alias filtered and resampled to this rate
 MIN_FS = 100.0  # Hz: slower runs cannot resolve the bands and the noise floor
 #: Hz: the fastest run resampled (by a ratio of denominator at most 1000: 200 Hz from 200 kHz)
