@@ -49,12 +49,14 @@ def _height_hessian(a: float, b: float, c: float) -> np.ndarray:
 
 
 def mechanics(vt: VirtualTable, specimen: Specimen, *, gravity: bool = True,
-              com_offset: bool = True, body_inertia: bool = True):
+              com_offset: bool = True, body_inertia: bool = True, jacobian: bool = True):
     """Small-motion mass, stiffness and damping matrices of the slab (x, z, φ, θ, ψ) and
     the specimen's slides, and the actuators' extension Jacobian; also used by the reduced
-    model of the diagnosis. The slide block of C is the specimen's full damping matrix
-    (`tables.bodies.specimen_damping`: a building's modal damping couples its storeys).
-    Returns (M, K, C, Ja, coordinate names, slide bodies, slab-frame positions)."""
+    model of the diagnosis (without the Jacobian, `jacobian=False`: it lumps the actuators,
+    and the Jacobian was most of the time of a build there). The slide block of C is the
+    specimen's full damping matrix (`tables.bodies.specimen_damping`: a building's modal
+    damping couples its storeys). Returns (M, K, C, Ja or None, coordinate names, slide
+    bodies, slab-frame positions)."""
     bodies = specimen_bodies(specimen)
     sb = slab_body(vt)
     pos = slab_frame_positions(bodies)
@@ -95,13 +97,15 @@ def mechanics(vt: VirtualTable, specimen: Specimen, *, gravity: bool = True,
         z_p = vt.pivot_depth - vt.table.geometry.thickness
         weight = (sb.mass + sum(b.mass for b in bodies)) * G
         K[rot, rot] -= weight * _height_hessian(0.0, 0.0, z_p)
+    names = [*SLAB_DOFS, *(b.joint for b in slides)]
+    if not jacobian:
+        return M, K, Cd, None, names, slides, pos
     acts = vt.actuators
     Ja = np.zeros((len(acts), nq))
     pivot = np.array([0.0, 0.0, -vt.pivot_depth])
     for i, a in enumerate(acts):
         r = np.asarray(a.slab_point) - pivot
         Ja[i, :5] = a.axis @ _rot_jacobian(r)
-    names = [*SLAB_DOFS, *(b.joint for b in slides)]
     return M, K, Cd, Ja, names, slides, pos
 
 

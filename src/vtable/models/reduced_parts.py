@@ -3,8 +3,9 @@ for the last few: a fit builds the model hundreds of times, and each of a Jacobi
 columns moves one parameter (a servo-loop, specimen, table or effect value), so most of
 the parts are the same as last time.
 
-- `mechanics_on`: the model's table (`Physics.on_table`) and its rigid-body matrices with
-  the specimen (`linear_table.mechanics`), by table, calibrated table values and specimen;
+- `mechanics_on`: the model's table (`Physics.on_table`), by table and calibrated table
+  values, and its rigid-body matrices with the specimen (`linear_table.mechanics`), by
+  that table and specimen;
 - `base_servo`: one horizontal actuator's constants for the base loop
   (`Physics.base_hydraulics`), by that table and the open loop;
 - `pitch_loop`: the vertical actuators' pitch loop of that table
@@ -29,6 +30,7 @@ from vtable.models.linear_table import mechanics
 #: entries kept by each cache
 KEPT = 16
 
+_TABLES: dict = {}
 _MECHANICS: dict = {}
 _SERVOS: dict = {}
 _PITCH: dict = {}
@@ -50,31 +52,29 @@ def _kept(cache: dict, key: tuple, held: tuple, make: Callable[[], Any]) -> Any:
 
 
 def mechanics_on(ph: phys.Physics, vt) -> tuple:
-    """(`ph.on_table(vt)`, its `mechanics` with `ph`'s specimen). The specimen is a key by
-    its value (each fitted point unpacks a new one), by its identity when it cannot be
-    hashed; the matrices are read-only."""
+    """(`ph.on_table(vt)`, its `mechanics` with `ph`'s specimen, no actuator Jacobian). The
+    table is kept by its calibrated values, so that a specimen moved alone keeps its table
+    (and every part kept by table); the specimen is a key by its value (each fitted point
+    unpacks a new one), by its identity when it cannot be hashed. The matrices are
+    read-only."""
+    vt_on = _kept(_TABLES, (id(vt), tuple(sorted(ph.table.items())), ph.force_measured),
+                  (vt,), lambda: ph.on_table(vt))
     try:
         spec: Any = (hash(ph.specimen), ph.specimen)
     except TypeError:
         spec = id(ph.specimen)
-    key = (id(vt), tuple(sorted(ph.table.items())), ph.force_measured, spec)
+    key = (id(vt_on), spec)
     hit = _MECHANICS.get(key)
-    if hit is not None and hit[0][0] is vt and (hit[0][1] is ph.specimen or
-                                                hit[0][1] == ph.specimen):
-        return hit[1]
-
-    def make() -> tuple:
-        vt_on = ph.on_table(vt)
-        mech = mechanics(vt_on, ph.specimen)
-        for a in mech[:3]:
-            a.flags.writeable = False
-        return vt_on, mech
-
-    value = make()
+    if hit is not None and hit[0][0] is vt_on and (hit[0][1] is ph.specimen or
+                                                   hit[0][1] == ph.specimen):
+        return vt_on, hit[1]
+    mech = mechanics(vt_on, ph.specimen, jacobian=False)
+    for a in mech[:3]:
+        a.flags.writeable = False
     if len(_MECHANICS) >= KEPT:
         _MECHANICS.pop(next(iter(_MECHANICS)))
-    _MECHANICS[key] = ((vt, ph.specimen), value)
-    return value
+    _MECHANICS[key] = ((vt_on, ph.specimen), mech)
+    return vt_on, mech
 
 
 def base_servo(ph: phys.Physics, vt):
