@@ -26,7 +26,6 @@ from vtable.analytic.hold import first_order_hold
 from vtable.analytic.structure import storey_channels, storey_masses
 from vtable.controllers.force_law import law_params
 from vtable.effects.registry import stock_stages
-from vtable.effects.table import TableView
 from vtable.errors import VtableError, interrupted
 from vtable.hydraulics import group_law
 from vtable.hydraulics.compose import ElementLaw, counted
@@ -45,7 +44,13 @@ from vtable.models.reduced_kernel import (
     simulate_reduced,
     simulate_reduced_python,
 )
-from vtable.models.reduced_parts import base_servo, lumped_law, mechanics_on, pitch_loop
+from vtable.models.reduced_parts import (
+    base_servo,
+    lumped_law,
+    mechanics_on,
+    pitch_loop,
+    table_view,
+)
 from vtable.models.stiffness import needed_stiffness
 from vtable.params.virtual import VirtualTable
 from vtable.runs.model import Run
@@ -114,7 +119,7 @@ class ReducedAssembly:
         self.max_step = SIM_DT
         self.servo = base_servo(ph, vt)
         self.stages: list[tuple[Stage, dict[str, float]]] = []
-        self.table = TableView.of(vt, piston_area=self.servo.area)
+        self.table = table_view(vt, self.servo.area)
         self.n_actuators = len(vt.group("horizontal"))
         for stage, params in table_stages(vt, rc=False):  # its valve lag, its controller's
             self.add_stage(stage, **params)
@@ -218,8 +223,9 @@ class ReducedAssembly:
         n0, n = len(keep), len(self.active)
         order = coords + list(self.extra)
         M, K, C = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+        rows, cols = np.ix_(keep, keep)
         for X, X0 in ((M, M0), (K, K0), (C, C0)):
-            X[:n0, :n0] = X0[np.ix_(keep, keep)]
+            X[:n0, :n0] = X0[rows, cols]
         for k, mass in enumerate(self.extra.values()):
             M[n0 + k, n0 + k] = mass
         ix = {c: i for i, c in enumerate(order)}

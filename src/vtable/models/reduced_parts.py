@@ -11,7 +11,8 @@ the parts are the same as last time.
 - `pitch_loop`: the vertical actuators' pitch loop of that table
   (`ServoLaw.dof_loop`, the pitch effect's `set_rocking`);
 - `lumped_law`: the horizontal actuators lumped into one (`ServoLaw.lumped`), by that
-  table, those constants and the stages with their values.
+  table, those constants and the stages with their values;
+- `table_view`: what the effects read of that table (`effects.table.TableView`).
 
 Every key holds the objects it names by identity (kept with the result, so that an id
 stays theirs) and the values by value; what is kept is never changed (frozen dataclasses,
@@ -23,6 +24,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from vtable.effects.table import TableView
 from vtable.hydraulics import group_law
 from vtable.models import physics as phys
 from vtable.models.linear_table import mechanics
@@ -35,6 +37,7 @@ _MECHANICS: dict = {}
 _SERVOS: dict = {}
 _PITCH: dict = {}
 _LAWS: dict = {}
+_VIEWS: dict = {}
 
 
 def _kept(cache: dict, key: tuple, held: tuple, make: Callable[[], Any]) -> Any:
@@ -93,3 +96,9 @@ def lumped_law(vt, servo, stages: Sequence[tuple[Any, dict[str, float]]]):
     key = (id(vt), servo, tuple((id(s), tuple(sorted(p.items()))) for s, p in stages))
     return _kept(_LAWS, key, (vt, *(s for s, _ in stages)),
                  lambda: group_law(vt, "horizontal", servo, stages=stages).lumped("x"))
+
+
+def table_view(vt, piston_area: float):
+    """`TableView.of(vt, piston_area)`, kept by table and area."""
+    return _kept(_VIEWS, (id(vt), piston_area), (vt,),
+                 lambda: TableView.of(vt, piston_area=piston_area))
