@@ -21,6 +21,7 @@ read-only arrays).
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -48,10 +49,17 @@ def _kept(cache: dict, key: tuple, held: tuple, make: Callable[[], Any]) -> Any:
             all(a is b for a, b in zip(hit[0], held, strict=True)):
         return hit[1]
     value = make()
-    if len(cache) >= KEPT:
-        cache.pop(next(iter(cache)))
-    cache[key] = (held, value)
+    _keep(cache, key, (held, value))
     return value
+
+
+def _keep(cache: dict, key: tuple, entry: tuple) -> None:
+    """`cache[key] = entry`, the oldest entry dropped beyond `KEPT` (fits in threads share
+    the caches: one dropped by another thread meanwhile is left to it)."""
+    if len(cache) >= KEPT:
+        with contextlib.suppress(RuntimeError, KeyError, StopIteration):
+            cache.pop(next(iter(cache)))
+    cache[key] = entry
 
 
 def mechanics_on(ph: phys.Physics, vt) -> tuple:
@@ -74,9 +82,7 @@ def mechanics_on(ph: phys.Physics, vt) -> tuple:
     mech = mechanics(vt_on, ph.specimen, jacobian=False)
     for a in mech[:3]:
         a.flags.writeable = False
-    if len(_MECHANICS) >= KEPT:
-        _MECHANICS.pop(next(iter(_MECHANICS)))
-    _MECHANICS[key] = ((vt_on, ph.specimen), mech)
+    _keep(_MECHANICS, key, ((vt_on, ph.specimen), mech))
     return vt_on, mech
 
 
