@@ -21,6 +21,7 @@ each DOF loop reduces to eq 6.5a with the mass per actuator M_d/ΣT_ij².
 
 from __future__ import annotations
 
+import contextlib
 import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -176,7 +177,8 @@ class ServoLaw:
         out = (float(tp @ b.A @ t), float(tp @ b.Bx @ t), float(tp @ b.Bv @ t),
                float(t @ b.C @ t))
         if len(_DOF_LOOPS) >= 64:  # a fit asks for the same few loops thousands of times
-            _DOF_LOOPS.pop(next(iter(_DOF_LOOPS)))
+            with contextlib.suppress(RuntimeError, KeyError, StopIteration):  # threads
+                _DOF_LOOPS.pop(next(iter(_DOF_LOOPS)))  # share it: left to the other
         _DOF_LOOPS[key] = out
         return out
 

@@ -15,8 +15,9 @@ the parts are the same as last time.
 - `table_view`: what the effects read of that table (`effects.table.TableView`).
 
 Every key holds the objects it names by identity (kept with the result, so that an id
-stays theirs) and the values by value; what is kept is never changed (frozen dataclasses,
-read-only arrays).
+stays theirs) and the values by value; nothing kept is changed in place: frozen
+dataclasses, the mechanics' matrices read-only, and the laws' arrays only read (they stay
+writeable: the compiled integrators take them as they take any model's).
 """
 
 from __future__ import annotations
