@@ -71,20 +71,19 @@ def mechanics_on(ph: phys.Physics, vt) -> tuple:
     read-only."""
     vt_on = _kept(_TABLES, (id(vt), tuple(sorted(ph.table.items())), ph.force_measured),
                   (vt,), lambda: ph.on_table(vt))
-    try:
-        spec: Any = (hash(ph.specimen), ph.specimen)
+    spec = ph.specimen
+    try:  # by value (the dict compares equal keys), else by identity, held
+        key, held = (id(vt_on), hash(spec), spec), (vt_on,)
     except TypeError:
-        spec = id(ph.specimen)
-    key = (id(vt_on), spec)
-    hit = _MECHANICS.get(key)
-    if hit is not None and hit[0][0] is vt_on and (hit[0][1] is ph.specimen or
-                                                   hit[0][1] == ph.specimen):
-        return vt_on, hit[1]
-    mech = mechanics(vt_on, ph.specimen, jacobian=False)
-    for a in mech[:3]:
-        a.flags.writeable = False
-    _keep(_MECHANICS, key, ((vt_on, ph.specimen), mech))
-    return vt_on, mech
+        key, held = (id(vt_on), id(spec)), (vt_on, spec)
+
+    def make() -> tuple:
+        mech = mechanics(vt_on, spec, jacobian=False)
+        for a in mech[:3]:
+            a.flags.writeable = False
+        return mech
+
+    return vt_on, _kept(_MECHANICS, key, held, make)
 
 
 def base_servo(ph: phys.Physics, vt):
