@@ -6,10 +6,12 @@ statistics behind them stay in the JSON and the verdict (`vtable diagnose --verb
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from vtable.diagnose.noise import NOISE_FACTOR, within_noise
 from vtable.diagnose.reading import SAID
+from vtable.diagnose.selection import implausibility, near_miss
 from vtable.effects.registry import get as effect
 from vtable.effects.registry import names
 
@@ -130,18 +132,78 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
             f"(--with {name}) to see it fitted in, or declare what it stands for (an "
             "undocumented specimen in [specimen])",
             numbers={k: float(v) for k, v in values.items()}))
+    missed = _not_added(d)
+    out += [f for _, f in missed]
     drifting = [e for e in names() if getattr(effect(e), "accumulates", False)]
     held = [e for e in d.final_effects if e in drifting]
+    blocked = [e for e, _ in missed if e in drifting]
+    tried = [e for e in drifting if any(c.effect == e for r in d.rounds for c in r.ranking)]
     for run, (f1, f2, w) in (notches or {}).items():
         out.append(finding(
             "softening", f"x_t/x_c's notch moves {f1:.2f} -> {f2:.2f} Hz within the run: the "
             f"specimen's stiffness changes by {(f2 / f1) ** 2 - 1:+.0%}",
             f"the final model follows it with {', '.join(held)}" if held else
+            f"the diagnosis fitted {', '.join(blocked)} to it and did not add it: see the "
+            "not_added finding" if blocked else
+            f"the diagnosis fitted {', '.join(tried)} to it, which did not explain enough of it "
+            "(its ranking, --verbose): write an effect of another form of change, or fit the "
+            "run's first part alone" if tried else
             "no time-invariant model follows it: add an effect whose stiffness changes during "
             f"the run ({', '.join(drifting) or 'your own'}: it acts on the declared "
             "specimen, so where the runs declare none, declare the one whose notch moves, "
             "e.g. the resonator fitted in its place), or fit the run's first part alone",
             runs=[run], numbers={"first_hz": f1, "last_hz": f2, "window_s": w}))
+    return out
+
+
+def _not_added(d) -> list[tuple[str, dict[str, Any]]]:
+    """The candidates of the final model's rounds (the last ones, which added nothing) whose
+    held-out gain the selection's statistics take (`selection.near_miss`) but which were not
+    added, the best first: what each would have bought and what stopped it (its parameters
+    at a bound, their distance from their defaults, a declaration that explains as much).
+    Returns (effect, finding) pairs."""
+    tail = []
+    for r in reversed(d.rounds):
+        if r.added is not None:
+            break
+        tail.append(r)
+    out, seen = [], set(d.final_effects)
+    for r in tail:
+        for c in sorted(r.ranking, key=lambda c: c.score):
+            if c.effect in seen or not near_miss(c):
+                continue
+            seen.add(c.effect)
+            failing = c.failing()
+            why = [f.removeprefix(f"{c.effect}.") for f in c.blocking] + failing[:1]
+            if c.stand_in:
+                why.append("the starting model refitted with its leaning declarations widened "
+                           "explains as much")
+            bound = [f.split(" at its ")[0] for f in why if " at its " in f and "bound" in f]
+            far = [w.split(" (", 1)[0] for w, z in implausibility(
+                c.effect, c.physics.effects.get(c.effect, {}), c.table) if abs(z) > 1]
+            charged = bool(failing) and failing[0].startswith("charged") and far
+            action = ("a declaration explains as much: correct the declarations at their "
+                      "bounds (their findings)" if c.stand_in else
+                      f"it ends at the edge of its range ({', '.join(bound)}): the runs may "
+                      "hold another form of it, an effect of your own (--effects-from FILE)"
+                      if bound else
+                      f"its fitted values are far from the catalog's defaults ({'; '.join(far)})"
+                      ": if they are right for your table or specimen, an effect of your own "
+                      "with them as defaults (--effects-from FILE) is not charged for them; "
+                      "else it stands in for something else" if charged else
+                      "not added on this evidence: its flags and statistics are in the "
+                      "ranking (--verbose)")
+            if getattr(effect(c.effect), "accumulates", False):
+                action += ", or split the run where the specimen changed"
+            g = c.gain
+            share = f"{g.share:.0%}" if math.isfinite(g.share) else "all"
+            params = {k: float(v) for k, v in c.params.items() if isinstance(v, (int, float))}
+            out.append((c.effect, finding(
+                "not_added", f"{c.effect} would lower the held-out error {_pct(r.error)} -> "
+                f"{_pct(c.error_after)} ({share} of the systematic residual) but was not "
+                f"added: {'; '.join(why) or 'another candidate won'}", action,
+                numbers={"error_before": r.error, "error_after": c.error_after, "z": g.z,
+                         "share": g.share, **params})))
     return out
 
 

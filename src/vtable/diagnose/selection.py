@@ -230,3 +230,18 @@ def failing(g: Gain | None, model: Physics | None = None, name: str | None = Non
         out.append(f"its parameters' distance from their defaults costs {cost:.3g} of the "
                    f"gain {g.gain:.3g}{whole}" + (f" ({'; '.join(far)})" if far else ""))
     return out
+
+
+def near_miss(c) -> bool:
+    """Whether candidate `c` (a `result.Candidate`, fitted and refined) shows a held-out gain
+    the selection's statistics take on their own — (1) above `Z_NOISE` standard errors of
+    the noise, (2) at least `MIN_SHARE` of the systematic residual, (3) at least
+    `NOISE_SHARE` of the noise's cost, (4) at least the squared resolution of the model with
+    it — before the cost of its parameters' distance from their defaults and the soundness
+    of its fit: when it was not added, what stopped it is worth saying (`findings`)."""
+    g = c.gain
+    if g is None or c.screened or c.not_fitted or c.unrefined:
+        return False
+    r = resolution(c.physics.effects)
+    return (g.z > Z_NOISE and g.gain >= MIN_SHARE * g.systematic
+            and g.gain >= NOISE_SHARE * g.f2 and g.gain >= r * r)
