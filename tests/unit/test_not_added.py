@@ -32,11 +32,14 @@ def _candidate(effect: str, values: dict, gain: Gain, flags=()) -> Candidate:
                      flags=list(flags), gain=gain)
 
 
-def _diagnosis(rounds: list[Round], final: list[str]):
-    return SimpleNamespace(interrupted=False, steps=lambda: rounds, rounds=rounds, limits=None,
-                           final_error=math.sqrt(E2_CURRENT), base_at_bounds=[],
-                           unexplained={"ratio_to_floor": 14.7}, final_effects=final,
-                           noise_floor=math.sqrt(F2))
+def _diagnosis(rounds: list[Round], final: list[str], **kw):
+    d = SimpleNamespace(interrupted=False, steps=lambda: rounds, rounds=rounds, limits=None,
+                        final_error=0.2, base_at_bounds=[], unexplained={"ratio_to_floor": 14.7},
+                        final_effects=final, noise_floor=math.sqrt(F2), states={},
+                        states_declared=False)
+    for k, v in kw.items():
+        setattr(d, k, v)
+    return d
 
 
 def _degradation(gain: Gain) -> Candidate:
@@ -112,3 +115,45 @@ def test_a_declaration_that_explains_as_much_is_what_is_said_to_correct():
     assert f["what"].endswith("the starting model refitted with its leaning declarations "
                               "widened explains as much")
     assert f["action"].startswith("a declaration explains as much: correct the declarations")
+
+
+def _missed(d) -> list[dict]:
+    return [f for f in findings(d) if f["kind"] == "not_added"]
+
+
+def test_each_effect_once_from_the_last_round_and_none_added_then_removed():
+    before, earlier = math.sqrt(E2_CURRENT), 0.25
+    late = _degradation(Gain(E2_CURRENT, E2_CANDIDATE, F2, SE))
+    rounds = [Round([], "sensor_mount", earlier, 0.42),
+              Round([_degradation(Gain(E2_CURRENT, 0.04, F2, SE))], None, earlier, earlier),
+              Round([late], None, before, before)]
+    (f,) = _missed(_diagnosis(rounds, ["sensor_mount"]))
+    assert f["numbers"]["error_before"] == before  # the round's, not the final error (0.2)
+    assert f["numbers"]["error_after"] == late.error_after
+    rounds[0].removed = {"specimen_degradation": "it no longer passes"}
+    assert not _missed(_diagnosis(rounds, ["sensor_mount"]))  # its removal says it
+
+
+@pytest.mark.parametrize("case", ["within the noise", "a state per run", "screened",
+                                  "not fitted", "no valid model"])
+def test_nothing_is_said_where_its_numbers_would_not_hold(case):
+    c = _degradation(Gain(E2_CURRENT, E2_CANDIDATE, F2, SE))
+    kw = {}
+    if case == "within the noise":
+        kw["unexplained"] = None
+    elif case == "a state per run":  # split after the rounds: the gains predate it
+        kw["states"] = {s: {"runs": [s], "specimen": {"frequency_hz": f, "damping": 0.02}}
+                        for s, f in (("r1", 3.2), ("r2", 3.0))}
+    elif case == "screened":
+        c.screened = True
+    elif case == "not fitted":
+        c.not_fitted = "the runs show no amplitude dependence"
+    else:
+        c.gain = None
+    rounds = [Round([c], None, math.sqrt(E2_CURRENT), math.sqrt(E2_CURRENT))]
+    d = _diagnosis(rounds, [], **kw)
+    assert not _missed(d)
+    if case in ("not fitted", "no valid model"):  # never fitted: the softening says the rest
+        soft = next(f for f in findings(d, notches={"r": (3.25, 3.06, 27.3)})
+                    if f["kind"] == "softening")
+        assert soft["action"].startswith("no time-invariant model follows it")

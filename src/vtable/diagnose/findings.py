@@ -137,7 +137,8 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
     drifting = [e for e in names() if getattr(effect(e), "accumulates", False)]
     held = [e for e in d.final_effects if e in drifting]
     blocked = [e for e, _ in missed if e in drifting]
-    tried = [e for e in drifting if any(c.effect == e for r in d.rounds for c in r.ranking)]
+    tried = [e for e in drifting if any(c.effect == e and c.gain is not None and not (
+        c.screened or c.not_fitted) for r in d.rounds for c in r.ranking)]
     for run, (f1, f2, w) in (notches or {}).items():
         out.append(finding(
             "softening", f"x_t/x_c's notch moves {f1:.2f} -> {f2:.2f} Hz within the run: the "
@@ -159,15 +160,21 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
 def _not_added(d) -> list[tuple[str, dict[str, Any]]]:
     """The candidates of the final model's rounds (the last ones, which added nothing) whose
     held-out gain the selection's statistics take (`selection.near_miss`) but which were not
-    added, the best first: what each would have bought and what stopped it (its parameters
-    at a bound, their distance from their defaults, a declaration that explains as much).
+    added — the last round's first, each round's best first: what each would have bought and
+    what stopped it (its parameters at a bound, their distance from their defaults, a
+    declaration that explains as much). None when the final model is within the noise, and
+    none when the diagnosis then split the runs into a state each (its gains were measured
+    on the model before the split); an effect added and removed is said by its removal.
     Returns (effect, finding) pairs."""
+    if d.unexplained is None or (getattr(d, "states", None)
+                                 and not getattr(d, "states_declared", False)):
+        return []
     tail = []
     for r in reversed(d.rounds):
         if r.added is not None:
             break
         tail.append(r)
-    out, seen = [], set(d.final_effects)
+    out, seen = [], set(d.final_effects) | {e for r in d.rounds for e in r.removed}
     for r in tail:
         for c in sorted(r.ranking, key=lambda c: c.score):
             if c.effect in seen or not near_miss(c):
@@ -187,10 +194,11 @@ def _not_added(d) -> list[tuple[str, dict[str, Any]]]:
                       f"it ends at the edge of its range ({', '.join(bound)}): the runs may "
                       "hold another form of it, an effect of your own (--effects-from FILE)"
                       if bound else
-                      f"its fitted values are far from the catalog's defaults ({'; '.join(far)})"
-                      ": if they are right for your table or specimen, an effect of your own "
-                      "with them as defaults (--effects-from FILE) is not charged for them; "
-                      "else it stands in for something else" if charged else
+                      f"its fitted values are far from their defaults ({'; '.join(far)}): "
+                      "where a source of its own (a test, a datasheet; not this fit) gives "
+                      "such values for your table or specimen, an effect of your own with "
+                      "them as defaults (--effects-from FILE) is not charged for them; else "
+                      "it stands in for something else" if charged else
                       "not added on this evidence: its flags and statistics are in the "
                       "ranking (--verbose)")
             if getattr(effect(c.effect), "accumulates", False):
@@ -201,7 +209,7 @@ def _not_added(d) -> list[tuple[str, dict[str, Any]]]:
             out.append((c.effect, finding(
                 "not_added", f"{c.effect} would lower the held-out error {_pct(r.error)} -> "
                 f"{_pct(c.error_after)} ({share} of the systematic residual) but was not "
-                f"added: {'; '.join(why) or 'another candidate won'}", action,
+                f"added: {'; '.join(why) or 'see its ranking (--verbose)'}", action,
                 numbers={"error_before": r.error, "error_after": c.error_after, "z": g.z,
                          "share": g.share, **params})))
     return out

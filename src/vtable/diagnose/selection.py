@@ -235,13 +235,16 @@ def failing(g: Gain | None, model: Physics | None = None, name: str | None = Non
 def near_miss(c) -> bool:
     """Whether candidate `c` (a `result.Candidate`, fitted and refined) shows a held-out gain
     the selection's statistics take on their own — (1) above `Z_NOISE` standard errors of
-    the noise, (2) at least `MIN_SHARE` of the systematic residual, (3) at least
-    `NOISE_SHARE` of the noise's cost, (4) at least the squared resolution of the model with
-    it — before the cost of its parameters' distance from their defaults and the soundness
-    of its fit: when it was not added, what stopped it is worth saying (`findings`)."""
+    the noise, (2) at least `MIN_SHARE` of the systematic residual (`SHOWN_SHARE` for what
+    the runs show), (3) at least `NOISE_SHARE` of the noise's cost, (4) at least the squared
+    resolution of the model with it — before the cost of its parameters' distance from their
+    defaults and the soundness of its fit: when it was not added, what stopped it is worth
+    saying (`findings`). A current model within the noise (no systematic residual) leaves
+    nothing to say."""
     g = c.gain
-    if g is None or c.screened or c.not_fitted or c.unrefined:
+    if g is None or c.screened or c.not_fitted or c.unrefined or not g.systematic > 0:
         return False
+    share = SHOWN_SHARE if shown(c.physics, c.effect, c.table) else MIN_SHARE
     r = resolution(c.physics.effects)
-    return (g.z > Z_NOISE and g.gain >= MIN_SHARE * g.systematic
+    return (g.z > Z_NOISE and g.gain >= share * g.systematic
             and g.gain >= NOISE_SHARE * g.f2 and g.gain >= r * r)
