@@ -167,8 +167,9 @@ def _emit(a: argparse.Namespace, result: Result) -> None:
 
 def main(argv: list[str] | None = None, loaded: Callable[[], None] | None = None) -> int:
     """Run one command; exit codes: 0 ok, 2 bad input (one line on stderr), 3 unstable
-    configuration, 130 interrupted (Ctrl-C), 141 output pipe closed (quietly). `loaded`
-    is called once the command's modules are imported, before it runs."""
+    configuration, 130 interrupted (Ctrl-C, and whatever the command fails with once it has
+    been interrupted), 141 output pipe closed (quietly). `loaded` is called once the
+    command's modules are imported, before it runs."""
     try:
         a = parser().parse_args(argv)
         if (verb := a.command.replace("-", "_")) in verbs.VERBS:
@@ -180,12 +181,6 @@ def main(argv: list[str] | None = None, loaded: Callable[[], None] | None = None
             raise KeyboardInterrupt
         _emit(a, result)
         return 0
-    except UnstableError as e:
-        print(f"vtable: {e}", file=sys.stderr)
-        return 3
-    except VtableError as e:
-        print(f"vtable: error: {e}", file=sys.stderr)
-        return 2
     except BrokenPipeError:
         quiet_stdout()
         return 141
@@ -194,9 +189,17 @@ def main(argv: list[str] | None = None, loaded: Callable[[], None] | None = None
             print("vtable: interrupted", file=sys.stderr)
         return 130
     except Exception as e:
-        if interrupted(e):
+        # once Ctrl-C has reached the command, whatever it then fails with is the interrupt
+        # (a library may turn it into an error of its own, unchained: numba, MuJoCo)
+        if interrupted(e) or sigint_seen():
             print("vtable: interrupted", file=sys.stderr)
             return 130
+        if isinstance(e, UnstableError):
+            print(f"vtable: {e}", file=sys.stderr)
+            return 3
+        if isinstance(e, VtableError):
+            print(f"vtable: error: {e}", file=sys.stderr)
+            return 2
         raise
 
 

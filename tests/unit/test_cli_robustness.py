@@ -14,7 +14,9 @@ import numpy as np
 import pytest
 from conftest import python_output, vtable_exe
 
+from vtable import cli, errors
 from vtable.cli import main
+from vtable.errors import UnstableError, VtableError
 
 
 def run(capsys, *argv):
@@ -210,3 +212,26 @@ def test_the_command_ends_with_python_s_exit_codes(case):
     else:
         _, got_err = p.communicate(timeout=60)
     assert (p.returncode, got_err) == (want, err)
+
+
+@pytest.mark.parametrize("error, code", [(RuntimeError("numba: lowering failed"), 1),
+                                         (VtableError("the run's CSV ended early"), 2),
+                                         (UnstableError("the loop", [0.5 + 3j]), 3)])
+def test_a_failure_after_ctrl_c_is_the_interrupt(capsys, monkeypatch, error, code):
+    """A library may turn Ctrl-C into an error of its own, unchained to the interrupt (the
+    Ctrl-C test once ended with exit code 1 in CI): once the interrupt has reached the
+    command, whatever it fails with ends as the interrupt, one line and 130; without one,
+    each error keeps its own code."""
+    def command(_args):
+        raise error
+
+    monkeypatch.setitem(cli._COMMANDS, "presets", command)
+    if code == 1:
+        with pytest.raises(RuntimeError):
+            main(["presets"])
+    else:
+        assert main(["presets"]) == code
+    capsys.readouterr()
+    monkeypatch.setattr(errors, "_SIGINT", [True])  # `on_sigint` ran
+    assert main(["presets"]) == 130
+    assert capsys.readouterr().err == "vtable: interrupted\n"
