@@ -29,7 +29,7 @@ import signal
 import sys
 import threading
 
-from vtable.errors import on_sigint, sigint_seen
+from vtable.errors import interrupted, on_sigint, sigint_seen
 
 
 def _quiet_interrupts(u) -> None:
@@ -46,6 +46,11 @@ def run() -> None:
     sys.unraisablehook = _quiet_interrupts
     try:
         from vtable.cli import main  # in the try: Ctrl-C while the libraries load
+    except Exception as e:  # a library's own error once Ctrl-C came: the interrupt (`main`)
+        if not (interrupted(e) or sigint_seen()):
+            raise
+        print("vtable: interrupted", file=sys.stderr)
+        sys.exit(130)
     except KeyboardInterrupt:
         print("vtable: interrupted", file=sys.stderr)
         sys.exit(130)

@@ -235,3 +235,25 @@ def test_a_failure_after_ctrl_c_is_the_interrupt(capsys, monkeypatch, error, cod
     monkeypatch.setattr(errors, "_SIGINT", [True])  # `on_sigint` ran
     assert main(["presets"]) == 130
     assert capsys.readouterr().err == "vtable: interrupted\n"
+
+
+@pytest.mark.parametrize("interrupt", [True, False])
+def test_a_failed_start_after_ctrl_c_is_the_interrupt(capsys, monkeypatch, interrupt):
+    """The same while the command's libraries load (`vtable.__main__.run`): an import that
+    fails once Ctrl-C has come ends as the interrupt; without one, its error is raised."""
+    import vtable.__main__ as entry
+
+    monkeypatch.setattr(entry.signal, "signal", lambda *a: None)  # this process's own
+    monkeypatch.setattr(entry.gc, "disable", lambda: None)
+    monkeypatch.setattr(sys, "unraisablehook", sys.unraisablehook)
+    monkeypatch.setenv("MUJOCO_GL", "disable")
+    monkeypatch.setitem(sys.modules, "vtable.cli", type(sys)("vtable.cli"))  # no `main`
+    monkeypatch.setattr(errors, "_SIGINT", [interrupt])
+    if interrupt:
+        with pytest.raises(SystemExit) as stop:
+            entry.run()
+        assert stop.value.code == 130
+        assert capsys.readouterr().err == "vtable: interrupted\n"
+    else:
+        with pytest.raises(ImportError, match="cannot import name 'main'"):
+            entry.run()
