@@ -11,7 +11,7 @@ from typing import Any
 
 from vtable.diagnose.noise import NOISE_FACTOR, within_noise
 from vtable.diagnose.reading import SAID
-from vtable.diagnose.selection import implausibility, near_miss
+from vtable.diagnose.selection import implausibility, near_miss, prior_cost
 from vtable.effects.registry import get as effect
 from vtable.effects.registry import names
 
@@ -185,10 +185,13 @@ def _not_added(d) -> list[tuple[str, dict[str, Any]]]:
             if c.stand_in:
                 why.append("the starting model refitted with its leaning declarations widened "
                            "explains as much")
-            bound = [f.split(" at its ")[0] for f in why if " at its " in f and "bound" in f]
+            bound = [f.removeprefix(f"{c.effect}.").split(" at its ")[0]
+                     for f in c.blocking if " bound (" in f]
             far = [w.split(" (", 1)[0] for w, z in implausibility(
                 c.effect, c.physics.effects.get(c.effect, {}), c.table) if abs(z) > 1]
-            charged = bool(failing) and failing[0].startswith("charged") and far
+            # the statistics fail only with its distance from the defaults charged
+            charged = bool(failing) and far and prior_cost(c.gain, c.physics, c.effect,
+                                                           c.table) > 0
             action = ("a declaration explains as much: correct the declarations at their "
                       "bounds (their findings)" if c.stand_in else
                       f"it ends at the edge of its range ({', '.join(bound)}): the runs may "
