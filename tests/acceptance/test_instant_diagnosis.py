@@ -432,8 +432,59 @@ def test_a_freed_core_takes_the_next_fit_in_line_and_one_never_asked_for_is_stop
         assert not fits._ahead and fut.cancelled()
         assert StopFlag(*flag.names).is_set() and not StopFlag(flag.names[0]).is_set()
         assert Event(flag.names[-1]).is_set()  # its own, not the diagnosis's
+        # begun before the round's other work (`begin`): the dispatch takes them over
+        fits.begin([("begun", long("valve_dynamics"))])
+        submitted = len(fits.tasks._futures)
+        begun = dict(fits.dispatch([("begun", long("valve_dynamics"))]))["begun"]
+        assert len(fits.tasks._futures) == submitted and not fits._ahead
+        assert begun.cost == own.cost and begun.train_error == own.train_error
     finally:
         fits.close()
+
+
+def _until_stopped(flag, path: str) -> None:
+    """A task that looks at `flag` every millisecond for up to 20 s, then writes the time
+    it stopped to `path`."""
+    from pathlib import Path
+
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 20 and not flag.is_set():
+        time.sleep(0.001)
+    Path(path).write_text(repr(time.time()))
+
+
+def test_a_cancelled_fit_stops_at_its_next_look_not_at_the_next_message(tmp_path):
+    """A task the client cancels (`Tasks.drop`: a fit started ahead and not asked for; or
+    Ctrl-C's `halt`) reads that from its worker's own state at its next look at its
+    `StopFlag`: it ends within milliseconds, where the Dask event, read every `POLL_S`,
+    took up to 0.2 s (a dropped fit held a core of the next round ~0.1 s). Its event is
+    never set here; outside a worker the flag reads only its events."""
+    import uuid
+    from pathlib import Path
+
+    from distributed import Event
+
+    from vtable.diagnose import workers
+
+    client = workers.cluster(2)
+    flag = workers.StopFlag(f"vtable-test-{uuid.uuid4().hex}")
+    assert not flag.is_set() and not flag._cancelled()  # here, not in a worker
+    for k in range(3):
+        out = tmp_path / f"stopped{k}"
+        fut = client.submit(_until_stopped, flag, str(out), pure=False)
+        while not client.processing() or not any(client.processing().values()):
+            time.sleep(0.01)
+        time.sleep(0.2)  # running, and its first look at the event made
+        t = time.time()
+        client.cancel([fut])
+        for _ in range(500):
+            if out.exists() and out.read_text():
+                break
+            time.sleep(0.01)
+        assert out.exists(), "the cancelled task did not stop within 5 s"
+        late = float(Path(out).read_text()) - t
+        assert 0 <= late < workers.POLL_S / 4, late
+    assert not Event(flag.name, client=client).is_set()
 
 
 def test_a_fit_asked_to_stop_returns_none_and_its_dispatch_stops():
@@ -596,7 +647,8 @@ def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monk
     round's longest) is the first screen dispatched, so that no core waits for it at the
     round's end (ordered by what the last round's fits cost, it was dispatched third). In
     the last round, with friction in and no amplitude dependence left, the linear
-    candidates are fitted all the same (they were not, as nonlinear models)."""
+    candidates are fitted all the same (they were not, as nonlinear models). A round's
+    backward refits are on the cores before its frame is made (`Fits.begin`)."""
     from readme_campaigns import campaign
 
     from vtable.diagnose import pool
@@ -619,9 +671,24 @@ def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monk
         return fit(*a, **kw)
 
     monkeypatch.setattr(d, "_candidates", candidates)
+    from vtable.diagnose import engine
+
+    begun: list[set] = []  # the refits running as each round's frame is made
+    frame_of = engine.Frame.of
+
+    def frame(*a, **kw):
+        begun.append({name for kind, name in d.fits._ahead if kind == "without"})
+        return frame_of(*a, **kw)
+
+    monkeypatch.setattr(engine.Frame, "of", frame)
     result = d.diagnose()
     assert sorted(result.final_effects) == ["actuator_friction", "force_feedback_filter",
                                             "pitch_flexibility"], result.verdict
+    # each round's backward refits (without each effect added before the last) already
+    # run on the cores while this process makes the round's frame
+    added = [r.added for r in result.rounds]
+    assert begun == [set(added[:k - 1]) if k > 1 else set() for k in range(len(begun))], \
+        (begun, added)
     rounds = [s for s in screens if s]
     added = [r.added for r in result.rounds]
     for k in (1, 2):  # the second and third rounds

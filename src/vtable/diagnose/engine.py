@@ -371,6 +371,12 @@ class Diagnoser:
         core the shorter of a pair frees takes the next: `Fits.dispatch`'s `ahead`); one
         whose screened training cost is above `REFINE_FACTOR` times that of an admissible
         refined candidate cannot win the round and is kept as screened."""
+        # the refits that need no frame go to the cores first, while the frame is made
+        early = [(("without", e), refit_without(current, e, cost, self.campaign))
+                 for e in backward]
+        if lean is not None:  # the starting model refitted with its leaning bounds widened
+            early.insert(0, (("widened", ""), {"start": self.start, "calibration": lean[0]}))
+        self.fits.begin(early)
         frame = Frame.of(self._model(), current, self.campaign.training_for(current).screening())
         ranking: list[Candidate] = []
         screen = nonlinearity_evidence(self.campaign, st.stages[-1].predictions)
@@ -401,10 +407,7 @@ class Diagnoser:
             return job(e, frame=None) if self.campaign.apart(current.with_effect(e), current) \
                 else job(e, baseline=cost, screen_only=True)
 
-        jobs = [(("without", e), refit_without(current, e, cost, self.campaign)) for e in backward]
-        if lean is not None:  # the starting model refitted with its leaning bounds widened
-            jobs.insert(0, (("widened", ""), {"start": self.start, "calibration": lean[0]}))
-        jobs += [(("screen", e), screened(e)) for e in todo]
+        jobs = early + [(("screen", e), screened(e)) for e in todo]
         left: dict[str, CandidateFit] = {}
         passed: dict[str, CandidateFit] = {}  # screens that passed: refined if they can win
         fitted_now: list[Candidate] = []

@@ -7,7 +7,8 @@ registered from code rather than a file (another process could not load it), or 
 one after the other in the calling thread with `workers=1`. It owns the stop flag every
 fit checks between simulations. On Dask a core that would wait for a longer fit of its
 batch takes the next fit in line (`dispatch`'s `ahead`), which the next batch then takes
-over: every result the same, sooner.
+over, and fits that need nothing the caller is still making start before it (`begin`):
+every result the same, sooner.
 
 `in_thread` runs the loop in a thread of its own while the caller's thread only waits and
 reports progress: an interrupt there (Ctrl-C, or a progress callback raising) sets the stop
@@ -160,6 +161,20 @@ class Fits:
             finally:
                 for fut in pending:
                     fut.cancel()
+
+    def begin(self, jobs: list[tuple[Any, dict]]) -> None:
+        """Start `jobs` (key, the estimator's keywords) on Dask now, before the caller's
+        other work: the `dispatch` that asks for them takes them over, as it does the fits
+        started `ahead` (a round's backward refits run while its frame is made). Nothing
+        without Dask workers (`dispatch` runs them)."""
+        if self.workers == 1 and not self.scheduler:
+            return
+        tasks = self.start()
+        if tasks is None:
+            return
+        for key, job in jobs:
+            if key not in self._ahead:
+                self._ahead[key] = tasks.ahead(job, self.calibration)
 
     def drop_ahead(self) -> None:
         """Stop the fits started ahead of their turn that no `dispatch` asked for."""

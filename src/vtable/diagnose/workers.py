@@ -45,7 +45,7 @@ from typing import Any, NamedTuple
 
 import dask
 import distributed.utils
-from distributed import Client, Event, LocalCluster
+from distributed import Client, Event, LocalCluster, get_worker
 
 from vtable.controllers import kinds
 from vtable.diagnose.calibration import Calibration
@@ -61,23 +61,52 @@ from vtable.models.reduced import ReducedModel
 POLL_S = 0.2
 
 
+#: the states of a task its worker is running and still wants (`distributed`'s worker
+#: state machine); a cancelled one is "cancelled", a forgotten one gone
+_RUNNING = ("executing", "long-running")
+
+
 class StopFlag:
     """Dask `Event`s read as one `threading.Event` by the fits (`is_set`: any of them set),
     looked at no more often than every `POLL_S` seconds (each look is a message to the
-    scheduler): the diagnosis's, and a task's own when it may be dropped (`Tasks.ahead`)."""
+    scheduler): the diagnosis's, and a task's own when it may be dropped (`Tasks.ahead`).
+
+    In a worker the running task's own state is read at every look as well, which is no
+    message: a task the client cancelled (`Tasks.drop`, `Tasks.halt`) stops at its next
+    simulation, not up to `POLL_S` later (a fit started ahead and dropped as its round
+    ended held a core of the next round for ~0.1 s)."""
 
     def __init__(self, *names: str) -> None:
         self.names = names
         self._events: list = []
         self._next = 0.0
         self._set = False
+        self._task: tuple | None = None  # (the worker's task states, this task's key)
 
     @property
     def name(self) -> str:
         return self.names[0]
 
+    def _cancelled(self) -> bool:
+        """Whether the task running this fit is no longer wanted by its worker (cancelled
+        or forgotten); False outside a Dask worker's task."""
+        if self._task is None:
+            try:
+                w = get_worker()
+                self._task = (w.state.tasks, w.get_current_task())
+            except (ValueError, AttributeError, KeyError):
+                self._task = ({}, None)
+        tasks, key = self._task
+        if key is None:
+            return False
+        ts = tasks.get(key)
+        return ts is None or ts.state not in _RUNNING
+
     def is_set(self) -> bool:
         if self._set:
+            return True
+        if self._cancelled():
+            self._set = True
             return True
         now = time.monotonic()
         if now >= self._next:
