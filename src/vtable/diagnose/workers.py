@@ -19,10 +19,11 @@ A diagnosis scatters its campaign to every worker once (`Tasks.campaign`) and su
 `_fit` tasks: each returns what `fitted` does (a `CandidateFit`). User files (effects
 and controller kinds registered with `--effects-from`, `--controller-from`) are sent to
 the workers as text and loaded there (`_load_files`), so a remote worker needs vtable
-installed, not the user's files. A stop (Ctrl-C) sets a Dask `Event` each fit polls
-between simulations (`StopFlag`), and cancels what has not started; a fit stopped so
-returns None (a task that raised would have its traceback pickled and sent, every module's
-path resolved the first time: ~16,000 file-system calls in each worker).
+installed, not the user's files. A stop (Ctrl-C) sets a Dask `Event` and cancels every
+fit; a running fit reads its cancellation from its worker's task state between
+simulations, and the event every `POLL_S` (`StopFlag`); a fit stopped so returns None (a
+task that raised would have its traceback pickled and sent, every module's path resolved
+the first time: ~16,000 file-system calls in each worker).
 """
 
 from __future__ import annotations
