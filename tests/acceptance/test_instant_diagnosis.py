@@ -485,6 +485,30 @@ def test_a_cancelled_fit_stops_at_its_next_look_not_at_the_next_message(tmp_path
         late = float(Path(out).read_text()) - t
         assert 0 <= late < workers.POLL_S / 4, late
     assert not Event(flag.name, client=client).is_set()
+    # the task is looked up at every look: a flag read by two tasks in turn answers for
+    # the one running (the first one's end does not stop the second)
+    from types import SimpleNamespace
+
+    class Worker:
+        current = "a"
+        state = SimpleNamespace(tasks={"a": SimpleNamespace(state="executing")})
+
+        def get_current_task(self):
+            if self.current is None:
+                raise KeyError("not a task thread")
+            return self.current
+
+    shared = workers.StopFlag(flag.name)
+    shared._next = float("inf")  # its event not read here
+    w = shared._worker = Worker()
+    assert not shared.is_set()
+    del w.state.tasks["a"]  # the first task done and forgotten, the second running
+    w.state.tasks["b"], w.current = SimpleNamespace(state="executing"), "b"
+    assert not shared.is_set()
+    w.state.tasks["b"].state = "cancelled"
+    assert shared.is_set()
+    w.current = None  # another thread of the worker: no task of its own
+    assert not shared.is_set()
 
 
 def test_a_fit_asked_to_stop_returns_none_and_its_dispatch_stops():

@@ -82,32 +82,32 @@ class StopFlag:
         self._events: list = []
         self._next = 0.0
         self._set = False
-        self._task: tuple | None = None  # (the worker's task states, this task's key)
+        self._worker: Any = None  # the worker this flag is read in (False: none)
 
     @property
     def name(self) -> str:
         return self.names[0]
 
     def _cancelled(self) -> bool:
-        """Whether the task running this fit is no longer wanted by its worker (cancelled
-        or forgotten); False outside a Dask worker's task."""
-        if self._task is None:
+        """Whether the task this thread runs is no longer wanted by its worker (cancelled
+        or forgotten); False outside a Dask worker's task. The task is looked up at every
+        call (a dictionary read), so a flag read by several tasks answers for each."""
+        if self._worker is None:
             try:
-                w = get_worker()
-                self._task = (w.state.tasks, w.get_current_task())
-            except (ValueError, AttributeError, KeyError):
-                self._task = ({}, None)
-        tasks, key = self._task
-        if key is None:
+                self._worker = get_worker()
+            except ValueError:
+                self._worker = False
+        if self._worker is False:
             return False
-        ts = tasks.get(key)
+        try:
+            key = self._worker.get_current_task()
+        except (KeyError, AttributeError):  # not in one of the worker's task threads
+            return False
+        ts = self._worker.state.tasks.get(key)
         return ts is None or ts.state not in _RUNNING
 
     def is_set(self) -> bool:
-        if self._set:
-            return True
-        if self._cancelled():
-            self._set = True
+        if self._set or self._cancelled():
             return True
         now = time.monotonic()
         if now >= self._next:
