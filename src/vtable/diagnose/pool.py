@@ -57,7 +57,7 @@ class Fits:
         self.stop = threading.Event()
         self.tasks: Tasks | None = None  # this diagnosis's tasks on Dask, once started
         self.on_dask = False  # whether its fits ran as Dask tasks
-        self._ahead: dict[Any, tuple] = {}  # fits started ahead of their turn: (future, flag)
+        self._ahead: dict[Any, Any] = {}  # fits started ahead of their turn: key -> future
 
     def here(self, job: dict[str, Any]) -> tuple:
         """`workers.fitted` of `job` (the estimator's keywords) in this process."""
@@ -134,7 +134,7 @@ class Fits:
             return
         tasks = self.start()
         if tasks is not None:
-            futures = {(self._ahead.pop(key)[0] if key in self._ahead else
+            futures = {(self._ahead.pop(key) if key in self._ahead else
                         tasks.submit(job, self.calibration)): key for key, job in jobs}
             if meanwhile is not None:
                 meanwhile()
@@ -149,7 +149,7 @@ class Fits:
                     spare = [(k, j) for k, j in (ahead() if callable(ahead) else ahead)
                              if k not in self._ahead and k not in asked]
                     if spare:
-                        self._ahead[spare[0][0]] = tasks.ahead(spare[0][1], self.calibration)
+                        self._ahead[spare[0][0]] = tasks.submit(spare[0][1], self.calibration)
             return
         with ThreadPoolExecutor(max_workers=self.workers) as threads:
             pending = {threads.submit(self.here, job): key for key, job in jobs}
@@ -174,12 +174,12 @@ class Fits:
             return
         for key, job in jobs:
             if key not in self._ahead:
-                self._ahead[key] = tasks.ahead(job, self.calibration)
+                self._ahead[key] = tasks.submit(job, self.calibration)
 
     def drop_ahead(self) -> None:
         """Stop the fits started ahead of their turn that no `dispatch` asked for."""
-        for fut, flag in self._ahead.values():
-            self.tasks.drop(fut, flag)
+        for fut in self._ahead.values():
+            self.tasks.drop(fut)
         self._ahead.clear()
 
     def halt(self) -> None:

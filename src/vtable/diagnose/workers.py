@@ -63,35 +63,34 @@ POLL_S = 0.2
 
 
 #: the states of a task its worker is running and still wants (`distributed`'s worker
-#: state machine); a cancelled one is "cancelled", a forgotten one gone
+#: state machine); a cancelled one is "cancelled", a forgotten one gone. "resumed" (a
+#: cancelled task asked for again under its key) is not among them: a fit's key is never
+#: asked for again (`pure=False`), so a resumed fit is one no dispatch waits for.
 _RUNNING = ("executing", "long-running")
 
 
 class StopFlag:
-    """Dask `Event`s read as one `threading.Event` by the fits (`is_set`: any of them set),
-    looked at no more often than every `POLL_S` seconds (each look is a message to the
-    scheduler): the diagnosis's, and a task's own when it may be dropped (`Tasks.ahead`).
+    """A diagnosis's stop, read by its fits as a `threading.Event` (`is_set`).
 
-    In a worker the running task's own state is read at every look as well, which is no
-    message: a task the client cancelled (`Tasks.drop`, `Tasks.halt`) stops at its next
-    simulation, not up to `POLL_S` later (a fit started ahead and dropped as its round
-    ended held a core of the next round for ~0.1 s)."""
+    In a worker the running task's own state is read at every look, which is no message:
+    a task the client cancelled (`Tasks.drop`, `Tasks.halt`) stops at its next
+    simulation (a fit started ahead and dropped as its round ended, read from the event
+    alone, held a core of the next round for ~0.1 s). The diagnosis's Dask `Event`, which
+    `Tasks.halt` sets as well, is looked at no more often than every `POLL_S` seconds (each
+    look is a message to the scheduler): a fit submitted after a stop, which no cancel
+    reached, ends at its first look."""
 
-    def __init__(self, *names: str) -> None:
-        self.names = names
-        self._events: list = []
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self._event: Any = None
         self._next = 0.0
         self._set = False
         self._worker: Any = None  # the worker this flag is read in (False: none)
 
-    @property
-    def name(self) -> str:
-        return self.names[0]
-
     def _cancelled(self) -> bool:
         """Whether the task this thread runs is no longer wanted by its worker (cancelled
-        or forgotten); False outside a Dask worker's task. The task is looked up at every
-        call (a dictionary read), so a flag read by several tasks answers for each."""
+        or forgotten); False outside a Dask worker's task thread. The task is looked up at
+        each call (a dictionary read), not kept."""
         if self._worker is None:
             try:
                 self._worker = get_worker()
@@ -112,16 +111,16 @@ class StopFlag:
         now = time.monotonic()
         if now >= self._next:
             self._next = now + POLL_S
-            if not self._events:
-                self._events = [Event(n) for n in self.names]
-            self._set = any(e.is_set() for e in self._events)
+            if self._event is None:
+                self._event = Event(self.name)
+            self._set = self._event.is_set()
         return self._set
 
     def __getstate__(self) -> dict:
-        return {"names": self.names}
+        return {"name": self.name}
 
     def __setstate__(self, state: dict) -> None:
-        self.__init__(*state["names"])
+        self.__init__(state["name"])
 
 
 # -- in the worker ----------------------------------------------------------------------
@@ -347,30 +346,23 @@ class Tasks:
         self._futures: list = []
         self._frame: tuple[Any, Any] | None = None  # the round's frame and its future
 
-    def submit(self, job: dict[str, Any], calibration: Calibration, stop: StopFlag | None = None):
-        """A fit (`_fit`) of `job` (stopped by `stop`, default this diagnosis's flag); its
-        frame, new to this round, scattered once."""
+    def submit(self, job: dict[str, Any], calibration: Calibration):
+        """A fit (`_fit`) of `job` (stopped by this diagnosis's flag, or by cancelling its
+        future); its frame, new to this round, scattered once."""
         frame = job.get("frame")
         if frame is not None:
             if self._frame is None or self._frame[0] is not frame:
                 self._frame = (frame, self.client.scatter(frame, broadcast=True, hash=False))
                 self._futures.append(self._frame[1])
             job = {**job, "frame": self._frame[1]}
-        fut = self.client.submit(_fit, self._campaign, job, calibration, stop or self.stop,
+        fut = self.client.submit(_fit, self._campaign, job, calibration, self.stop,
                                  self.files, pure=False)
         self._futures.append(fut)
         return fut
 
-    def ahead(self, job: dict[str, Any], calibration: Calibration) -> tuple[Any, StopFlag]:
-        """A fit submitted ahead of its turn (`pool.Fits.dispatch`'s `ahead`): (its future,
-        its stop flag: this diagnosis's event and one of its own, `drop`)."""
-        flag = StopFlag(self.stop.name, f"{self.stop.name}-{uuid.uuid4().hex}")
-        return self.submit(job, calibration, flag), flag
-
-    def drop(self, fut, flag: StopFlag) -> None:
-        """Stop a fit submitted `ahead` at its next look at its flag, and cancel it."""
-        with contextlib.suppress(Exception):
-            Event(flag.names[-1], client=self.client).set()
+    def drop(self, fut) -> None:
+        """Cancel a fit submitted ahead of its turn (`pool.Fits.dispatch`'s `ahead`,
+        `pool.Fits.begin`): running, it stops at its next simulation (`StopFlag`)."""
         with contextlib.suppress(Exception):
             self.client.cancel([fut])
 
@@ -381,7 +373,9 @@ class Tasks:
                                              pure=False) for ph in models]
 
     def halt(self) -> None:
-        """Stop the running fits at their next look at the event; cancel the rest."""
+        """Stop every fit: those not done cancelled (a running one stops at its next
+        simulation), and the diagnosis's event set (a fit submitted after this ends at its
+        first look at it: `StopFlag`)."""
         with contextlib.suppress(Exception):
             Event(self.stop.name, client=self.client).set()
         with contextlib.suppress(Exception):
