@@ -473,10 +473,11 @@ def test_a_cancelled_fit_stops_at_its_next_look_not_at_the_next_message(tmp_path
     for k in range(3):
         out = tmp_path / f"stopped{k}"
         fut = client.submit(_until_stopped, flag, str(out), pure=False)
-        for _ in range(500):  # running, and its first look at the event made
-            if Path(f"{out}.started").exists():
+        for _ in range(2000):  # running (a busy worker may take a while to start it),
+            if Path(f"{out}.started").exists():  # and its first look at the event made
                 break
             time.sleep(0.01)
+        assert Path(f"{out}.started").exists(), "the task did not start within 20 s"
         time.sleep(0.05)
         t = time.time()
         client.cancel([fut])
