@@ -167,8 +167,6 @@ class Fits:
         other work: the `dispatch` that asks for them takes them over, as it does the fits
         started `ahead` (a round's backward refits run while its frame is made). Nothing
         without Dask workers (`dispatch` runs them)."""
-        if self.workers == 1 and not self.scheduler:
-            return
         tasks = self.start()
         if tasks is None:
             return

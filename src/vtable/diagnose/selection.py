@@ -187,7 +187,7 @@ LATE = {False: "tried once the time-invariant effects are in (it accumulates ove
 
 
 def failing(g: Gain | None, model: Physics | None = None, name: str | None = None,
-            table=None) -> list[str]:
+            table=None, charged: bool = True) -> list[str]:
     """The statistical criteria of `SELECTION` a held-out gain does not meet (empty: it
     passes).
 
@@ -203,10 +203,13 @@ def failing(g: Gain | None, model: Physics | None = None, name: str | None = Non
     table
         The campaign's table (`vtable.effects.table.TableView`) the defaults are taken on;
         None: the EERC table's.
+    charged
+        Whether the gain is charged for the parameters' distance from their defaults
+        (False: the criteria on the gain alone, `near_miss`).
     """
     if g is None:
         return ["no valid model"]
-    cost = prior_cost(g, model, name, table)
+    cost = prior_cost(g, model, name, table) if charged else 0.0
     net = replace(g, e2_candidate=g.e2_candidate + cost)
     out = []
     if not net.z > Z_NOISE:
@@ -244,7 +247,4 @@ def near_miss(c) -> bool:
     g = c.gain
     if g is None or c.screened or c.not_fitted or c.unrefined or not g.systematic > 0:
         return False
-    share = SHOWN_SHARE if shown(c.physics, c.effect, c.table) else MIN_SHARE
-    r = resolution(c.physics.effects)
-    return (g.z > Z_NOISE and g.gain >= share * g.systematic
-            and g.gain >= NOISE_SHARE * g.f2 and g.gain >= r * r)
+    return not failing(g, c.physics, c.effect, c.table, charged=False)
