@@ -237,6 +237,11 @@ def cluster(n: int, scheduler: str | None = None):
                 with dask.config.set({"distributed.worker.multiprocessing-method": "fork",
                                       "distributed.worker.daemon": True,
                                       "distributed.scheduler.work-stealing": False,
+                                      # a worker holds only the fit it runs: the next goes
+                                      # to the first core free, in the order submitted (at
+                                      # the default 1.1 a screen could queue behind a
+                                      # round's long fit while the other core idled)
+                                      "distributed.scheduler.worker-saturation": 1.0,
                                       # no statistical profiler sampling the fits' stacks
                                       # every 10 ms, fewer ticks and system samples: each
                                       # takes the interpreter lock from a fit
