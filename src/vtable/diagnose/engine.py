@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from vtable.diagnose.backward import backward_step
 from vtable.diagnose.bounds import leaning_start, pushed_beyond, widened
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign, check_campaign
@@ -48,7 +49,7 @@ from vtable.diagnose.result import (
     evidence,
     localise,
 )
-from vtable.diagnose.screen import nonlinearity_evidence
+from vtable.diagnose.screen import linear_explains, nonlinearity_evidence
 from vtable.diagnose.selection import LATE, failing, preferred, preferred_note
 from vtable.diagnose.states import split, unexplained
 from vtable.diagnose.statistics import Comparison, held_out_gain
@@ -259,7 +260,7 @@ class Diagnoser:
                                                    spent, lean, progress, done, steps, k)
             lean = None  # refitted in the first round
             widened = self.widened
-            dropped = self._backward(st, backward, left, progress, done, steps, k)
+            dropped = backward_step(self, st, backward, left, progress, done, steps, k)
             backward = []
             if dropped is not None:
                 current, err, cost = dropped
@@ -294,7 +295,7 @@ class Diagnoser:
             left = dict((name, fitted) for (_, name), fitted in self.fits.dispatch(
                 [(("without", e), refit_without(current, e, cost, self.campaign))
                  for e in backward]))
-            self._backward(st, backward, left, progress, done, steps, k)
+            backward_step(self, st, backward, left, progress, done, steps, k)
         reason = reason or f"stopped after {self.max_rounds} rounds"
         progress(steps - 1, steps, "testing whether the runs hold one plant")
         st.plants = split(self, st)
@@ -366,11 +367,12 @@ class Diagnoser:
         Every candidate is screened on the current model linearised once for all of them
         (`projected`): a fit that does not lower the training cost by `SCREEN` cannot
         gain the 5 % of the noise's cost SELECTION asks (criterion 3). A nonlinear one is
-        not even tried where the runs show no amplitude dependence (`screen`). Those that
-        pass are refined (fitted in full) best first, the costliest first on the cores (a
-        core the shorter of a pair frees takes the next: `Fits.dispatch`'s `ahead`); one
-        whose screened training cost is above `REFINE_FACTOR` times that of an admissible
-        refined candidate cannot win the round and is kept as screened."""
+        not tried where the runs show no amplitude dependence (`screen`), nor, on a model
+        nonlinear itself, where the best linear candidate's fit leaves none (held back
+        till then: `screen.linear_explains`). Those that pass are refined best first, the
+        costliest first on the cores (`Fits.dispatch`'s `ahead`); one whose screened
+        training cost is above `REFINE_FACTOR` times that of an admissible refined
+        candidate cannot win the round and is kept as screened."""
         # the refits that need no frame go to the cores first, while the frame is made
         early = [(("without", e), refit_without(current, e, cost, self.campaign))
                  for e in backward]
@@ -381,18 +383,21 @@ class Diagnoser:
         ranking: list[Candidate] = []
         screen = nonlinearity_evidence(self.campaign, st.stages[-1].predictions)
         self.screens.append(screen)
-        if not screen.present:
-            for e in [e for e in todo if self._nonlinear(current, e)]:
-                todo = [t for t in todo if t != e]
-                ranking.append(not_fitted(e, current.with_effect(e), cost, st.err,
-                                          st.stages[-1].predictions, self.campaign,
-                                          self.table_view, screen.text()))
-                done += 1
-        # the costliest fits first (no long fit starts last on an idle core): those whose
-        # screen passed last round, best first (`promise`: likely refined in their task
-        # now); then by what each took last round (nonlinear ones first in the first)
-        todo.sort(key=lambda e: (0, self.promise[e]) if e in self.promise else
-                  (1, -spent.get(e, 1.0 if self._nonlinear(current, e) else 0.0)))
+        nonlinear = [e for e in todo if self._nonlinear(current, e)]
+        # kept out where the runs show no amplitude dependence; held back (queued behind the
+        # others) where the current model, nonlinear itself, may be showing a linear one's
+        out = [] if screen.present else nonlinear
+        held = [e for e in nonlinear if screen.present and screen.read and not self._linear(
+            current) and not self.campaign.apart(current.with_effect(e), current)]
+        todo = [e for e in todo if e not in out and e not in held]
+
+        def costliest(e: str) -> tuple:
+            return (0, self.promise[e]) if e in self.promise else \
+                (1, -spent.get(e, 1.0 if self._nonlinear(current, e) else 0.0))
+        for names in (todo, held):  # the costliest fits first (no long fit starts last on an
+            # idle core): those whose screen passed last round, best first (`promise`: likely
+            # refined in their task now); then by what each took last round (nonlinear first)
+            names.sort(key=costliest)
         self.promise = {}
 
         def job(e: str, **kw) -> dict:
@@ -407,33 +412,54 @@ class Diagnoser:
             return job(e, frame=None) if self.campaign.apart(current.with_effect(e), current) \
                 else job(e, baseline=cost, screen_only=True)
 
-        jobs = early + [(("screen", e), screened(e)) for e in todo]
         left: dict[str, CandidateFit] = {}
         passed: dict[str, CandidateFit] = {}  # screens that passed: refined if they can win
         fitted_now: list[Candidate] = []
-        # the current model's detailed comparison (the evidence's) while the fits run; a core
-        # the last screens leave idle refines the best that passed so far
-        for (kind, name), fitted in self.fits.dispatch(
-                jobs, meanwhile=lambda: self._detail(st),
-                ahead=lambda: [refit(e) for e in sorted(passed, key=lambda e: passed[e].cost)]):
-            if kind == "without":
-                left[name] = fitted
-                continue
-            if kind == "widened":
-                self.widened = widened(self, lean, fitted)
-                continue
-            done += 1
-            if fitted.passed is None:  # screened out, refined at once, or no valid model
-                c = self._judged(st, name, fitted, spent)
-                ranking.append(c)
-                fitted_now.append(c)
-                progress(done, steps, f"round {k}: tried {name}")
-                if not c.screened and np.isfinite(fitted.cost):  # refined in its task
+
+        def collect(jobs: list, meanwhile: Callable[[], Any] | None = None,
+                    spare: list | None = None) -> None:
+            # a core the last screens leave idle takes `spare` (the held candidates), then
+            # refines the best that passed so far
+            nonlocal done
+            for (kind, name), fitted in self.fits.dispatch(
+                    jobs, meanwhile=meanwhile, ahead=lambda: (spare or []) + [
+                        refit(e) for e in sorted(passed, key=lambda e: passed[e].cost)]):
+                if kind == "without":
+                    left[name] = fitted
+                    continue
+                if kind == "widened":
+                    self.widened = widened(self, lean, fitted)
+                    continue
+                done += 1
+                if fitted.passed is None:  # screened out, refined at once, or no valid model
+                    c = self._judged(st, name, fitted, spent)
+                    ranking.append(c)
+                    fitted_now.append(c)
+                    progress(done, steps, f"round {k}: tried {name}")
+                    if not c.screened and np.isfinite(fitted.cost):  # refined in its task
+                        self.promise[name] = fitted.cost / cost
+                else:
+                    passed[name] = fitted
+                    spent[name] = fitted.cpu_s
                     self.promise[name] = fitted.cost / cost
-            else:
-                passed[name] = fitted
-                spent[name] = fitted.cpu_s
-                self.promise[name] = fitted.cost / cost
+
+        held_jobs = [(("screen", e), screened(e)) for e in held]
+        # the current model's detailed comparison (the evidence's) while the fits run; the
+        # held candidates started on the cores the last of them leave idle (dropped if not
+        # needed)
+        collect(early + [(("screen", e), screened(e)) for e in todo],
+                meanwhile=lambda: self._detail(st), spare=held_jobs)
+        why = screen.text() if out else linear_explains(
+            self.campaign, current, screen, [(c.cost, c.effect, c.predictions) for c in fitted_now]
+            + [(f.cost, e, f.predictions) for e, f in passed.items()]) if held else ""
+        if held and not why:
+            collect(held_jobs)
+        elif why:  # not fitted, `why` their evidence
+            self.fits.drop_ahead([key for key, _ in held_jobs])
+            ranking += [not_fitted(e, current.with_effect(e), cost, st.err,
+                                   st.stages[-1].predictions, self.campaign, self.table_view,
+                                   why) for e in out + held]
+            done += len(out + held)
         order = sorted(passed, key=lambda e: passed[e].cost)
         best: Candidate | None = None
         for c in fitted_now:  # a candidate refined in its screen's task may have won
@@ -462,33 +488,6 @@ class Diagnoser:
                           f"({best.cost:.4g}): not refined further"))
             progress(done, steps, f"round {k}: tried {e}")
         return ranking, left, done
-
-    def _backward(self, st: State, names: list[str], fitted: dict[str, CandidateFit],
-                  progress, done: int, steps: int, k: int):
-        """The backward step: the current model against each fit without one of `names`;
-        the first effect whose keeping is not a gain `SELECTION` would count is removed
-        (recorded in the last round). Returns (model, error, cost) after a removal, else
-        None."""
-        pred_cur = st.stages[-1].predictions
-        for name in names:
-            physics, pred = fitted[name].physics, fitted[name].predictions
-            if isinstance(pred, Exception) or fitted[name].screened:  # screened: kept
-                continue
-            fails = failing(held_out_gain(pred, pred_cur, self.runs, self.campaign.noise),
-                            st.current, name, self.table_view)
-            if not fails:
-                continue
-            err = compare(pred, self.runs, scored="held", floor=self.floor).error
-            rnd = st.rounds[-1]
-            rnd.removed[name] = (
-                f"no longer needed once the later effects are in: without it (base "
-                f"recalibrated) the held-out error is {err:.2%}; keeping it is not a gain "
-                "the noise cannot produce: " + "; ".join(fails))
-            rnd.error = err
-            st.adopt(f"without_{name}", physics, err, pred)
-            progress(done, steps, f"round {k}: removed {name}")
-            return physics, err, fitted[name].cost
-        return None
 
     def _partial(self, st: State) -> Diagnosis:
         """The diagnosis of the rounds that finished, without another simulation."""

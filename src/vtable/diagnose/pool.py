@@ -174,11 +174,12 @@ class Fits:
             if key not in self._ahead:
                 self._ahead[key] = tasks.submit(job, self.calibration)
 
-    def drop_ahead(self) -> None:
-        """Stop the fits started ahead of their turn that no `dispatch` asked for."""
-        for fut in self._ahead.values():
-            self.tasks.drop(fut)
-        self._ahead.clear()
+    def drop_ahead(self, keys: Sequence[Any] | None = None) -> None:
+        """Stop the fits started ahead of their turn (`ahead`, `begin`) that no `dispatch`
+        asked for: those of `keys`, or all."""
+        for key in list(self._ahead) if keys is None else keys:
+            if key in self._ahead:
+                self.tasks.drop(self._ahead.pop(key))
 
     def halt(self) -> None:
         """Stop the fits: this process's and the workers' (at their next look)."""
