@@ -456,9 +456,10 @@ class Diagnoser:
             collect(held_jobs)
         elif why:  # not fitted, `why` their evidence
             self.fits.drop_ahead([key for key, _ in held_jobs])
-            ranking += [not_fitted(e, current.with_effect(e), cost, st.err,
-                                   st.stages[-1].predictions, self.campaign, self.table_view,
-                                   why) for e in out + held]
+            ranking[:0] = [not_fitted(e, current.with_effect(e), cost, st.err,
+                                      st.stages[-1].predictions, self.campaign,
+                                      self.table_view, why)
+                           for e in sorted(out + held, key=self.catalog.index)]
             done += len(out + held)
         order = sorted(passed, key=lambda e: passed[e].cost)
         best: Candidate | None = None
