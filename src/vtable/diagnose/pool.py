@@ -199,17 +199,27 @@ def in_thread(target: Callable[[Callable[[tuple], None]], None],
               progress: Callable[..., None], halt: Callable[[], None],
               name: str = "vtable-diagnose") -> None:
     """Run `target(post)` in a thread of its own; this thread hands each tuple it posts to
-    `progress(*item)`. Anything raised here (Ctrl-C, a failing progress callback) calls
-    `halt()`, waits for the thread to end and is raised again."""
+    `progress(*item)`, and returns as soon as it ends (it posts None last). Anything raised
+    here (Ctrl-C, a failing progress callback) calls `halt()`, waits for the thread to end
+    and is raised again."""
     events: queue.SimpleQueue = queue.SimpleQueue()
-    worker = threading.Thread(target=target, args=(events.put,), daemon=True, name=name)
+
+    def run() -> None:
+        try:
+            target(events.put)
+        finally:
+            events.put(None)
+
+    worker = threading.Thread(target=run, daemon=True, name=name)
     worker.start()
     try:
-        while worker.is_alive() or not events.empty():
+        while True:
             try:
-                item = events.get(timeout=0.1)
+                item = events.get(timeout=0.1)  # a timeout: Ctrl-C is seen meanwhile
             except queue.Empty:
                 continue
+            if item is None:
+                break
             progress(*item)
     except BaseException:
         halt()
