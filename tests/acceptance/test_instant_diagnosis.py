@@ -634,13 +634,14 @@ def test_a_linear_fit_that_leaves_no_amplitude_dependence_explains_it():
     good = {r.name: {ch: y + 0.01 * np.std(y) * rng.standard_normal(len(y))
                      for ch, y in r.channels.items()} for r in c.runs}
     assert not nonlinearity_evidence(c, good).present
-    why = linear_explains(c, bare.physics_, before, [(1.0, "valve_dynamics", good),
-                                                     (2.0, "sensor_filter", bad)])
-    assert "with valve_dynamics (linear) added no longer beyond the noise" in why, why
+    why = linear_explains(c, before, [(1.0, "valve_dynamics", good),
+                                      (2.0, "sensor_filter", bad)])
+    assert "but not beyond the noise with valve_dynamics's fit" in why, why
     assert f"({before.amplitude:.1f} standard deviations)" in why
-    assert linear_explains(c, bare.physics_, before, [(2.0, "valve_dynamics", good),
-                                                      (1.0, "sensor_filter", bad)]) == ""
-    assert linear_explains(c, bare.physics_, before, [(np.nan, "valve_dynamics", good)]) == ""
+    assert linear_explains(c, before, [(2.0, "valve_dynamics", good),
+                                       (1.0, "sensor_filter", bad)]) == ""
+    assert linear_explains(c, before, [(np.nan, "valve_dynamics", good)]) == ""
+    assert linear_explains(c, before, []) == ""
 
 
 @functools.cache
@@ -767,9 +768,12 @@ def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monk
                     "amplitude_dependent_damping", "storey_yield"}, third
     assert not held & set(rounds[2]), rounds[2]
     for e in held:
-        assert "with force_feedback_filter (linear) added no longer beyond the noise" in \
+        assert "but not beyond the noise with force_feedback_filter's fit" in \
             third[e].evidence and f"({d.screens[2].amplitude:.1f} standard" in third[e].evidence
     assert dropped == [sorted(("screen", e) for e in held)], dropped
+    # ranked in catalog order among themselves, whatever order their fits ran in
+    kept = [c.effect for c in result.rounds[2].ranking if c.not_fitted]
+    assert kept == sorted(kept, key=BUILT_IN.index), kept
     # the last round's residual shows no amplitude dependence: with friction in, the
     # nonlinear candidates are not fitted, the linear ones are (their models are
     # nonlinear only by the friction they join)
@@ -779,6 +783,40 @@ def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monk
     ranked = {c.effect: c for c in last.ranking}
     assert linear <= set(ranked) and not any(ranked[e].not_fitted for e in linear)
     assert all(c.not_fitted for e, c in ranked.items() if e not in linear | {"sensor_mount"})
+
+
+def test_held_nonlinear_candidates_are_fitted_where_no_linear_fit_explains_the_amplitude(
+        monkeypatch, tmp_path):
+    """The README's friction campaign with `linear_explains` finding no linear fit that
+    leaves the amplitude dependence (as where a second nonlinearity is missing): the third
+    round's held nonlinear candidates are dispatched after the linear ones (those started
+    ahead taken over, none left running) and fitted; the same effects are found."""
+    from readme_campaigns import campaign
+
+    from vtable.diagnose import engine, pool
+
+    runs = [read_run(p) for p in campaign("actuator_friction", 0.01, tmp_path)]
+    monkeypatch.setattr(engine, "linear_explains", lambda *a: "")
+    screens: list[set[str]] = []  # each dispatch's screen jobs
+    dispatch = pool.Fits.dispatch
+
+    def recorded(self, jobs, **kw):
+        screens.append({name for (kind, name), _ in jobs if kind == "screen"})
+        return dispatch(self, jobs, **kw)
+
+    monkeypatch.setattr(pool.Fits, "dispatch", recorded)
+    d = Diagnoser(runs, catalog=BUILT_IN, workers=2)
+    result = d.diagnose()
+    assert sorted(result.final_effects) == ["actuator_friction", "force_feedback_filter",
+                                            "pitch_flexibility"], result.verdict
+    third = {c.effect: c for c in result.rounds[2].ranking}
+    nonlinear = {"valve_flow_nonlinearity", "flow_saturation", "oil_column_air",
+                 "amplitude_dependent_damping", "storey_yield"}
+    assert d.screens[2].present and nonlinear <= set(third), third
+    assert not any(third[e].not_fitted for e in nonlinear), third
+    # the third round's linear screens, then its held nonlinear ones in a dispatch of their own
+    rounds = [s for s in screens if s]
+    assert nonlinear.isdisjoint(rounds[2]) and rounds[3] == nonlinear, rounds
 
 
 def test_an_effect_is_nonlinear_by_what_it_brings_not_by_the_model_it_joins():

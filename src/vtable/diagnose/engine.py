@@ -5,8 +5,9 @@ add the best that passes the selection rule (`selection.SELECTION`), repeat; aft
 addition, test the earlier ones again without it (the backward step).
 
 Each round's candidates are screened before they are fitted in full (`_candidates`): a
-nonlinear one only where the runs show amplitude dependence (`screen`), every one on the
-current model linearised once for the round (`projected`); those that pass are refined
+nonlinear one only where the runs show amplitude dependence (`screen`; on a model
+nonlinear itself, only where the best linear candidate's fit still shows it), every one on
+the current model linearised once for the round (`projected`); those that pass are refined
 best first, and one that cannot win the round is kept where its screen left it. Training
 is the first 60 % of every run (at most its first 30 s), held out the last 40 %, both at
 the analysis rate (`sampling`). The verdict (`verdict`) is honest about what is left:
@@ -32,7 +33,7 @@ from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import compare
 from vtable.diagnose.evidence import evidence_view
-from vtable.diagnose.judge import judged, not_fitted
+from vtable.diagnose.judge import admissible, judged, not_fitted, select
 from vtable.diagnose.model import BASE_PARAMS, TableModel, one_blas_thread, refit_without
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
 from vtable.diagnose.projected import Frame
@@ -46,13 +47,12 @@ from vtable.diagnose.result import (
     DiagnosisInterrupted,
     DiagnosisStage,
     Round,
-    evidence,
     localise,
 )
 from vtable.diagnose.screen import linear_explains, nonlinearity_evidence
-from vtable.diagnose.selection import LATE, failing, preferred, preferred_note
+from vtable.diagnose.selection import LATE, failing
 from vtable.diagnose.states import split, unexplained
-from vtable.diagnose.statistics import Comparison, held_out_gain
+from vtable.diagnose.statistics import Comparison
 from vtable.diagnose.verdict import State, diagnosis_of
 from vtable.diagnose.workers import CandidateFit
 from vtable.effects.registry import default_candidates
@@ -271,7 +271,7 @@ class Diagnoser:
                 break
             ranking.sort(key=lambda c: c.score)
             seeds.update({c.effect: c.params for c in ranking if not c.screened})
-            best = self._select(ranking, widened, err, self._detail(st))
+            best = select(self, ranking, widened, err, self._detail(st))
             if best is not None:
                 st.rounds.append(Round(ranking, best.effect, best.error_after, err, skipped))
                 current, err, cost = best.physics, best.error_after, best.cost
@@ -324,32 +324,6 @@ class Diagnoser:
                 todo.append(e)
         return todo, skipped
 
-    def _select(self, ranking: list[Candidate], widened: tuple | None, err: float,
-                cmp_cur: Comparison) -> Candidate | None:
-        """SELECTION: of the candidates whose held-out gain passes the statistical criteria
-        and whose fit is sound (no parameter at a bound, none entangled with the base),
-        the preferred one (`selection.preferred`), or None; every candidate's evidence
-        written, only the chosen one's predictions kept."""
-        passing = [c for c in ranking if self._admissible(c, widened)]
-        best = preferred(passing)
-        for c in ranking:
-            c.evidence = evidence(c, err, self.floor, cmp_cur)
-            if c is not best:
-                c.predictions = None
-        if best is not None and best is not passing[0]:
-            best.evidence += preferred_note(best, passing[0])
-        return best
-
-    def _admissible(self, c: Candidate, widened: tuple | None) -> bool:
-        """Whether SELECTION would add `c`: its gain passes the statistical criteria, its
-        fit is sound, and (when the starting model leans on its bounds, `widened`) it
-        beats the starting model refitted with them widened too (sets `c.stand_in`)."""
-        if widened is not None and c.predictions is not None:
-            c.stand_in = failing(held_out_gain(widened[2], c.predictions, self.runs,
-                                               self.campaign.noise),
-                                 c.physics, c.effect, self.table_view)
-        return not c.failing() and not c.blocking and not c.stand_in
-
     def _judged(self, st: State, name: str, fitted: CandidateFit, spent: dict[str, float],
                 unrefined: str = "") -> Candidate:
         """The candidate a fit makes (`judge.judged`); its CPU seconds counted in `spent`."""
@@ -384,11 +358,15 @@ class Diagnoser:
         screen = nonlinearity_evidence(self.campaign, st.stages[-1].predictions)
         self.screens.append(screen)
         nonlinear = [e for e in todo if self._nonlinear(current, e)]
-        # kept out where the runs show no amplitude dependence; held back (queued behind the
-        # others) where the current model, nonlinear itself, may be showing a linear one's
+        # kept out where the runs show no amplitude dependence; held back (fitted after the
+        # linear ones) where the current model, nonlinear itself, may be showing a linear
+        # one's, unless the best screen of the last round was nonlinear (likely the winner)
+        lead = min((e for e in todo if e in self.promise), key=self.promise.get, default=None)
+        hold = screen.present and screen.read and lead not in nonlinear and \
+            not self._linear(current)
         out = [] if screen.present else nonlinear
-        held = [e for e in nonlinear if screen.present and screen.read and not self._linear(
-            current) and not self.campaign.apart(current.with_effect(e), current)]
+        held = [e for e in nonlinear if hold and
+                not self.campaign.apart(current.with_effect(e), current)]
         todo = [e for e in todo if e not in out and e not in held]
 
         def costliest(e: str) -> tuple:
@@ -418,12 +396,12 @@ class Diagnoser:
 
         def collect(jobs: list, meanwhile: Callable[[], Any] | None = None,
                     spare: list | None = None) -> None:
-            # a core the last screens leave idle takes `spare` (the held candidates), then
-            # refines the best that passed so far
+            # a core the last screens leave idle refines the best that passed so far, then
+            # takes `spare` (the held candidates)
             nonlocal done
             for (kind, name), fitted in self.fits.dispatch(
-                    jobs, meanwhile=meanwhile, ahead=lambda: (spare or []) + [
-                        refit(e) for e in sorted(passed, key=lambda e: passed[e].cost)]):
+                    jobs, meanwhile=meanwhile, ahead=lambda: [refit(e) for e in sorted(
+                        passed, key=lambda e: passed[e].cost)] + (spare or [])):
                 if kind == "without":
                     left[name] = fitted
                     continue
@@ -443,15 +421,18 @@ class Diagnoser:
                     spent[name] = fitted.cpu_s
                     self.promise[name] = fitted.cost / cost
 
+        def refined() -> list[Candidate]:  # refined in their screen's task and sound
+            return [c for c in fitted_now if not c.screened and admissible(self, c, self.widened)
+                    and not self.campaign.apart(c.physics, current)]
+
         held_jobs = [(("screen", e), screened(e)) for e in held]
         # the current model's detailed comparison (the evidence's) while the fits run; the
-        # held candidates started on the cores the last of them leave idle (dropped if not
-        # needed)
+        # held candidates started on cores the last of them leave idle (dropped if not needed)
         collect(early + [(("screen", e), screened(e)) for e in todo],
                 meanwhile=lambda: self._detail(st), spare=held_jobs)
         why = screen.text() if out else linear_explains(
-            self.campaign, current, screen, [(c.cost, c.effect, c.predictions) for c in fitted_now]
-            + [(f.cost, e, f.predictions) for e, f in passed.items()]) if held else ""
+            self.campaign, screen, [(c.cost, c.effect, c.predictions) for c in refined()]
+        ) if held else ""
         if held and not why:
             collect(held_jobs)
         elif why:  # not fitted, `why` their evidence
@@ -462,11 +443,8 @@ class Diagnoser:
                            for e in sorted(out + held, key=self.catalog.index)]
             done += len(out + held)
         order = sorted(passed, key=lambda e: passed[e].cost)
-        best: Candidate | None = None
-        for c in fitted_now:  # a candidate refined in its screen's task may have won
-            if not c.screened and not self.campaign.apart(c.physics, current) and \
-                    self._admissible(c, self.widened) and (best is None or c.score < best.score):
-                best = c
+        # a candidate refined in its screen's task may have won
+        best: Candidate | None = min(refined(), key=lambda c: c.score, default=None)
         while order:
             if best is not None and passed[order[0]].cost > REFINE_FACTOR * best.cost:
                 break
@@ -477,7 +455,7 @@ class Diagnoser:
                 c = self._judged(st, name, fitted, spent)
                 ranking.append(c)
                 progress(done, steps, f"round {k}: tried {name}")
-                if self._admissible(c, self.widened) and \
+                if admissible(self, c, self.widened) and \
                         (best is None or c.score < best.score):
                     best = c
         self.fits.drop_ahead()  # those started ahead that cannot win: stopped

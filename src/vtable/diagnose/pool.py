@@ -201,7 +201,8 @@ def in_thread(target: Callable[[Callable[[tuple], None]], None],
     """Run `target(post)` in a thread of its own; this thread hands each tuple it posts to
     `progress(*item)`, and returns as soon as it ends (it posts None last). Anything raised
     here (Ctrl-C, a failing progress callback) calls `halt()`, waits for the thread to end
-    and is raised again."""
+    and is raised again; what `target` raises is its own to hand over (the diagnosis keeps
+    it for the caller: `Diagnoser._loop`)."""
     events: queue.SimpleQueue = queue.SimpleQueue()
 
     def run() -> None:

@@ -34,10 +34,12 @@ A model that is nonlinear itself (friction added in an earlier round) makes a mi
 linear effect's residual depend on amplitude too: the README's friction campaign, with
 friction in and the force-feedback filter missing, reads z 31.5 there, and 1.9 once the
 filter is in. So on such a model the nonlinear candidates are held back while the linear
-ones are fitted, and fitted only if the linear candidate with the lowest training cost
-still leaves amplitude dependence (`linear_explains`, the same statistic on its
-predictions); else they are not fitted, the reason with both readings. Held back, they run
-only on cores the linear fits leave idle, and are dropped if not needed.
+ones are fitted (unless the best screen of the round before was a nonlinear one), and
+fitted unless a linear candidate refined in its screen's task and passing the selection
+(the lowest training cost of those) leaves no amplitude dependence (`linear_explains`, the
+same statistic on its predictions); then they are not fitted, the reason with both
+readings. Meanwhile they run only on cores the linear fits leave idle, after the
+refinements started there, and are dropped if not needed.
 
 The residual's power incoherent with the command (distortion) is not used: on a model
 still missing a resonant linear effect the residual is sharp, and its coherence is biased
@@ -122,15 +124,14 @@ class NonlinearityEvidence:
 
     def explained_text(self, linear: str, before: NonlinearityEvidence) -> str:
         """Why the nonlinear candidates are not fitted although the current model's
-        residual (`before`) depends on amplitude: with the linear candidate `linear` in,
-        whose fit this reading is of, it no longer does (`engine`: a missing linear effect
-        seen through a nonlinearity the model has)."""
+        residual (`before`) depends on amplitude: the fit of the linear candidate `linear`
+        (refined, passing the selection), whose reading this is, leaves none."""
         return (f"the current model's residual depends on amplitude "
-                f"({before.amplitude:.1f} standard deviations), but with {linear} (linear) "
-                "added no longer beyond the noise: a missing linear effect seen through the "
-                "model's own nonlinearity; a nonlinear candidate could only add its "
-                f"equivalent linear part; not fitted (with {linear}: {self._stat()})")
-
+                f"({before.amplitude:.1f} standard deviations), but not beyond the noise with "
+                f"{linear}'s fit (this round's, refined and passing the selection): as a "
+                "missing linear effect seen through the model's own nonlinearity would; a "
+                "nonlinear candidate could only add its equivalent linear part; not fitted "
+                f"(with {linear}: {self._stat()})")
 
 def _frames(campaign: Campaign) -> int | None:
     """The Welch frame (samples) every run can average `MIN_AVERAGES` times, as fine as
@@ -177,18 +178,17 @@ def nonlinearity_evidence(campaign: Campaign,
     return ev
 
 
-def linear_explains(campaign: Campaign, current, screen: NonlinearityEvidence,
+def linear_explains(campaign: Campaign, screen: NonlinearityEvidence,
                     fits: list[tuple[float, str, object]]) -> str:
-    """Why a round's nonlinear candidates need no fit although the residual of `current`
-    (a `Physics` with a nonlinearity of its own) depends on amplitude (`screen`): the linear
-    candidate of `fits` (training cost, effect, predictions of the whole runs) with the
-    lowest cost leaves no amplitude dependence — a missing linear effect seen through the
-    model's own nonlinearity (friction makes its residual depend on amplitude); else ''."""
-    fits = [f for f in fits if np.isfinite(f[0]) and isinstance(f[2], dict)
-            and not campaign.apart(current.with_effect(f[1]), current)]
+    """Why a round's nonlinear candidates need no fit although the current model's residual
+    (the model nonlinear itself) depends on amplitude (`screen`): of `fits` (training cost,
+    effect, predictions of the whole runs: the round's linear candidates refined and
+    admissible), the one with the lowest cost (then name) leaves no amplitude dependence;
+    else '' (none, or it still does)."""
+    fits = [f for f in fits if np.isfinite(f[0]) and isinstance(f[2], dict)]
     if not fits:
         return ""
-    _, name, pred = min(fits, key=lambda f: f[0])
+    _, name, pred = min(fits, key=lambda f: (f[0], f[1]))
     after = nonlinearity_evidence(campaign, pred)
     return "" if after.present else after.explained_text(name, screen)
 

@@ -240,8 +240,15 @@ def cluster(n: int, scheduler: str | None = None):
                                       # a worker holds only the fit it runs: the next goes
                                       # to the first core free, in the order submitted (at
                                       # the default 1.1 a screen could queue behind a
-                                      # round's long fit while the other core idled)
+                                      # round's long fit while the other core idled). Dask
+                                      # queues so only "root-ish" tasks: many of one group
+                                      # on few inputs. The fits' inputs are the campaign and
+                                      # each round's frame (kept till the diagnosis ends):
+                                      # past the default 5 of them, a later round's fits
+                                      # would no longer count
                                       "distributed.scheduler.worker-saturation": 1.0,
+                                      "distributed.scheduler.rootish-taskgroup-dependencies":
+                                          1 << 20,
                                       # no statistical profiler sampling the fits' stacks
                                       # every 10 ms, fewer ticks and system samples: each
                                       # takes the interpreter lock from a fit
