@@ -396,12 +396,11 @@ class Diagnoser:
 
         def collect(jobs: list, meanwhile: Callable[[], Any] | None = None,
                     spare: list | None = None) -> None:
-            # a core the last screens leave idle refines the best that passed so far, then
-            # takes `spare` (the held candidates)
+            # a core the last screens leave idle refines the best that passed so far (not
+            # one a refined fit already beats: `hopeful`), then takes `spare` (held ones)
             nonlocal done
             for (kind, name), fitted in self.fits.dispatch(
-                    jobs, meanwhile=meanwhile, ahead=lambda: [refit(e) for e in sorted(
-                        passed, key=lambda e: passed[e].cost)] + (spare or [])):
+                    jobs, meanwhile=meanwhile, ahead=lambda: hopeful() + (spare or [])):
                 if kind == "without":
                     left[name] = fitted
                     continue
@@ -424,6 +423,12 @@ class Diagnoser:
         def refined() -> list[Candidate]:  # refined in their screen's task and sound
             return [c for c in fitted_now if not c.screened and admissible(self, c, self.widened)
                     and not self.campaign.apart(c.physics, current)]
+
+        def hopeful() -> list[tuple]:  # the refinements of passed screens the loop below
+            # may run: best first, none above REFINE_FACTOR x a refined sound fit's cost
+            won = min(refined(), key=lambda c: c.score, default=None)
+            return [refit(e) for e in sorted(passed, key=lambda e: passed[e].cost)
+                    if won is None or passed[e].cost <= REFINE_FACTOR * won.cost]
 
         held_jobs = [(("screen", e), screened(e)) for e in held]
         # the current model's detailed comparison (the evidence's) while the fits run; the
