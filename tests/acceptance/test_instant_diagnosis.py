@@ -636,7 +636,7 @@ def test_a_linear_fit_that_leaves_no_amplitude_dependence_explains_it():
     assert not nonlinearity_evidence(c, good).present
     why = linear_explains(c, before, [(1.0, "valve_dynamics", good),
                                       (2.0, "sensor_filter", bad)])
-    assert "but not beyond the noise with valve_dynamics's fit" in why, why
+    assert "but with valve_dynamics fitted" in why and "no longer beyond the noise" in why, why
     assert f"({before.amplitude:.1f} standard deviations)" in why
     assert linear_explains(c, before, [(2.0, "valve_dynamics", good),
                                        (1.0, "sensor_filter", bad)]) == ""
@@ -760,7 +760,7 @@ def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monk
     # the third round: with friction in and the RC filter missing, the residual depends on
     # amplitude (z 31.5 measured), through the friction: the nonlinear candidates were held
     # back, not dispatched with the linear ones, and not fitted once the filter's fit left
-    # no amplitude dependence (those started on an idle core meanwhile dropped)
+    # no amplitude dependence (the fits of theirs an idle core may have started: dropped)
     third = {c.effect: c for c in result.rounds[2].ranking}
     assert d.screens[2].present and d.screens[2].amplitude > Z_SCREEN
     held = {e for e, c in third.items() if c.not_fitted}
@@ -768,8 +768,8 @@ def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monk
                     "amplitude_dependent_damping", "storey_yield"}, third
     assert not held & set(rounds[2]), rounds[2]
     for e in held:
-        assert "but not beyond the noise with force_feedback_filter's fit" in \
-            third[e].evidence and f"({d.screens[2].amplitude:.1f} standard" in third[e].evidence
+        assert "but with force_feedback_filter fitted" in third[e].evidence and \
+            f"({d.screens[2].amplitude:.1f} standard" in third[e].evidence
     assert dropped == [sorted(("screen", e) for e in held)], dropped
     # ranked in catalog order among themselves, whatever order their fits ran in
     kept = [c.effect for c in result.rounds[2].ranking if c.not_fitted]
@@ -789,8 +789,8 @@ def test_held_nonlinear_candidates_are_fitted_where_no_linear_fit_explains_the_a
         monkeypatch, tmp_path):
     """The README's friction campaign with `linear_explains` finding no linear fit that
     leaves the amplitude dependence (as where a second nonlinearity is missing): the third
-    round's held nonlinear candidates are dispatched after the linear ones (those started
-    ahead taken over, none left running) and fitted; the same effects are found."""
+    round's held nonlinear candidates are dispatched after the linear ones, in a dispatch
+    of their own, and fitted; the same effects are found."""
     from readme_campaigns import campaign
 
     from vtable.diagnose import engine, pool

@@ -127,11 +127,12 @@ class NonlinearityEvidence:
         residual (`before`) depends on amplitude: the fit of the linear candidate `linear`
         (refined, passing the selection), whose reading this is, leaves none."""
         return (f"the current model's residual depends on amplitude "
-                f"({before.amplitude:.1f} standard deviations), but not beyond the noise with "
-                f"{linear}'s fit (this round's, refined and passing the selection): as a "
-                "missing linear effect seen through the model's own nonlinearity would; a "
-                "nonlinear candidate could only add its equivalent linear part; not fitted "
+                f"({before.amplitude:.1f} standard deviations), but with {linear} fitted "
+                "(refined this round, the selection's criteria met) no longer beyond the "
+                "noise: a missing linear effect seen through the model's own nonlinearity; "
+                "a nonlinear candidate could only add its equivalent linear part "
                 f"(with {linear}: {self._stat()})")
+
 
 def _frames(campaign: Campaign) -> int | None:
     """The Welch frame (samples) every run can average `MIN_AVERAGES` times, as fine as
