@@ -201,20 +201,25 @@ def limits(runs: list[Run], predictions: dict[str, dict[str, np.ndarray]] | None
         nper = _frames(held.stop - held.start, r.fs)
         split = None if nper is None else CoherentSplit(x[held], r.fs, nper)
         sxx: dict = {}
+        p = None if predictions is None else predictions.get(r.name)
+        groups = []  # (group, measured, predicted or None)
         for g in run_groups(r):
             y = group_signal(r, g)
-            if y is None:
-                continue
+            if y is not None:
+                groups.append((g, y, None if p is None else group_prediction(p, r, g)))
+        # the model's residuals, coherent and incoherent, every group's in one call each
+        fitted = [(y[held] - y_hat[held], y[held]) for _, y, y_hat in groups if y_hat is not None]
+        splits = iter(split.stable_many(*map(np.array, zip(*fitted, strict=True)))
+                      if split is not None and fitted else ())
+        for g, y, y_hat in groups:
             rms = float(np.sqrt(np.mean(y[held] ** 2)))
             noise = min(sigma.get(g, 0.0) / rms, 1.0) if rms > 0 else 1.0
             ref = black_box(x, y, train, held, _sxx=sxx)
-            p = None if predictions is None else predictions.get(r.name)
-            y_hat = None if p is None else group_prediction(p, r, g)
             inc = err = within = beyond = None
             if y_hat is not None:  # the model's residual: coherent, and incoherent
                 err = nrms(y_hat[held], y[held])
                 if split is not None:
-                    within, inc = split.stable(y[held] - y_hat[held], y[held])
+                    within, inc = next(splits)
                     within = min(within, err)  # spectra and time series differ a little
                     if inc is not None:  # resolution-limited: not known (None)
                         beyond = math.sqrt(max(inc**2 - noise**2, 0.0))

@@ -122,25 +122,38 @@ class CoherentSplit:
 
     def at(self, r: np.ndarray, y: np.ndarray, n: int) -> tuple[float, float]:
         """(coherent, incoherent) on `n`-sample frames."""
+        return self.at_many(np.array([r]), np.array([y]), n)[0]
+
+    def at_many(self, R: np.ndarray, Y: np.ndarray, n: int) -> list[tuple[float, float]]:
+        """`at` of each row of the residuals `R` over the measured `Y` (rows matched), the
+        spectra of all in one scipy call each (its cost is mostly per call)."""
         if n not in self._sxx:
             self._sxx[n] = scipy.signal.welch(self.x, self.fs, nperseg=n)[1]
-        f, (s_rr, s_yy) = scipy.signal.welch(np.array([r, y]), self.fs, nperseg=n)  # one call
-        _, s_xr = scipy.signal.csd(self.x, r, self.fs, nperseg=n)
-        s_xx = self._sxx[n]
-        k = (f > 0) & (s_xx > 0) & (s_rr > 0)
-        total = float(np.sum(s_yy[f > 0]))
-        if total <= 0:
-            return 0.0, 0.0
-        coh = np.minimum(np.abs(s_xr[k]) ** 2 / (s_xx[k] * s_rr[k]), 1.0)
-        return (float(np.sqrt(np.sum(coh * s_rr[k]) / total)),
-                float(np.sqrt(np.sum((1 - coh) * s_rr[k]) / total)))
+        f, S = scipy.signal.welch(np.concatenate([R, Y]), self.fs, nperseg=n)
+        _, S_xr = scipy.signal.csd(self.x, R, self.fs, nperseg=n)
+        s_xx, out = self._sxx[n], []
+        for s_rr, s_yy, s_xr in zip(S[:len(R)], S[len(R):], S_xr, strict=True):
+            k = (f > 0) & (s_xx > 0) & (s_rr > 0)
+            total = float(np.sum(s_yy[f > 0]))
+            if total <= 0:
+                out.append((0.0, 0.0))
+                continue
+            coh = np.minimum(np.abs(s_xr[k]) ** 2 / (s_xx[k] * s_rr[k]), 1.0)
+            out.append((float(np.sqrt(np.sum(coh * s_rr[k]) / total)),
+                        float(np.sqrt(np.sum((1 - coh) * s_rr[k]) / total))))
+        return out
 
     def stable(self, r: np.ndarray, y: np.ndarray) -> tuple[float, float | None]:
         """`at` on `nperseg`-sample frames, the incoherent part None when halving the
         resolution raises it by more than `STABLE` (resolution-limited)."""
-        fine = self.at(r, y, self.nperseg)
-        coarse = self.at(r, y, self.nperseg // 2)
-        return fine if coarse[1] <= STABLE * fine[1] else (fine[0], None)
+        return self.stable_many(np.array([r]), np.array([y]))[0]
+
+    def stable_many(self, R: np.ndarray, Y: np.ndarray) -> list[tuple[float, float | None]]:
+        """`stable` of each row of `R` over `Y` (`at_many`)."""
+        fine = self.at_many(R, Y, self.nperseg)
+        coarse = self.at_many(R, Y, self.nperseg // 2)
+        return [a if b[1] <= STABLE * a[1] else (a[0], None)
+                for a, b in zip(fine, coarse, strict=True)]
 
 
 def coherent_split(x: np.ndarray, r: np.ndarray, y: np.ndarray, fs: float,
