@@ -371,7 +371,7 @@ class Diagnoser:
 
         def costliest(e: str) -> tuple:
             return (0, self.promise[e]) if e in self.promise else \
-                (1, -spent.get(e, 1.0 if self._nonlinear(current, e) else 0.0))
+                (1, -spent.get(e, 1.0 if e in nonlinear else 0.0))
         for names in (todo, held):  # the costliest fits first (no long fit starts last on an
             # idle core): those whose screen passed last round, best first (`promise`: likely
             # refined in their task now); then by what each took last round (nonlinear first)
@@ -424,11 +424,15 @@ class Diagnoser:
             return [c for c in fitted_now if not c.screened and admissible(self, c, self.widened)
                     and not self.campaign.apart(c.physics, current)]
 
+        def can_win(e: str, best: Candidate | None) -> bool:  # a passed screen is refined
+            # unless its cost is above REFINE_FACTOR x that of the best refined sound fit
+            return not (best is not None and passed[e].cost > REFINE_FACTOR * best.cost)
+
         def hopeful() -> list[tuple]:  # the refinements of passed screens the loop below
-            # may run: best first, none above REFINE_FACTOR x a refined sound fit's cost
+            # may run, best first
             won = min(refined(), key=lambda c: c.score, default=None)
             return [refit(e) for e in sorted(passed, key=lambda e: passed[e].cost)
-                    if won is None or passed[e].cost <= REFINE_FACTOR * won.cost]
+                    if can_win(e, won)]
 
         held_jobs = [(("screen", e), screened(e)) for e in held]
         # the current model's detailed comparison (the evidence's) while the fits run; the
@@ -451,7 +455,7 @@ class Diagnoser:
         # a candidate refined in its screen's task may have won
         best: Candidate | None = min(refined(), key=lambda c: c.score, default=None)
         while order:
-            if best is not None and passed[order[0]].cost > REFINE_FACTOR * best.cost:
+            if not can_win(order[0], best):
                 break
             batch, order = order[:max(1, self.workers)], order[max(1, self.workers):]
             batch.sort(key=lambda e: -spent.get(e, 0.0))
