@@ -726,14 +726,22 @@ def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monk
     monkeypatch.setattr(d, "_candidates", candidates)
     from vtable.diagnose import engine
 
-    begun: list[set] = []  # the refits running as each round's frame is made
-    frame_of = engine.Frame.of
+    begun: list[set] = []  # the refits running as each round's frame is taken
+    frames: list[tuple] = []  # (the model, its frame) of each round
+    made_here = []  # the frames this process made
+    frame_of, take = engine.Frame.of, d._frame
 
-    def frame(*a, **kw):
-        begun.append({name for kind, name in d.fits._ahead if kind == "without"})
+    def made(*a, **kw):
+        made_here.append(a[1])
         return frame_of(*a, **kw)
 
-    monkeypatch.setattr(engine.Frame, "of", frame)
+    def frame(current):
+        begun.append({name for kind, name in d.fits._ahead if kind == "without"})
+        frames.append((current, take(current)))
+        return frames[-1][1]
+
+    monkeypatch.setattr(engine.Frame, "of", made)
+    monkeypatch.setattr(d, "_frame", frame)
     dropped: list = []  # the keys of the fits started ahead and dropped by name
     drop_ahead = pool.Fits.drop_ahead
 
@@ -751,6 +759,17 @@ def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monk
     added = [r.added for r in result.rounds]
     assert begun == [set(added[:k - 1]) if k > 1 else set() for k in range(len(begun))], \
         (begun, added)
+    # the first round's frame (the starting model's) made here; each later round's brought
+    # by the fit of the effect it adds, made in its worker beside the round's other fits:
+    # to the bit the frame this process makes of that model
+    assert len(frames) == len(result.rounds) and made_here == [frames[0][0]], made_here
+    for current, f in frames[1:]:
+        here = d._model().frame_of(current, d.campaign)
+        assert f.keys == here.keys and f.cost == here.cost
+        for a in ("x", "Q", "R", "J", "J_declared"):
+            assert (getattr(f, a) is None) == (getattr(here, a) is None), a
+            if getattr(f, a) is not None:
+                assert np.array_equal(getattr(f, a), getattr(here, a)), a
     rounds = [s for s in screens if s]
     added = [r.added for r in result.rounds]
     for k in (1, 2):  # the second and third rounds

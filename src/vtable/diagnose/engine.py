@@ -113,6 +113,7 @@ class Diagnoser:
         #: the candidates whose screen passed in the last round: their training cost as a
         #: share of the model's they were screened on (what orders the next round's fits)
         self.promise: dict[str, float] = {}
+        self._frames: dict[int, tuple] = {}  # the last round's fits' frames (`_frame`)
 
     def model(self, start: Physics, **kw) -> TableModel:
         """The estimator the loop fits (sharing this diagnosis's stop flag; `kw`:
@@ -153,10 +154,7 @@ class Diagnoser:
     def _model(self, calibration: Calibration | None = None) -> TableModel:
         """An unfitted estimator on this campaign's table and declaration (for its tables
         of the base: `calibration`'s bounds, default this diagnosis's)."""
-        m = TableModel(stop=self._stop, calibration=calibration or self.calibration)
-        m.vt, m.declared = self.vt, self.campaign.specimen
-        m.state_specimens, m.campaign_ = self.campaign.state_specimens, self.campaign
-        return m
+        return TableModel.unfitted(self.campaign, calibration or self.calibration, self._stop)
 
     def at_bounds(self, ph: Physics) -> list[str]:
         return self._model().at_bounds(ph)
@@ -328,8 +326,17 @@ class Diagnoser:
                 unrefined: str = "") -> Candidate:
         """The candidate a fit makes (`judge.judged`); its CPU seconds counted in `spent`."""
         spent[name] = spent.get(name, 0.0) + fitted.cpu_s if unrefined else fitted.cpu_s
+        if fitted.frame is not None:  # should it be added (`_frame`)
+            self._frames[id(fitted.physics)] = (fitted.physics, fitted.frame)
         return judged(name, fitted, st.stages[-1].predictions, self.campaign, self.floor,
                       self.table_view, unrefined)
+
+    def _frame(self, current: Physics) -> Frame:
+        """The round's frame: the one the fit of `current` brought (`workers.fitted`'s
+        `frame_after`, made beside the last round's fits), else made here."""
+        made, self._frames = self._frames.get(id(current)), {}
+        return made[1] if made is not None and made[0] is current else \
+            self._model().frame_of(current, self.campaign)
 
     def _candidates(self, st: State, current: Physics, cost: float, todo: list[str],
                     backward: list[str], seeds: dict, spent: dict, lean: tuple | None,
@@ -347,13 +354,13 @@ class Diagnoser:
         costliest first on the cores (`Fits.dispatch`'s `ahead`); one whose screened
         training cost is above `REFINE_FACTOR` times that of an admissible refined
         candidate cannot win the round and is kept as screened."""
-        # the refits that need no frame go to the cores first, while the frame is made
+        # the refits that need no frame go to the cores first, while the frame is taken
         early = [(("without", e), refit_without(current, e, cost, self.campaign))
                  for e in backward]
         if lean is not None:  # the starting model refitted with its leaning bounds widened
             early.insert(0, (("widened", ""), {"start": self.start, "calibration": lean[0]}))
         self.fits.begin(early)
-        frame = Frame.of(self._model(), current, self.campaign.training_for(current).screening())
+        frame = self._frame(current)
         ranking: list[Candidate] = []
         screen = nonlinearity_evidence(self.campaign, st.stages[-1].predictions)
         self.screens.append(screen)
@@ -380,7 +387,7 @@ class Diagnoser:
 
         def job(e: str, **kw) -> dict:
             return {"start": current.with_effect(e), "multistart": e, "seed": seeds.get(e),
-                    "frame": frame, **kw}
+                    "frame": frame, "frame_after": True, **kw}
 
         def refit(e: str) -> tuple:  # a screen that passed, refined from where it stopped
             return ("add", e), job(e, begin=passed[e].passed)

@@ -167,6 +167,24 @@ class TableModel(Residuals):
         self.state_specimens: dict = {}  # further states -> their declared specimen
         self.campaign_: Campaign | None = None
 
+    @classmethod
+    def unfitted(cls, campaign: Campaign, calibration: Calibration | None = None,
+                 stop: threading.Event | None = None) -> TableModel:
+        """An estimator on `campaign`'s table and declaration, not fitted: its layout,
+        residuals and tables of the base (`calibration`'s bounds) for models it is given
+        (a diagnosis's `Frame`, `at_bounds`, `base_table`)."""
+        m = cls(stop=stop, calibration=calibration)
+        m.vt, m.declared = campaign.table, campaign.specimen
+        m.state_specimens, m.campaign_ = campaign.state_specimens, campaign
+        return m
+
+    def frame_of(self, physics: Physics, campaign: Campaign) -> Frame:
+        """The linearisation of `physics` (a fitted model) a diagnosis's next round
+        screens its candidates on (`projected.Frame`), on `campaign`'s screening share of
+        the window `physics` trains on."""
+        with one_blas_thread():
+            return Frame.of(self, physics, campaign.training_for(physics).screening())
+
     # -- the estimator -----------------------------------------------------------------
     def fit(self, runs: Sequence[Run] | Campaign) -> TableModel:
         """Fit on the campaign's training segments. Sets `physics_`, `train_error_`

@@ -60,7 +60,9 @@ class Fits:
         self._ahead: dict[Any, Any] = {}  # fits started ahead of their turn: key -> future
 
     def here(self, job: dict[str, Any]) -> tuple:
-        """`workers.fitted` of `job` (the estimator's keywords) in this process."""
+        """`workers.fitted` of `job` (the estimator's keywords) in this process: no frame
+        made ahead (`frame_after`: this process makes it when it is needed)."""
+        job = {k: v for k, v in job.items() if k != "frame_after"}
         return fitted(self.model(**job), self.campaign)
 
     def user_files(self) -> tuple[tuple[str, str, str], ...] | None:

@@ -46,6 +46,7 @@ from typing import Any, NamedTuple
 
 import dask
 import distributed.utils
+import numpy as np
 from distributed import Client, Event, LocalCluster, get_worker
 
 from vtable.controllers import kinds
@@ -158,8 +159,11 @@ def _fit(campaign: Campaign, job: dict[str, Any], calibration: Calibration, stop
     asked to stop; `job` holds the estimator's keywords (start, multistart, baseline, seed,
     frame, ...)."""
     _load_files(files)
+    job = dict(job)
+    after = job.pop("frame_after", False)
     try:
-        return fitted(TableModel(**{"calibration": calibration, **job}, stop=stop), campaign)
+        return fitted(TableModel(**{"calibration": calibration, **job}, stop=stop), campaign,
+                      frame_after=after)
     except StopRequestedError:  # asked to stop (the module docstring)
         return None
 
@@ -190,10 +194,17 @@ class CandidateFit(NamedTuple):
     predictions: Any  # each run's channels, or the error that prevented them
     cpu_s: float  # CPU seconds of the thread that fitted it
     passed: Any  # where a screen that passed stopped (fitted scale), or None
+    #: the next round's `projected.Frame` of the fitted model, should it be added (asked
+    #: with `frame_after`, made for a refined fit only), or None
+    frame: Any = None
 
 
-def fitted(model, campaign: Campaign) -> CandidateFit:
-    """Fit `model` (a `TableModel`) on `campaign` (`CandidateFit`: what the diagnosis reads)."""
+def fitted(model, campaign: Campaign, frame_after: bool = False) -> CandidateFit:
+    """Fit `model` (a `TableModel`) on `campaign` (`CandidateFit`: what the diagnosis
+    reads). `frame_after`: a refined fit (not screened, no screen stopped) also brings the
+    frame the next round screens on were it added (`TableModel.frame_of`, as the diagnosis
+    makes it): made here, beside the round's other fits, where the diagnosis would make it
+    after the round with the cores idle."""
     t0 = time.thread_time()
     m = model.fit(campaign)
     try:
@@ -204,8 +215,14 @@ def fitted(model, campaign: Campaign) -> CandidateFit:
     if not isinstance(pred, Exception):  # an effect fitted beyond what the runs reach
         flags += [why for name, v in m.physics_.effects.items()
                   if (why := effect(name).unseen(v, pred))]
+    cpu_s = time.thread_time() - t0
+    frame = None
+    if frame_after and not m.screened_ and m.passed_ is None and np.isfinite(m.cost_) and \
+            not isinstance(pred, Exception):
+        frame = TableModel.unfitted(campaign, m.calibration, m.stop).frame_of(m.physics_,
+                                                                              campaign)
     return CandidateFit(m.physics_, m.train_error_, flags, m.cost_, m.screened_, pred,
-               time.thread_time() - t0, m.passed_)
+                        cpu_s, m.passed_, frame)
 
 
 # -- in the parent ----------------------------------------------------------------------
