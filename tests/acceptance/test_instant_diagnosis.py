@@ -701,7 +701,9 @@ def test_a_round_starts_with_the_candidates_whose_screen_passed_in_the_last(monk
     round's end (ordered by what the last round's fits cost, it was dispatched third). In
     the last round, with friction in and no amplitude dependence left, the linear
     candidates are fitted all the same (they were not, as nonlinear models). A round's
-    backward refits are on the cores before its frame is made (`Fits.begin`)."""
+    backward refits are on the cores before its frame is taken (`Fits.begin`); the frames
+    of the rounds after the first are made by the workers, with the fit of the effect each
+    adds, to the bit as this process would make them."""
     from readme_campaigns import campaign
 
     from vtable.diagnose import pool

@@ -154,7 +154,9 @@ class Diagnoser:
     def _model(self, calibration: Calibration | None = None) -> TableModel:
         """An unfitted estimator on this campaign's table and declaration (for its tables
         of the base: `calibration`'s bounds, default this diagnosis's)."""
-        return TableModel.unfitted(self.campaign, calibration or self.calibration, self._stop)
+        m = TableModel.unfitted(self.campaign, calibration or self.calibration, self._stop)
+        m.vt = self.vt  # the table of the campaign as read (`states.split` may replace it)
+        return m
 
     def at_bounds(self, ph: Physics) -> list[str]:
         return self._model().at_bounds(ph)
@@ -289,6 +291,7 @@ class Diagnoser:
                     reason = reason or why
                     break
                 drift, reason = True, why  # now what accumulates over a run
+        self._frames = {}  # the last round's, never asked for
         if backward:  # the rounds ran out right after an addition
             left = dict((name, fitted) for (_, name), fitted in self.fits.dispatch(
                 [(("without", e), refit_without(current, e, cost, self.campaign))
@@ -394,7 +397,8 @@ class Diagnoser:
 
         def screened(e: str) -> dict:  # trained on another window (what accumulates):
             # fitted in full, costs would not compare
-            return job(e, frame=None) if self.campaign.apart(current.with_effect(e), current) \
+            return job(e, frame=None, frame_after=False) if \
+                self.campaign.apart(current.with_effect(e), current) \
                 else job(e, baseline=cost, screen_only=True)
 
         left: dict[str, CandidateFit] = {}

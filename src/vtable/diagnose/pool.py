@@ -167,7 +167,7 @@ class Fits:
     def begin(self, jobs: list[tuple[Any, dict]]) -> None:
         """Start `jobs` (key, the estimator's keywords) on Dask now, before the caller's
         other work: the `dispatch` that asks for them takes them over, as it does the fits
-        started `ahead` (a round's backward refits run while its frame is made). Nothing
+        started `ahead` (a round's backward refits run while its frame is taken). Nothing
         without Dask workers (`dispatch` runs them)."""
         tasks = self.start()
         if tasks is None:

@@ -215,7 +215,7 @@ def fitted(model, campaign: Campaign, frame_after: bool = False) -> CandidateFit
     if not isinstance(pred, Exception):  # an effect fitted beyond what the runs reach
         flags += [why for name, v in m.physics_.effects.items()
                   if (why := effect(name).unseen(v, pred))]
-    cpu_s = time.thread_time() - t0
+    cpu_s = time.thread_time() - t0  # the fit's own (what orders the next round's fits)
     frame = None
     if frame_after and not m.screened_ and m.passed_ is None and np.isfinite(m.cost_) and \
             not isinstance(pred, Exception):
