@@ -337,9 +337,9 @@ class Diagnoser:
     def _frame(self, current: Physics) -> Frame:
         """The round's frame: the one the fit of `current` brought (`workers.fitted`'s
         `frame_after`, made beside the last round's fits), else made here."""
+        # by id: each entry holds its model, so no other object can have that id
         made, self._frames = self._frames.get(id(current)), {}
-        return made[1] if made is not None and made[0] is current else \
-            self._model().frame_of(current, self.campaign)
+        return made[1] if made is not None else self._model().frame_of(current, self.campaign)
 
     def _candidates(self, st: State, current: Physics, cost: float, todo: list[str],
                     backward: list[str], seeds: dict, spent: dict, lean: tuple | None,

@@ -34,7 +34,7 @@ from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.model import TableModel
 from vtable.diagnose.residuals import StopRequestedError
-from vtable.diagnose.workers import Tasks, cluster, fitted
+from vtable.diagnose.workers import Tasks, cluster, estimator_job, fitted
 from vtable.effects.registry import is_user, source_file
 
 #: the processes the candidates are fitted in by default (two on this project's machines)
@@ -62,8 +62,7 @@ class Fits:
     def here(self, job: dict[str, Any]) -> tuple:
         """`workers.fitted` of `job` (the estimator's keywords) in this process: no frame
         made ahead (`frame_after`: this process makes it when it is needed)."""
-        job = {k: v for k, v in job.items() if k != "frame_after"}
-        return fitted(self.model(**job), self.campaign)
+        return fitted(self.model(**estimator_job(job)[0]), self.campaign)
 
     def user_files(self) -> tuple[tuple[str, str, str], ...] | None:
         """The user files the workers must load for this diagnosis, (kind, path, text),

@@ -159,8 +159,7 @@ def _fit(campaign: Campaign, job: dict[str, Any], calibration: Calibration, stop
     asked to stop; `job` holds the estimator's keywords (start, multistart, baseline, seed,
     frame, ...)."""
     _load_files(files)
-    job = dict(job)
-    after = job.pop("frame_after", False)
+    job, after = estimator_job(job)
     try:
         return fitted(TableModel(**{"calibration": calibration, **job}, stop=stop), campaign,
                       frame_after=after)
@@ -197,6 +196,12 @@ class CandidateFit(NamedTuple):
     #: the next round's `projected.Frame` of the fitted model, should it be added (asked
     #: with `frame_after`, made for a refined fit only), or None
     frame: Any = None
+
+
+def estimator_job(job: dict[str, Any]) -> tuple[dict[str, Any], bool]:
+    """A fit's job as the estimator's keywords, and whether it asks for the next round's
+    frame (`frame_after`, which `fitted` reads)."""
+    return {k: v for k, v in job.items() if k != "frame_after"}, bool(job.get("frame_after"))
 
 
 def fitted(model, campaign: Campaign, frame_after: bool = False) -> CandidateFit:
