@@ -3,6 +3,10 @@
 Inside vtable everything is SI: m, kg, s, N, Pa, rad. The report (UCB/EERC-91/13) works
 in inches, kips, kip-in-s², psi, in³/s/psi and g; those names are the keys of `UNITS`.
 Weights given in kip or lb are forces; `weight_to_mass` turns them into masses.
+
+A unit is also read in the other spellings labs write (`canonical`): a power as ``^2`` or
+``²`` (``m/s^2``, ``m/s²`` for ``m/s2``) and a product's dot as ``·`` or ``*`` (``kg·m²``
+for ``kg-m2``); the messages name the spellings of `UNITS`.
 """
 
 from __future__ import annotations
@@ -109,6 +113,27 @@ PLAUSIBLE_MIN: dict[str, float] = {"frequency": 1e-6}
 _NOUN = {"length": "displacement", "angle": "rotation"}
 
 
+#: the other spellings of a power and a product (`canonical`)
+_SPELLINGS = (("^2", "2"), ("^3", "3"), ("\u00b2", "2"), ("\u00b3", "3"), ("\u00b7", "-"),
+              ("*", "-"))
+
+
+def canonical(unit: str) -> str:
+    """`unit` in the spelling of `UNITS` (``m/s^2``, ``m/s²`` -> ``m/s2``; ``kg·m²`` ->
+    ``kg-m2``); a spelling of no known unit is returned as given."""
+    if not isinstance(unit, str):
+        return unit
+    u = unit
+    for a, b in _SPELLINGS:
+        u = u.replace(a, b)
+    return u if u in UNITS else unit
+
+
+def known(unit) -> bool:
+    """Whether `unit` (in any spelling `canonical` reads) is a unit vtable knows."""
+    return isinstance(unit, str) and canonical(unit) in UNITS
+
+
 def noun(dim: str) -> str:
     """What a quantity of dimension `dim` is called in messages (length -> displacement)."""
     return _NOUN.get(dim, dim)
@@ -117,7 +142,7 @@ def noun(dim: str) -> str:
 def dimension(unit: str) -> str:
     """The dimension of `unit` (length, acceleration, force, ...); unknown is an error."""
     factor(unit)
-    return DIMENSIONS[unit]
+    return DIMENSIONS[canonical(unit)]
 
 
 def _article(word: str) -> str:
@@ -142,8 +167,8 @@ def units_of(dim: str) -> list[str]:
 def factor(unit: str) -> float:
     """SI factor of `unit`; an unknown unit is an error naming the known ones."""
     try:
-        return UNITS[unit]
-    except KeyError:
+        return UNITS[canonical(unit)]
+    except (KeyError, TypeError):
         raise VtableError(f"unknown unit {unit!r}; expected one of {', '.join(UNITS)}") from None
 
 

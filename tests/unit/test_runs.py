@@ -331,6 +331,22 @@ def test_units_are_checked_for_dimension(tmp_path, channel, unit, msg):
     assert msg in _error(tmp_path, "dim", csv, TOML + f'\n[units]\n{channel} = "{unit}"\n')
 
 
+
+def test_a_unit_in_another_spelling_reads_the_same(tmp_path):
+    csv = "time,avg_hacc,avg_hdisp\n0,0,0\n0.005,1.5,2\n0.01,3,4\n"
+    ref = _read(tmp_path, "a", csv, TOML + '\n[units]\navg_hacc = "m/s2"\navg_hdisp = "m"\n')
+    r = _read(tmp_path, "b", csv, TOML + '\n[units]\navg_hacc = "m/s^2"\navg_hdisp = "m"\n')
+    assert r.units == ref.units == {"avg_hacc": "m/s2", "avg_hdisp": "m"}
+    for k in ref.channels:
+        np.testing.assert_array_equal(r.channels[k], ref.channels[k])
+    assert r.channels["avg_hacc"][1] == 1.5  # m/s², not g
+    write_run(r, tmp_path / "copy")
+    back = read_run(tmp_path / "copy.toml")
+    assert back.units == r.units
+    np.testing.assert_array_equal(back.channels["avg_hacc"], r.channels["avg_hacc"])
+    h5 = read_hdf5(write_hdf5(r, tmp_path / "b.h5"))
+    assert h5.units == r.units
+
 def test_floor_channels_and_extra_channels_take_their_units(tmp_path):
     csv = "time,floor1_acc,floor12_disp,strain,temp\n0,0,0,0,0\n0.005,0.5,1,2,3\n0.01,1,2,3,4\n"
     r = _read(tmp_path, "fl", csv, TOML + '\n[units]\nfloor12_disp = "mm"\nstrain = "%"\n'

@@ -63,3 +63,21 @@ def test_dimension_mismatch_is_named(unit, dim, msg):
     units.check_dimension("mm", "length", "avg_hdisp")  # the same dimension passes
     with pytest.raises(VtableError, match="unknown unit 'furlong'"):
         units.check_dimension("furlong", "length", "avg_hdisp")
+
+
+@pytest.mark.parametrize("spelled, unit", [
+    ("m/s^2", "m/s2"), ("m/s\u00b2", "m/s2"), ("in/s^2", "in/s2"), ("rad/s^2", "rad/s2"),
+    ("kg\u00b7m\u00b2", "kg-m2"), ("kip*in*s^2", "kip-in-s2"), ("in\u00b3/s/psi", "in3/s/psi"),
+    ("m^3/s", "m3/s"), ("N\u00b7m", "N-m"),
+])
+def test_the_other_spellings_labs_write_are_read(spelled, unit):
+    assert units.canonical(spelled) == unit and units.known(spelled)
+    assert units.factor(spelled) == units.factor(unit)
+    assert units.dimension(spelled) == units.dimension(unit)
+
+
+def test_a_spelling_of_no_unit_stays_an_error():
+    assert units.canonical("m/s^4") == "m/s^4" and not units.known("m/s^4")
+    assert not units.known(None) and not units.known(2)
+    with pytest.raises(VtableError, match=r"unknown unit 'm/s\^4'"):
+        units.to_si(1.0, "m/s^4")

@@ -72,7 +72,7 @@ class Param:
         """The declaration itself is sound (a user's effect is checked on loading)."""
         if not isinstance(self.name, str) or not self.name.isidentifier():
             raise VtableError(f"{where}: parameter name {self.name!r} is not an identifier")
-        if self.unit not in units.UNITS:
+        if not units.known(self.unit):
             raise VtableError(f"{where}: parameter {self.name!r} has unknown unit "
                               f"{self.unit!r}")
         for k in ("lower", "upper"):

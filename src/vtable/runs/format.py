@@ -187,7 +187,7 @@ def command_from_dict(d: Any, where: str, folder: Path | None = None) -> Command
             raise VtableError(f"{where}.drive_file: {str(drive)!r} is not a file")
     unit = _text(d, "drive_unit", where)
     if unit is not None:
-        if unit not in units.UNITS:
+        if not units.known(unit):
             raise VtableError(f"{where}.drive_unit: {unit!r} is not a known unit; expected a "
                               f"length unit ({', '.join(units.units_of('length'))})")
         units.check_dimension(unit, "length", f"{where}.drive_unit")
@@ -213,7 +213,8 @@ def command_from_dict(d: Any, where: str, folder: Path | None = None) -> Command
             raise VtableError(f"{where}.seed: expected a whole number >= 0, got {seed!r}")
     return CommandDescription(
         kind=kind, band=band, span=_positive(d, "span", where), drive_file=drive,
-        drive_unit=unit, drive_scale=_positive(d, "drive_scale", where), drive_offset=offset,
+        drive_unit=None if unit is None else units.canonical(unit),
+        drive_scale=_positive(d, "drive_scale", where), drive_offset=offset,
         peak=peak, seed=seed,
         frequency=_positive(d, "frequency_hz", where, "Hz"), record=_text(d, "record", where),
         length_scale=_positive(d, "length_scale", where),

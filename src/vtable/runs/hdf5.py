@@ -91,7 +91,8 @@ def read_hdf5(path: str | Path) -> Run:
         why = " ".join(str(e).split())[:120]
         raise VtableError(f"{p}: damaged or not a vtable run file ({why})") from None
     decl = check_meta(meta, str(p), p.parent)  # [units] names every channel's unit
-    units = meta.pop("units", {})
+    meta.pop("units", None)
+    units = dict(decl.units)  # in the spelling of `vtable.units.UNITS`
     unnamed = [h for h in order if h in FORMAT_UNITS and h not in units]
     override = {h: u for h, u in units.items() if FORMAT_UNITS.get(h) != u and u != "1"}
     if override:

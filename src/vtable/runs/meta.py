@@ -100,7 +100,8 @@ def declare(meta: dict[str, Any], where: str, folder: Path | None = None) -> Dec
     title = meta.get("title")
     return Declaration(title=title if isinstance(title, str) else None, table=table,
                        control=dict(meta.get("control", {})), specimen=specimen,
-                       command=command, units=dict(meta.get("units", {})),
+                       command=command,
+                       units={k: units.canonical(u) for k, u in meta.get("units", {}).items()},
                        notes=tuple(notes), meta=meta, state=state)
 
 
@@ -140,7 +141,7 @@ def check_units(d: Any, where: str) -> None:
     channel takes units of its own dimension, `time` a time unit, other (extra) channels
     any known unit."""
     for ch, u in d.items():
-        if not isinstance(u, str) or u not in units.UNITS:
+        if not units.known(u):
             raise VtableError(f"{where} {ch} = {u!r} is not a known unit (e.g. in, mm, m, g, "
                               "m/s2, kip, N, rad)")
         dim = "time" if ch == "time" else channel_dimension(ch)

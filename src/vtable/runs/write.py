@@ -46,7 +46,7 @@ def check_writable(run: Run) -> list[str]:
             raise VtableError(f"{run.name}: channel {h!r} has {len(run.channels[h])} samples, "
                               f"the time base {n}")
         u = run.units.get(h, "1")
-        if u not in un.UNITS:
+        if not un.known(u):
             raise VtableError(f"{run.name}: channel {h!r} has unit {u!r}, not a known unit")
         if np.isinf(run.channels[h]).any():
             raise VtableError(f"{run.name}: channel {h!r} has infinite values; a run file "
