@@ -121,7 +121,7 @@ _SPELLINGS = (("^2", "2"), ("^3", "3"), ("\u00b2", "2"), ("\u00b3", "3"), ("\u00
 def canonical(unit: str) -> str:
     """`unit` in the spelling of `UNITS` (``m/s^2``, ``m/s²`` -> ``m/s2``; ``kg·m²`` ->
     ``kg-m2``); a spelling of no known unit is returned as given."""
-    if not isinstance(unit, str):
+    if not isinstance(unit, str) or unit in UNITS:  # (a model build's hot path: one lookup)
         return unit
     u = unit
     for a, b in _SPELLINGS:
