@@ -274,3 +274,43 @@ def test_model_file_binary_is_one_line(tmp_path):
     p.write_bytes(b"\x00\x01\x02\xff\xfe")
     with pytest.raises(VtableError, match=r"m\.toml: not UTF-8 text"):
         configs.load(str(p))
+
+
+def test_a_specimen_declared_in_si_is_the_same_specimen():
+    """The run format lets every [specimen] key name SI instead (../shared/spec): a mass for
+    a weight (kg), heights in m or mm, stiffnesses in N/m, a yield drift in mm."""
+    m = units.weight_to_mass(68.4, "kip")
+    si = specimen_from_dict({"kind": "sdof", "mass_kg": m, "height_m": 219.0 * 0.0254,
+                             "frequency_hz": 2.87, "damping": 0.01}, "run.toml [specimen]")
+    ref = specimen_from_dict(SDOF)
+    assert si.mass == pytest.approx(ref.mass, rel=1e-14) == pytest.approx(31_025.6, rel=1e-5)
+    assert si.height == pytest.approx(ref.height, rel=1e-14) and si.frequency == 2.87
+    k = [60.0, 50.0]  # kip/in
+    imperial = {"kind": "shear_building", "weights_kip": [20.0, 30.0],
+                "heights_in": [50.0, 100.0], "damping": 0.02, "stiffnesses_kip_per_in": k,
+                "hysteresis": {"yield_drift_in": [0.5, 0.4], "post_yield_ratio": 0.1}}
+    metric = {"kind": "shear_building", "weights_kn": [20 * 4.4482216152605, 30 * 4.4482216152605],
+              "heights_mm": [1270.0, 2540.0], "damping": 0.02,
+              "stiffnesses_n_per_m": [units.to_si(v, "kip/in") for v in k],
+              "hysteresis": {"yield_drift_mm": [12.7, 10.16], "post_yield_ratio": 0.1}}
+    a, b = specimen_from_dict(imperial), specimen_from_dict(metric)
+    np.testing.assert_allclose(b.masses, a.masses, rtol=1e-14)
+    np.testing.assert_allclose(b.heights, a.heights, rtol=1e-14)
+    np.testing.assert_allclose(b.stiffnesses, a.stiffnesses, rtol=1e-14)
+    np.testing.assert_allclose(b.hysteresis.yield_drift, a.hysteresis.yield_drift, rtol=1e-14)
+
+
+@pytest.mark.parametrize("d, msg", [
+    ({**SDOF, "mass_kg": 100.0}, "'weight_kip' and 'mass_kg' give the same quantity; give one"),
+    ({**{k: v for k, v in SDOF.items() if k != "height_in"}, "height_m": "2"},
+     r"\[specimen\].height_m: expected a number in m, got '2'"),
+    ({"kind": "shear_building", "masses_kg": [1000.0, "x"], "heights_m": [1.0, 2.0],
+      "damping": 0.02, "frequencies_hz": [2.0, 5.0]},
+     r"\[specimen\].masses_kg\[1\]: expected a number in kg, got 'x'"),
+    ({**{k: v for k, v in SDOF.items() if k != "weight_kip"}, "mass_kg": -5.0},
+     "weight_kip must be > 0"),
+])
+def test_si_specimen_keys_are_checked_under_their_own_names(d, msg):
+    with pytest.raises(VtableError, match=msg) as e:
+        specimen_from_dict(d, "run.toml [specimen]")
+    assert "\n" not in str(e.value)

@@ -196,6 +196,39 @@ def check_number(v: Any, where: str, unit: str = "1") -> float:
     return si
 
 
+
+def respelled(d: dict[str, Any], spellings: dict[str, tuple[str, dict[str, str]]],
+              where: str) -> dict[str, Any]:
+    """`d` with each quantity given by another unit's key turned into the format's key:
+    `spellings` maps the format's key to (its unit, {other key: its unit}) —
+    ``"weight_kip": ("kip", {"mass_kg": "kg", ...})``. The value (a number, or a list of
+    them) is checked under the key given (`check_number`) and converted; a mass given for a
+    weight is its weight under standard gravity. Two keys of one quantity are an error."""
+    out = dict(d)
+    for key, (unit, others) in spellings.items():
+        given = [k for k in (key, *others) if k in d]
+        if len(given) > 1:
+            raise VtableError(f"{where}: {given[0]!r} and {given[1]!r} give the same "
+                              "quantity; give one")
+        if not given or given[0] == key:
+            continue
+        k = given[0]
+        v = out.pop(k)
+        out[key] = [_respelled(x, f"{where}.{k}[{i}]", others[k], unit)
+                    for i, x in enumerate(v)] if isinstance(v, list) else \
+            _respelled(v, f"{where}.{k}", others[k], unit)
+    return out
+
+
+def _respelled(x: Any, where: str, given: str, unit: str) -> float:
+    """A value `x` given in unit `given` (checked as `where`) in `unit` (a mass given for a
+    weight: its weight under standard gravity)."""
+    si = check_number(x, where, given)
+    if units.dimension(given) == "mass" and units.dimension(unit) == "force":
+        si *= units.G
+    return units.from_si(si, unit)
+
+
 def _show(v: Any) -> str:
     s = repr(v)
     return s if len(s) <= 40 else s[:37] + "..."

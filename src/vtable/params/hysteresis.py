@@ -28,10 +28,13 @@ from dataclasses import dataclass
 from typing import Any
 
 from vtable.errors import VtableError, did_you_mean
-from vtable.params.base import Params, check_number, plain, quantity
+from vtable.params.base import Params, check_number, plain, quantity, respelled
 
 KEYS = ("storeys", "yield_drift_in", "yield_shear_kip", "post_yield_ratio", "n", "beta",
         "gamma")
+#: the keys in other units (`params.base.respelled`)
+SPELLINGS = {"yield_drift_in": ("in", {"yield_drift_m": "m", "yield_drift_mm": "mm"}),
+             "yield_shear_kip": ("kip", {"yield_shear_n": "N", "yield_shear_kn": "kN"})}
 #: the usual shape: β = γ = 0.5 (Baber & Wen 1981), n = 2 (a smooth knee)
 DEFAULT_N, DEFAULT_BETA, DEFAULT_GAMMA = 2.0, 0.5, 0.5
 
@@ -102,6 +105,7 @@ def parse_hysteresis(d: Any, n_storeys: int, where: str) -> Hysteresis:
     """The `[specimen.hysteresis]` table of a specimen of `n_storeys` storeys."""
     if not isinstance(d, dict):
         raise VtableError(f"{where}: expected a table, got {type(d).__name__}")
+    d = respelled(d, SPELLINGS, where)
     unknown = sorted(set(d) - set(KEYS))
     if unknown:
         raise VtableError(f"{where}: unknown key {unknown[0]!r}"

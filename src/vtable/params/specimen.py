@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from vtable.errors import VtableError
-from vtable.params.base import Params, check_number, plain, quantity
+from vtable.params.base import Params, check_number, plain, quantity, respelled
 from vtable.params.hysteresis import Hysteresis, parse_hysteresis
 from vtable.units import G
 
@@ -402,7 +402,27 @@ def specimen_from_dict(d: dict[str, Any], where: str = "specimen",
     return dataclasses.replace(spec, hysteresis=h)
 
 
+#: a specimen's keys in other units (`params.base.respelled`): the run format's key -> (its
+#: unit, {another key: its unit}); the format's spec lets every key name SI instead
+_WEIGHT = {"mass_kg": "kg", "weight_lb": "lb", "weight_n": "N", "weight_kn": "kN"}
+SPELLINGS: dict[str, tuple[str, dict[str, str]]] = {
+    "weight_kip": ("kip", _WEIGHT),
+    "height_in": ("in", {"height_m": "m", "height_mm": "mm"}),
+    "size_in": ("in", {"size_m": "m", "size_mm": "mm"}),
+    "weights_kip": ("kip", {"masses_kg": "kg", "weights_lb": "lb", "weights_n": "N",
+                            "weights_kn": "kN"}),
+    "heights_in": ("in", {"heights_m": "m", "heights_mm": "mm"}),
+    "stiffness_kip_per_in": ("kip/in", {"stiffness_n_per_m": "N/m",
+                                        "stiffness_lb_per_in": "lb/in"}),
+    "stiffnesses_kip_per_in": ("kip/in", {"stiffnesses_n_per_m": "N/m",
+                                          "stiffnesses_lb_per_in": "lb/in"}),
+    "damping_lb_s_per_in": ("lb-s/in", {"damping_n_s_per_m": "N-s/m",
+                                        "damping_kip_s_per_in": "kip-s/in"}),
+}
+
+
 def _specimen(kind: str, d: dict[str, Any], where: str) -> Specimen:
+    d = respelled(d, SPELLINGS, where)
     if kind == "shear_building":
         for k in ("weights_kip", "heights_in", "stiffnesses_kip_per_in", "frequencies_hz"):
             if isinstance(d.get(k), list) and len(d[k]) > MAX_STOREYS:
