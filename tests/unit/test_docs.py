@@ -195,10 +195,12 @@ def test_the_readers_refuse_what_run_format_md_says_they_do_not_read_yet():
         specimen_from_dict({"kind": "shear_building", "weights_kip": [10, 10],
                             "heights_in": [50, 100], "frequencies_hz": [2, 6],
                             "damping": [0.02, 0.03, 0.04]})
-    with pytest.raises(VtableError, match="unknown key 'mass_kg'"):
-        specimen_from_dict({"kind": "sdof", "mass_kg": 3e4, "height_in": 219,
-                            "frequency_hz": 2.87, "damping": 0.01})
-    for k in ("floorK_drift", "floorK_shear", "mass_kg"):
+    # a specimen's keys in SI are read now, and the page no longer lists them
+    assert specimen_from_dict({"kind": "sdof", "mass_kg": 3e4, "height_in": 219,
+                               "frequency_hz": 2.87, "damping": 0.01}).mass == \
+        pytest.approx(3e4, rel=1e-14)
+    assert "mass_kg" not in text and "`mass_kg`" in _text("run-format.md")
+    for k in ("floorK_drift", "floorK_shear"):
         assert k in text
     # storey drift and shear are read in their units now (issue 21), not scored yet
     assert FORMAT_UNITS["floor1_drift"] == "in" and FORMAT_UNITS["floor3_shear"] == "kip"
