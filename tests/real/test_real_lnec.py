@@ -248,3 +248,33 @@ def test_the_table_changes_between_the_diagnosis_training_and_held_out_segments(
     assert err["avg_hdisp", "adjacent"] < 0.5 * err["avg_hdisp", "first"], err
     assert err["avg_hacc", "adjacent"] < 0.8 * err["avg_hacc", "first"], err
     assert (err["avg_hdisp", "first"] + err["avg_hacc", "first"]) / 2 > 3 * 3 * 0.0178
+
+
+def test_the_run_written_in_si_reads_the_same(run_dir):
+    """A metric lab's spelling of the same run: its columns converted here with numpy (mm
+    -> m, g -> m/s², 1 g = 9.80665 m/s²), `[units]` in `m` and `m/s^2`, and the specimen
+    declared in SI both ways: every channel reads as the original's, to the digits written."""
+    text = (run_dir / "lnec_pink_2.toml").read_text()
+    head = (run_dir / "lnec_pink_2.csv").read_text().split("\n", 1)[0]
+    data = np.loadtxt(run_dir / "lnec_pink_2.csv", delimiter=",", skiprows=1)
+    units_of = dict(re.findall(r'^(\w+) = "(mm|g)"$', text, re.M))
+    cols = head.split(",")
+    for j, c in enumerate(cols):
+        data[:, j] *= {"mm": 1e-3, "g": 9.80665}.get(units_of.get(c), 1.0)
+    si = re.sub(r'= "mm"$', '= "m"', text, flags=re.M)
+    si = re.sub(r'= "g"$', '= "m/s^2"', si, flags=re.M)
+    np.savetxt(run_dir / "lnec_si.csv", data, delimiter=",", header=head, comments="",
+               fmt="%.17g")
+    (run_dir / "lnec_si.toml").write_text(si)
+    a, b = read_run(run_dir / "lnec_pink_2.toml"), read_run(run_dir / "lnec_si.toml")
+    assert set(b.units.values()) == {"m", "m/s2"} and b.channels.keys() == a.channels.keys()
+    for c in a.channels:
+        np.testing.assert_allclose(b.channels[c], a.channels[c], rtol=1e-14, atol=1e-18)
+    for spec in ('[specimen]\nkind = "sdof"\nweight_kip = 2.0\nheight_in = 40.0\n'
+                 'frequency_hz = 3.2\ndamping = 0.08\n',
+                 '[specimen]\nkind = "sdof"\nmass_kg = 907.18474\nheight_m = 1.016\n'
+                 'frequency_hz = 3.2\ndamping = 0.08\n'):
+        name = "kip" if "weight_kip" in spec else "kg"
+        s = read_run(_with_specimen(run_dir, f"spec_{name}", spec)).declared.specimen
+        assert s.mass == pytest.approx(907.18474, rel=1e-9) and s.height == \
+            pytest.approx(1.016, rel=1e-12)
