@@ -76,7 +76,7 @@ def test_limits_on_a_linear_truth_the_bound_is_the_noise():
     for f in j["findings"]:
         assert set(f) == {"kind", "runs", "what", "numbers", "action"}
     added = [f for f in j["findings"] if f["kind"] == "effect_added"]
-    assert len(added) == 1 and "--effects pitch_flexibility" in added[0]["action"]
+    assert len(added) == 1 and added[0]["action"].endswith("(--with pitch_flexibility)")
     assert added[0]["numbers"]["error_after"] == pytest.approx(d.final_error)
     text = d.report()
     assert "headline: added pitch_flexibility" in text and "verdict:" not in text

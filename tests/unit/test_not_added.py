@@ -34,6 +34,7 @@ def _candidate(effect: str, values: dict, gain: Gain, flags=()) -> Candidate:
 
 def _diagnosis(rounds: list[Round], final: list[str], **kw):
     d = SimpleNamespace(interrupted=False, steps=lambda: rounds, rounds=rounds, limits=None,
+                        start_effects=[],
                         final_error=0.2, base_at_bounds=[], unexplained={"ratio_to_floor": 14.7},
                         final_effects=final, noise_floor=math.sqrt(F2), states={},
                         states_declared=False)
@@ -157,3 +158,19 @@ def test_nothing_is_said_where_its_numbers_would_not_hold(case):
         soft = next(f for f in findings(d, notches={"r": (3.25, 3.06, 27.3)})
                     if f["kind"] == "softening")
         assert soft["action"].startswith("no time-invariant model follows it")
+
+
+def test_an_added_effect_is_kept_with_the_flag_that_keeps_the_model_so_far():
+    """`--with` keeps effects in the model (`--effects` is what a diagnosis tries): each
+    effect_added finding names the model up to it, the starting model's effects first, an
+    effect removed since left out."""
+    rounds = [Round([], "pitch_flexibility", 0.3, 0.2),
+              Round([], "actuator_friction", 0.2, 0.1),
+              Round([], "sensor_filter", 0.1, 0.05, removed={"pitch_flexibility": "no gain"})]
+    found = findings(_diagnosis(rounds, ["sensor_filter"], start_effects=["sensor_offset"]))
+    actions = [f["action"] for f in found if f["kind"] == "effect_added"]
+    assert actions == ["keep it in the model (--with sensor_offset,pitch_flexibility)",
+                       "keep it in the model (--with sensor_offset,pitch_flexibility,"
+                       "actuator_friction)",
+                       "keep it in the model (--with sensor_offset,actuator_friction,"
+                       "sensor_filter)"]

@@ -77,17 +77,20 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
     if d.interrupted:
         out.append(finding("interrupted", f"the diagnosis was interrupted after round "
                            f"{len(d.rounds)}", "run it again to the end"))
+    model = list(d.start_effects)  # the model's effects after each step (`--with`)
     for r in d.steps():
         if isinstance(r, dict):  # the force reading kept
             out.append(_reading_finding(r))
             continue
+        model = [e for e in model if e not in r.removed]
         if r.added:
+            model.append(r.added)
             c = next((c for c in r.ranking if c.effect == r.added), None)
             params = {} if c is None else {k: float(v) for k, v in c.params.items()
                                            if isinstance(v, (int, float))}
             out.append(finding(
                 "effect_added", f"{r.added} lowers the held-out error {_pct(r.before)} -> "
-                f"{_pct(r.error)}", f"keep it in the model (--effects {r.added})",
+                f"{_pct(r.error)}", f"keep it in the model (--with {','.join(model)})",
                 numbers={"error_before": r.before, "error_after": r.error, **params}))
         for e, why in r.removed.items():
             out.append(finding("effect_removed", f"{e} removed: {why}", "leave it out"))
