@@ -90,18 +90,19 @@ class Diagnoser:
         self.campaign = Campaign.of(runs)
         self.workers = WORKERS if workers is None else max(1, int(workers))
         self.source_runs, self.runs = self.campaign.source_runs, self.campaign.runs
-        for e in start_effects:
-            effect(e)
         self.notes, self.vt = self.campaign.notes, self.campaign.table
         self.campaign.residual_change = None  # asked by this diagnosis (`states.unexplained`)
         self.specimen = self.runs[0].specimen()
-        self.start = Physics(nominal_open_loop(self.vt), self.specimen,
-                             {e: {} for e in start_effects})
         self.catalog = list(catalog or default_candidates())
         for e in self.catalog:
             effect(e)
-        # the effects' defaults and what the runs show of them (`SELECTION`'s prior)
-        self.table_view = evidence_view(self.vt, self.catalog, self.campaign, self.notes)
+        # the effects' defaults and what the runs show of them (`SELECTION`'s prior; the
+        # starting model's effects start there, as `compare --with` starts them)
+        self.table_view = evidence_view(self.vt, list(dict.fromkeys([*start_effects,
+                                                                     *self.catalog])),
+                                        self.campaign, self.notes)
+        self.start = Physics(nominal_open_loop(self.vt), self.specimen, {
+            e: dict(self.table_view.evidence.get(e, ({}, ""))[0]) for e in start_effects})
         self.progress, self.max_rounds = progress or (lambda i, n, s: None), max_rounds
         self.floor, self._spectra = self.campaign.floor, {}  # `compare`'s memo of the runs
         self.calibration = calibration or Calibration()

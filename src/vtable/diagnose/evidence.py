@@ -1,7 +1,8 @@
 """What a campaign's runs show of the catalog effects' parameters before any fit
 (`Effect.evidence`: identification, the checks on the runs): the diagnosis starts each
 candidate's fit there too (`engine`) and centres its prior there (`selection.implausibility`
-reads `TableView.evidence`)."""
+reads `TableView.evidence`); a model given its effects by name (`vtable compare --with`,
+`vtable drive --with`, `diagnose --with`) starts them there (`started`)."""
 
 from __future__ import annotations
 
@@ -9,11 +10,18 @@ import dataclasses
 
 from vtable.effects.registry import get as effect
 from vtable.effects.table import TableView
+from vtable.models.physics import Physics
+
+#: what a diagnosis does with what the runs show of an effect (`shown_by_runs`)
+CHARGED = ("its fit starts there and is charged for its distance from these, not from its "
+           "defaults")
 
 
-def shown_by_runs(catalog, campaign, notes: list[str]) -> dict[str, tuple[dict, str]]:
+def shown_by_runs(catalog, campaign, notes: list[str], use: str = CHARGED
+                  ) -> dict[str, tuple[dict, str]]:
     """What the campaign's runs show of each catalog effect's parameters
-    (`Effect.evidence`), each said in `notes`: effect -> (values, where from)."""
+    (`Effect.evidence`), each said in `notes` with what is done with it (`use`): effect ->
+    (values, where from)."""
     out = {}
     for name in catalog:
         e = effect(name)
@@ -25,9 +33,19 @@ def shown_by_runs(catalog, campaign, notes: list[str]) -> dict[str, tuple[dict, 
                    for k, v in ev[0].items()}, ev[1])
             out[name] = ev
             vals = ", ".join(f"{k} {v:.3g}" for k, v in ev[0].items())
-            notes.append(f"{name}: the runs show {vals} ({ev[1]}): its fit starts there and "
-                         "is charged for its distance from these, not from its defaults")
+            notes.append(f"{name}: the runs show {vals} ({ev[1]}): {use}")
     return out
+
+
+def started(start: Physics, effects, campaign, notes: list[str]) -> Physics:
+    """`start` with each of `effects` it does not hold added at what the runs show of its
+    parameters (`shown_by_runs`, said in `notes`), else at its defaults: a model given its
+    effects by name (`vtable compare --with`) starts where the diagnosis starts them."""
+    new = [e for e in effects if not start.has(e)]
+    shown = shown_by_runs(new, campaign, notes, "its fit starts there") if new else {}
+    for e in new:
+        start = start.with_effect(e, dict(shown[e][0]) if e in shown else None)
+    return start
 
 
 def evidence_view(vt, catalog, campaign, notes: list[str]) -> TableView:

@@ -29,6 +29,7 @@ from vtable.diagnose.calibration import LOOP, Calibration
 from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.choices import fit_choices
 from vtable.diagnose.compare import Comparison, compare
+from vtable.diagnose.evidence import started
 from vtable.diagnose.layout import with_states
 from vtable.diagnose.projected import Frame, declared_loop, projected_start
 from vtable.diagnose.residuals import Residuals
@@ -166,6 +167,7 @@ class TableModel(Residuals):
         self.declared = None  # the campaign's declared specimen, known when fitting
         self.state_specimens: dict = {}  # further states -> their declared specimen
         self.campaign_: Campaign | None = None
+        self.start_notes_: list[str] = []
 
     @classmethod
     def unfitted(cls, campaign: Campaign, calibration: Calibration | None = None,
@@ -206,9 +208,8 @@ class TableModel(Residuals):
         self.state_specimens = campaign.state_specimens
         start = with_states(self.start or Physics(nominal_open_loop(self.vt),
                                                   campaign.specimen, {}), campaign)
-        for e in self.effects:
-            if not start.has(e):
-                start = start.with_effect(e)
+        self.start_notes_ = []  # what the runs show of the effects it adds (`started`)
+        start = started(start, self.effects, campaign, self.start_notes_)
         campaign = campaign.training_for(start)
         self.campaign_ = campaign
         # the whole values chosen: the candidate's own when there is one (the model it
@@ -387,7 +388,7 @@ class TableModel(Residuals):
             self.correlations_ = correlations(jac, len(lay))
             self.flags_ = self.at_bounds(self.physics_) + self._unidentified(lay)
         self.base_ = self.base_table(self.physics_)
-        self.notes_ = list(campaign.notes)
+        self.notes_ = list(dict.fromkeys([*campaign.notes, *self.start_notes_]))
         return self
 
     def _unidentified(self, lay) -> list[str]:
