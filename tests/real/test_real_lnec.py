@@ -33,6 +33,7 @@ Measured on this run (H1, 2048-point frames unless said; numbers in the asserts)
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -278,3 +279,23 @@ def test_the_run_written_in_si_reads_the_same(run_dir):
         s = read_run(_with_specimen(run_dir, f"spec_{name}", spec)).declared.specimen
         assert s.mass == pytest.approx(907.18474, rel=1e-9) and s.height == \
             pytest.approx(1.016, rel=1e-12)
+
+
+def test_a_drive_for_the_bare_table_drives_its_own_motion(run_dir, tmp_path):
+    """LNEC's table carries no declared specimen: the effective motion x_t + θh has no
+    height, said in one line with what to do, and `--objective table` drives x_t (the
+    height was asked for, and refused, whatever the objective)."""
+    from conftest import run_cli
+
+    toml = str(run_dir / "lnec_pink_2.toml")
+    args = ["drive", toml, "--target", "elcentro", "--target-peak", "20mm", "--with",
+            "sensor_offset", "--out", str(tmp_path / "drv")]
+    code, _, err = run_cli(args)
+    assert code == 2 and "has no effective height" in err and "--objective table" in err
+    code, out, err = run_cli([*args, "--objective", "table", "--json"])
+    assert code == 0, err
+    res = json.loads(out)
+    assert res["objective"] == "table" and res["effective_height_m"] == 0.0
+    # on the model, the drive reproduces x_t far better than the target played as it is
+    assert res["drive"]["nrms"] < 0.25 * res["baselines"]["target as it is"]["nrms"]
+    assert (tmp_path / "drv.csv").is_file() and (tmp_path / "drv.toml").is_file()

@@ -30,15 +30,19 @@ V_POS = {1: (72, 72), 2: (-72, 72), 3: (-72, -72), 4: (72, -72)}
 P_POS = {1: (102, 102), 2: (-102, 102), 3: (-102, -102), 4: (102, -102)}
 
 
-def effective_height(run: Run) -> float:
+def effective_height(run: Run, bare: float | None = None) -> float:
     """h of x_eff = x_t + hθ: the SDOF top mass (eq 3.5), a rigid block's centre of
-    gravity, or a shear building's first-mode effective height (eq 4.24)."""
+    gravity, or a shear building's first-mode effective height (eq 4.24); for a bare table
+    `bare` when given (what needs no height: the table's own motion), else an error."""
     spec = run.specimen()
     if isinstance(spec, SDOFSpecimen | RigidBlock):
         return spec.height
     if isinstance(spec, ShearBuilding):
         return closed_forms.effective_height_first_mode(spec.masses, spec.heights)
-    raise VtableError(f"{run.name}: a bare table has no effective height")
+    if bare is not None:
+        return bare
+    raise VtableError(f"{run.name}: a bare table has no effective height (x_t + θh at a "
+                      "specimen): --objective table drives the table's motion x_t")
 
 
 def lowest_declared_mode(run: Run) -> tuple[float, float] | None:

@@ -125,7 +125,7 @@ def drive(paths: Sequence[str], target: str, out: str, target_unit: str = "in",
     tgt = read_target(target, target_unit, peak=target_peak)
     model, how = calibrated(runs, list(dict.fromkeys(with_)), Calibration.parse(calibrate),
                             from_, measured_runs)
-    h = effective_height(runs[0])
+    h = effective_height(runs[0], bare=None if objective == "effective" else 0.0)
     measured = None
     if measured_runs:
         measured = _measured(measured_runs[-1], tgt, h, objective)
