@@ -348,3 +348,15 @@ def test_identify_on_a_table_that_cannot_pitch(capsys, tmp_path):
     assert cases == ["fixed base", "translational coupling"], cases
     assert "does not pitch" in d["skipped"]["table 3.1: base rotation coupling"]
     assert d["table_3_1"][1]["f_hz"] < d["table_3_1"][0]["f_hz"] < 4.2
+
+
+def test_a_run_file_given_as_a_model_configuration_says_what_reads_it(capsys, tmp_path):
+    """modes and margins take a model configuration; a run file (format vtable-run/1) is
+    named as one, with the verbs that read a run (not 'unknown key command')."""
+    p = tmp_path / "run.toml"
+    p.write_text('format = "vtable-run/1"\n[table]\npreset = "eerc"\n[command]\nkind = "random"\n')
+    for cmd in ("margins", "modes"):
+        code, out, err = run(capsys, cmd, str(p))
+        assert code == 2 and out == "" and err.count("\n") == 1
+        assert "a run file (vtable-run/1), not a model configuration" in err
+        assert "vtable identify RUN.toml" in err and "unknown key" not in err

@@ -130,6 +130,12 @@ def from_file(path: str | Path) -> LinearModel:
     """Build the model a TOML model file describes (see the module docstring)."""
     d = read_toml(path)
     where = str(path)
+    if isinstance(d.get("format"), str) and d["format"].startswith("vtable-run/"):
+        raise VtableError(f"{where}: a run file ({d['format']}), not a model configuration "
+                          "(a preset, `vtable presets`, or a model .toml: "
+                          "docs/how-to/command-line.md); what a run holds: vtable tf RUN.toml "
+                          "(its x_t/x_c), vtable identify RUN.toml (its loop, margin and "
+                          "specimen)")
     unknown = sorted(set(d) - _TOP, key=str)
     if unknown:
         raise VtableError(f"{where}: unknown key {unknown[0]!r}"
