@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import dataclasses
 
+from vtable.diagnose.prose import params_text
+from vtable.display import run_family
 from vtable.effects.registry import get as effect
 from vtable.effects.table import TableView
 from vtable.models.physics import Physics
@@ -32,7 +34,7 @@ def shown_by_runs(catalog, campaign, notes: list[str], use: str = CHARGED
             ev = ({k: min(max(float(v), e.param(k).lower), e.param(k).upper)
                    for k, v in ev[0].items()}, ev[1])
             out[name] = ev
-            vals = ", ".join(f"{k} {v:.3g}" for k, v in ev[0].items())
+            vals = params_text(name, ev[0], run_family(campaign.runs[0]), ".3g")
             notes.append(f"{name}: the runs show {vals} ({ev[1]}): {use}")
     return out
 

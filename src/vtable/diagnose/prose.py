@@ -6,12 +6,15 @@ from __future__ import annotations
 
 from typing import Any
 
+from vtable import display
 from vtable.diagnose.groups import short
 from vtable.diagnose.noise import within_noise
 from vtable.diagnose.statistics import Comparison
 from vtable.display import amplitude
+from vtable.effects.registry import get as effect
 from vtable.params.specimen import NoSpecimen
 from vtable.runs.model import Run
+from vtable.units import to_si
 
 
 def linear_model(runs: list[Run]) -> str:
@@ -133,3 +136,12 @@ def base_lines(base: dict[str, Any], indent: str = "") -> list[str]:
         out.append(f"{indent}  {k:<28} {v['declared']:.4g} -> {v['fitted']:.4g}{u} "
                    f"({moved:+.1%}; bounds {lo:.4g}-{hi:.4g})")
     return out
+
+
+def params_text(name: str, params: dict[str, float], fam: str, spec: str = ".4g") -> str:
+    """An effect's fitted parameters (in its units) as the user reads them: 'friction =
+    2.98 kip' for a run in the report's units, '13.3 kN' for a metric one
+    (`vtable.display`)."""
+    units_of = {p.name: p.unit for p in effect(name).params}
+    return ", ".join(f"{k} = {display.quantity(to_si(v, units_of[k]), units_of[k], fam, spec)}"
+                     if k in units_of else f"{k} = {v:{spec}}" for k, v in params.items())

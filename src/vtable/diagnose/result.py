@@ -16,18 +16,21 @@ from typing import Any
 
 import numpy as np
 
-from vtable import display
 from vtable.diagnose.limits import Limits, limits
 from vtable.diagnose.model import SCREEN, TableModel
 from vtable.diagnose.noise import UNEXPLAINED_RULE
-from vtable.diagnose.prose import base_lines, linear_model, localisation_text, unexplained
+from vtable.diagnose.prose import (
+    base_lines,
+    linear_model,
+    localisation_text,
+    params_text,
+    unexplained,
+)
 from vtable.diagnose.selection import SELECTION, failing
 from vtable.diagnose.statistics import Comparison, Gain
-from vtable.effects.registry import get as effect
 from vtable.jsonable import jsonable
 from vtable.models.physics import Physics
 from vtable.runs.model import Run
-from vtable.units import to_si
 
 ERROR_DEFINITION = ("mean over runs and channel groups of the normalised RMS error "
                     "||model - measured|| / ||measured|| on the held-out last 40 % of every "
@@ -352,15 +355,6 @@ def evidence(c: Candidate, err: float, floor: float, cmp: Comparison) -> str:
             + f"; adding {c.effect} removes {removed} of its systematic part (held-out error "
               f"{err:.2%} -> {c.error_after:.2%}{z}); fitted {params}")
 
-
-
-def params_text(name: str, params: dict[str, float], fam: str, spec: str = ".4g") -> str:
-    """An effect's fitted parameters (in its units) as the user reads them: 'friction =
-    2.98 kip' for a run in the report's units, '13.3 kN' for a metric one
-    (`vtable.display`)."""
-    units_of = {p.name: p.unit for p in effect(name).params}
-    return ", ".join(f"{k} = {display.quantity(to_si(v, units_of[k]), units_of[k], fam, spec)}"
-                     if k in units_of else f"{k} = {v:{spec}}" for k, v in params.items())
 
 
 def localise(d: Diagnosis) -> str:
