@@ -174,3 +174,31 @@ def test_an_added_effect_is_kept_with_the_flag_that_keeps_the_model_so_far():
                        "actuator_friction)",
                        "keep it in the model (--with sensor_offset,actuator_friction,"
                        "sensor_filter)"]
+
+
+@pytest.mark.parametrize("states, declared, says", [
+    ({}, False, "declare each state ([specimen] state) and diagnose them apart"),
+    ({"run a": {"specimen": {"frequency_hz": 3.1}, "runs": ["a"]},
+      "run b": {"specimen": {"frequency_hz": 3.0}, "runs": ["b"]}}, False,
+     "fitted with a specimen state per run"),
+    ({"first": {"specimen": {"frequency_hz": 3.15}, "runs": ["a"]},
+      "second": {"specimen": {"frequency_hz": 3.04}, "runs": ["b"]}}, True,
+     "the states' specimens, fitted apart, do not follow the difference"),
+    ({"first": {"specimen": {}, "runs": ["a"]}, "second": {"specimen": {}, "runs": ["b"]}},
+     True, "the runs declare no specimen"),
+])
+def test_runs_that_do_not_hold_one_plant_are_told_what_they_have_not_done(states, declared,
+                                                                          says):
+    """Two runs that differ beyond their estimates: the action never asks for what the
+    runs already declare (states declared on a bare table once asked to declare states)."""
+    pair = SimpleNamespace(text=lambda: "a and b do not hold one plant", runs=("a", "b"),
+                           z2_mean=2.0, z_max=3.0, lines=48, at_hz=9.8, relative=0.28)
+    d = _diagnosis([Round([], None, 0.2, 0.2)], [], states=states, states_declared=declared)
+    found = findings(d, plants=[pair])
+    plants = next(f for f in found if f["kind"] == "plants")
+    assert says in plants["action"], plants["action"]
+    if declared:
+        assert "declare each state" not in plants["action"]
+        states_finding = next(f for f in found if f["kind"] == "states")
+        assert ("the runs declare no specimen" in states_finding["action"]) == \
+            (says == "the runs declare no specimen")

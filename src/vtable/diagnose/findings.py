@@ -113,16 +113,10 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
         out.append(finding("sensor", c.text(), "check the acceleration channel's sensor, "
                            "its mount and its calibration against the displacement",
                            runs=[c.run]))
-    split = bool(getattr(d, "states", None)) and not getattr(d, "states_declared", False)
     for p in plants:
-        out.append(finding(
-            "plants", p.text(), "fitted with a specimen state per run (the states finding); "
-            "declare each state ([specimen] state) in the run files" if split else
-            "a specimen that changed between the runs: declare each state ([specimen] "
-            "state) and diagnose them apart; or an amplitude dependence no effect in the "
-            "model follows", runs=list(p.runs),
-            numbers={"z2_mean": p.z2_mean, "z_max": p.z_max, "lines": p.lines,
-                     "at_hz": p.at_hz, "relative": p.relative}))
+        out.append(finding("plants", p.text(), _plants_action(d), runs=list(p.runs),
+                           numbers={"z2_mean": p.z2_mean, "z_max": p.z_max, "lines": p.lines,
+                                    "at_hz": p.at_hz, "relative": p.relative}))
     if getattr(d, "states", None):
         out.append(_states_finding(d.states, d.states_declared))
     for name, (values, where) in ({} if explained else shown or {}).items():
@@ -221,6 +215,32 @@ def _not_added(d) -> list[tuple[str, dict[str, Any]]]:
     return out
 
 
+#: what to do where the runs declare states but no specimen to fit in each
+NO_SPECIMEN = ("the runs declare no specimen ([specimen] kind \"none\"): the states have "
+               "nothing of their own to fit; declare the specimen that changed (its kind and "
+               "nominal values) so that each state gets its own, or diagnose the runs apart")
+
+
+def _plants_action(d) -> str:
+    """What to do about two runs that do not hold one plant: the states the diagnosis
+    split the runs into, the states they declare (with or without a specimen to fit in
+    each), or none."""
+    states = getattr(d, "states", None) or {}
+    if states and not getattr(d, "states_declared", False):
+        return ("fitted with a specimen state per run (the states finding); declare each "
+                "state ([specimen] state) in the run files")
+    if states and not any(r["specimen"] for r in states.values()):
+        return NO_SPECIMEN
+    if states:
+        return ("the states' specimens, fitted apart, do not follow the difference: runs of "
+                "one state that differ (declare the states finer), a change beyond the "
+                "specimen (the table, a sensor), or an amplitude dependence no effect in the "
+                "model follows")
+    return ("a specimen that changed between the runs: declare each state ([specimen] "
+            "state) and diagnose them apart; or an amplitude dependence no effect in the "
+            "model follows")
+
+
 def _states_finding(states: dict[str, dict[str, Any]], declared: bool) -> dict[str, Any]:
     """The specimen's fitted parameters in each state (`states.state_rows`)."""
     def text(s: str, row: dict[str, Any]) -> str:
@@ -233,7 +253,8 @@ def _states_finding(states: dict[str, dict[str, Any]], declared: bool) -> dict[s
 
     what = (("the runs' declared states" if declared else "a state per run") + ", fitted: "
             + "; ".join(text(s, r) for s, r in states.items()))
-    action = ("compare the states' specimens: the change between them is the specimen's"
+    action = (("compare the states' specimens: the change between them is the specimen's"
+               if any(r["specimen"] for r in states.values()) else NO_SPECIMEN)
               if declared else "the runs do not hold one specimen: declare each run's state "
               "([specimen] state) so that runs of one state share it")
     numbers = {f"{s}.{k}": float(v) for s, r in states.items()
