@@ -35,15 +35,23 @@ class PlatenResonator(Effect):
     def evidence(self, campaign):
         """The resonance identify's structure check finds on the runs that declare no
         specimen with a mode (`vtable.ident.undeclared`): the median over those runs of
-        its frequency, damping and mass ratio (eq 7.9's u, the platen's mass fraction)."""
+        its frequency, and of its damping and mass ratio (eq 7.9's u, the platen's mass
+        fraction) over the runs that resolve them (a short record may resolve the
+        frequency alone: the others then start at their defaults)."""
         found = [r for r in map(undeclared_resonance, campaign.runs) if r is not None]
         if not found:
             return None
         med = statistics.median
-        values = {"m_r": 100.0 * med(r.u for r in found), "f_r": med(r.f_s for r in found),
-                  "xi_r": med(r.xi_s for r in found)}
+        values = {"f_r": med(r.f_s for r in found)}
+        if us := [r.u for r in found if r.u is not None]:
+            values["m_r"] = 100.0 * med(us)
+        if xis := [r.xi_s for r in found if r.xi_s is not None]:
+            values["xi_r"] = med(xis)
         runs = ", ".join(r.run for r in found)
-        return values, f"identified on {runs}'s x_t/x_c (eq 7.9 with the valve lag)"
+        alone = "" if len(values) == 3 else (
+            "; the records resolve " + ("its frequency alone" if len(values) == 1 else
+                                        "not all of it"))
+        return values, f"identified on {runs}'s x_t/x_c (eq 7.9 with the valve lag){alone}"
 
     def apply(self, m, p):
         mass = p["m_r"] * m.table.platen_mass  # p["m_r"] is in SI: a fraction

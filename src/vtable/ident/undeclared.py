@@ -13,8 +13,9 @@ import numpy as np
 from vtable.errors import VtableError
 from vtable.ident import channels
 from vtable.ident.frames import MIN_AVERAGES, frame_for_averages
-from vtable.ident.loop import LoopData, compare_structures, prior_of
+from vtable.ident.loop import AIC_MARGIN, LoopData, aic, compare_structures, fit_structure, prior_of
 from vtable.ident.report import servo_band
+from vtable.ident.resonator import RESONANCE_MAX_DAMPING
 from vtable.ident.tf import transfer_function
 from vtable.params.specimen import NoSpecimen, RigidBlock
 from vtable.runs.lab import run_table
@@ -24,12 +25,13 @@ from vtable.runs.model import Run
 @dataclass(frozen=True)
 class Resonance:
     """A resonance on the platen a run does not declare: its frequency (Hz), damping ratio
-    and mass over the platen's (u = m_s/m_t, eq 7.9)."""
+    and mass over the platen's (u = m_s/m_t, eq 7.9); the damping or the mass None where
+    the record does not resolve it (a short record: an earthquake's few averages)."""
 
     run: str
     f_s: float
-    xi_s: float
-    u: float
+    xi_s: float | None
+    u: float | None
 
 
 #: the bands (Hz) in which the table acceleration is compared with s² times the table
@@ -65,7 +67,8 @@ def _agreeing(run: Run, tf, n: int) -> float:
 def undeclared_resonance(run: Run) -> Resonance | None:
     """The resonance identify's structure check finds on `run`'s x_t/x_c, where the run
     declares no specimen with a mode (none, or a rigid block) and the resonator structure
-    wins (`loop.compare_structures`); None otherwise, or when the run cannot be fitted."""
+    wins (`loop.compare_structures`), or its frequency alone where the record resolves
+    only that (`_frequency_only`); None otherwise, or when the run cannot be fitted."""
     spec = run.specimen()
     if not isinstance(spec, NoSpecimen | RigidBlock):
         return None
@@ -77,11 +80,32 @@ def undeclared_resonance(run: Run) -> Resonance | None:
             return None
         tf = transfer_function(x_c, x_t, run.fs, n)
         lo, hi = servo_band(run, table)
-        ls = compare_structures(LoopData.from_tf(tf, (lo, min(hi, _agreeing(run, tf, n)))),
-                                prior_of(table))
+        data = LoopData.from_tf(tf, (lo, min(hi, _agreeing(run, tf, n))))
+        ls = compare_structures(data, prior_of(table))
     except VtableError:
         return None
-    if not ls.fits_eq_6_15 or ls.best != "resonator":
+    if not ls.fits_eq_6_15:
         return None
-    fit = ls.fits["resonator"]
-    return Resonance(run.name, float(fit["f_s"]), float(fit["xi_s"]), float(fit["u"]))
+    if ls.best == "resonator":
+        fit = ls.fits["resonator"]
+        return Resonance(run.name, float(fit["f_s"]), float(fit["xi_s"]), float(fit["u"]))
+    return _frequency_only(run, data, table, ls)
+
+
+def _frequency_only(run: Run, data: LoopData, table, ls) -> Resonance | None:
+    """A resonance whose frequency alone the record resolves: the resonator structure
+    wins by `AIC_MARGIN` over every other, its f_s unflagged, but its damping or mass
+    flagged (`is_resonance` then keeps it out of identify's structures); those are None,
+    the ones resolved kept. None otherwise."""
+    try:
+        fit = fit_structure("resonator", data, prior_of(table))
+    except VtableError:
+        return None
+    others = [aic(f) for k, f in ls.fits.items() if k != "resonator"]
+    flagged = {f.param for f in fit.flags if f.code != "correlated"}
+    if not others or not aic(fit) + AIC_MARGIN < min(others) or "f_s" in flagged \
+            or fit["xi_s"] > RESONANCE_MAX_DAMPING:
+        return None
+    return Resonance(run.name, float(fit["f_s"]),
+                     None if "xi_s" in flagged else float(fit["xi_s"]),
+                     None if "u" in flagged else float(fit["u"]))
