@@ -108,7 +108,6 @@ def test_a_diagnosis_starts_the_resonator_where_identify_found_it():
     assert shown[0]["numbers"]["f_r"] == pytest.approx(8.3, rel=0.05)
 
 
-
 #: a heavy specimen nobody declared, as on LNEC's table: 1500 kg (76 % of the platen) at
 #: 2 Hz, ξ 2 %; the table's accelerometer on a mount (17 Hz, ζ 0.09, a 30 Hz low-pass)
 #: with a zero of -0.08 m/s²
@@ -159,3 +158,25 @@ def test_a_short_record_that_resolves_part_of_the_resonance_seeds_the_resonator(
     assert p["m_r"] / 100 * platen == pytest.approx(M_EQ, rel=0.2), p
     assert d.final_error < 2 * d.noise_floor and d.final_error < d.limits.reference, \
         d.headline
+
+
+def test_the_evidence_holds_what_the_records_resolve(monkeypatch):
+    """`platen_resonator.evidence` over runs that resolve a resonance in part: the median
+    of each value over the runs that resolve it, the others left out (they start at their
+    defaults), and its note says how much the records resolve."""
+    from types import SimpleNamespace
+
+    import vtable.effects.platen_resonator as pr
+    from vtable.ident.undeclared import Resonance
+
+    found = {"a": Resonance("a", 3.0, None, None), "b": Resonance("b", 3.2, None, 0.5),
+             "c": Resonance("c", 3.1, None, 0.7)}
+    monkeypatch.setattr(pr, "undeclared_resonance", lambda run: found[run])
+    values, where = pr.EFFECT.evidence(SimpleNamespace(runs=["a", "b", "c"]))
+    assert values == {"f_r": 3.1, "m_r": pytest.approx(60.0)}
+    assert where.endswith("the records resolve not all of it")
+    values, where = pr.EFFECT.evidence(SimpleNamespace(runs=["a"]))
+    assert values == {"f_r": 3.0} and where.endswith("the records resolve its frequency alone")
+    found["a"] = Resonance("a", 3.0, 0.04, 0.5)
+    values, where = pr.EFFECT.evidence(SimpleNamespace(runs=["a"]))
+    assert values == {"f_r": 3.0, "m_r": 50.0, "xi_r": 0.04} and "resolve" not in where

@@ -308,7 +308,11 @@ def test_a_specimen_declared_in_si_is_the_same_specimen():
       "damping": 0.02, "frequencies_hz": [2.0, 5.0]},
      r"\[specimen\].masses_kg\[1\]: expected a number in kg, got 'x'"),
     ({**{k: v for k, v in SDOF.items() if k != "weight_kip"}, "mass_kg": -5.0},
-     "weight_kip must be > 0"),
+     r"\[specimen\].mass_kg: expected a number >= 0 in kg, got -5.0"),
+    ({**{k: v for k, v in SDOF.items() if k != "weight_kip"}, "mass_kg": [1.0, 2.0]},
+     r"\[specimen\].mass_kg: expected a number in kg, got \[1.0, 2.0\]"),
+    ({**{k: v for k, v in SDOF.items() if k != "weight_kip"}, "masses_kg": [1.0, 2.0]},
+     "unknown key 'masses_kg'"),  # another kind's key stays as given
 ])
 def test_si_specimen_keys_are_checked_under_their_own_names(d, msg):
     with pytest.raises(VtableError, match=msg) as e:

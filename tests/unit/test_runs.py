@@ -347,6 +347,7 @@ def test_a_unit_in_another_spelling_reads_the_same(tmp_path):
     h5 = read_hdf5(write_hdf5(r, tmp_path / "b.h5"))
     assert h5.units == r.units
 
+
 def test_floor_channels_and_extra_channels_take_their_units(tmp_path):
     csv = "time,floor1_acc,floor12_disp,strain,temp\n0,0,0,0,0\n0.005,0.5,1,2,3\n0.01,1,2,3,4\n"
     r = _read(tmp_path, "fl", csv, TOML + '\n[units]\nfloor12_disp = "mm"\nstrain = "%"\n'

@@ -98,9 +98,8 @@ class Diagnoser:
             effect(e)
         # the effects' defaults and what the runs show of them (`SELECTION`'s prior; the
         # starting model's effects start there, as `compare --with` starts them)
-        self.table_view = evidence_view(self.vt, list(dict.fromkeys([*start_effects,
-                                                                     *self.catalog])),
-                                        self.campaign, self.notes)
+        self.table_view = evidence_view(self.vt, self.catalog, self.campaign, self.notes,
+                                        start_effects)
         self.start = Physics(nominal_open_loop(self.vt), self.specimen, {
             e: dict(self.table_view.evidence.get(e, ({}, ""))[0]) for e in start_effects})
         self.progress, self.max_rounds = progress or (lambda i, n, s: None), max_rounds

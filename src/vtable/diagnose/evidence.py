@@ -14,9 +14,11 @@ from vtable.effects.registry import get as effect
 from vtable.effects.table import TableView
 from vtable.models.physics import Physics
 
-#: what a diagnosis does with what the runs show of an effect (`shown_by_runs`)
+#: what a diagnosis does with what the runs show of an effect (`shown_by_runs`): a
+#: candidate's, and an effect's a model is given
 CHARGED = ("its fit starts there and is charged for its distance from these, not from its "
            "defaults")
+STARTS = "its fit starts there"
 
 
 def shown_by_runs(catalog, campaign, notes: list[str], use: str = CHARGED
@@ -44,14 +46,17 @@ def started(start: Physics, effects, campaign, notes: list[str]) -> Physics:
     parameters (`shown_by_runs`, said in `notes`), else at its defaults: a model given its
     effects by name (`vtable compare --with`) starts where the diagnosis starts them."""
     new = [e for e in effects if not start.has(e)]
-    shown = shown_by_runs(new, campaign, notes, "its fit starts there") if new else {}
+    shown = shown_by_runs(new, campaign, notes, STARTS) if new else {}
     for e in new:
         start = start.with_effect(e, dict(shown[e][0]) if e in shown else None)
     return start
 
 
-def evidence_view(vt, catalog, campaign, notes: list[str]) -> TableView:
+def evidence_view(vt, catalog, campaign, notes: list[str], starting=()) -> TableView:
     """The view of table `vt` the diagnosis takes the effects' defaults and priors on,
-    with what the runs show of each of `catalog` (`shown_by_runs`)."""
-    return dataclasses.replace(TableView.of(vt),
-                               evidence=shown_by_runs(catalog, campaign, notes))
+    with what the runs show of each of `catalog` (`shown_by_runs`) and of the starting
+    model's effects `starting` (where they start; they are never charged)."""
+    shown = shown_by_runs(starting, campaign, notes, STARTS)
+    shown.update(shown_by_runs([e for e in catalog if e not in shown and e not in starting],
+                               campaign, notes))
+    return dataclasses.replace(TableView.of(vt), evidence=shown)

@@ -10,8 +10,10 @@ import math
 from typing import Any
 
 from vtable.diagnose.noise import NOISE_FACTOR, within_noise
+from vtable.diagnose.prose import params_text
 from vtable.diagnose.reading import SAID
 from vtable.diagnose.selection import implausibility, near_miss, prior_cost
+from vtable.display import run_family
 from vtable.effects.registry import get as effect
 from vtable.effects.registry import names
 
@@ -122,7 +124,8 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
     for name, (values, where) in ({} if explained else shown or {}).items():
         if name in d.final_effects:
             continue
-        vals = ", ".join(f"{k} {v:.3g}" for k, v in values.items())
+        runs = getattr(d, "runs", None)
+        vals = params_text(name, values, run_family(runs[0]) if runs else "imperial", ".3g")
         out.append(finding(
             "shown", f"the runs show {name} ({vals}; {where}) that the final model does not "
             "hold", f"the diagnosis fitted {name} from there and did not add it: start from it "

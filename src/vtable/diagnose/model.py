@@ -252,10 +252,11 @@ class TableModel(Residuals):
                                 else (p.lower, p.upper))
                         v[k] = a + frac * (b - a)
                 points.append(v)
-            if self.seed:  # ... and where an earlier fit of the effect ended (or what the
-                v = x0[idx].copy()  # runs show of it: what they do not, as it starts)
-                for k, i in enumerate(idx):
-                    if (name := lay[i].key.split(".", 1)[1]) in self.seed:
+            names = [lay[i].key.split(".", 1)[1] for i in idx]
+            if self.seed and set(names) & set(self.seed):  # ... and where an earlier fit of
+                v = x0[idx].copy()  # it ended (or what the runs show of it: the rest as it
+                for k, (i, name) in enumerate(zip(idx, names, strict=True)):  # starts)
+                    if name in self.seed:
                         v[k] = math.log(self.seed[name]) if lay[i].log else self.seed[name]
                 points.append(v)
             near = not loop.any() or np.max(np.abs(mixed - x0[base])[loop]) < 0.02

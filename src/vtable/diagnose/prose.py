@@ -1,6 +1,6 @@
 """Where a model fails, in words and numbers: the worst channel groups and bands, the
 amplitude trend, the worst time window, and whether a residual is left unexplained
-(`noise.UNEXPLAINED_RULE`)."""
+(`noise.UNEXPLAINED_RULE`); an effect's values as the user reads them (`params_text`)."""
 
 from __future__ import annotations
 

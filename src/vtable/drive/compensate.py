@@ -260,7 +260,8 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
         The motion to reproduce (`vtable.drive.target.read_target`), at `DRIVE_FS`.
     h
         The effective height of x_eff = x_t + θh (m); None: `vtable.ident.structure.
-        effective_height` of the model's first campaign run (its declared specimen).
+        effective_height` of the model's first campaign run (its declared specimen; 0 on a
+        bare table when the objective is x_t).
     objective
         "effective" (x_t + θh, §4.2.2) or "table" (x_t).
     regularisation, cap
@@ -283,7 +284,8 @@ def compensate(model: TableModel, target: Target, h: float | None = None,
         raise VtableError(f"need a regularisation > 0 and a cap > 1, got {regularisation:g} "
                           f"and {cap:g}")
     if h is None:
-        h = effective_height(model.campaign_.runs[0])
+        h = effective_height(model.campaign_.runs[0],
+                             bare=None if objective == "effective" else 0.0)
     plant = DrivePlant(model, h)
     fs, T, t = target.fs, target.x, target.t
     peak = float(np.max(np.abs(T)))

@@ -41,7 +41,8 @@ class Param:
     def __init__(self, name: str, unit: str, default: float | Callable[..., float],
                  lower: float, upper: float, log: bool = False, source: str = "",
                  doc: str = "", discrete: bool = False, spread: float | None = None) -> None:
-        self.name, self.unit, self.lower, self.upper = name, unit, lower, upper
+        # (a unit in another spelling, m/s^2, is kept in the spelling of `UNITS`, m/s2)
+        self.name, self.unit, self.lower, self.upper = name, units.canonical(unit), lower, upper
         self.log, self.source, self.doc, self.discrete = log, source, doc, discrete
         self.spread = spread
         self._default = default

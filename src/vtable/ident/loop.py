@@ -334,6 +334,9 @@ class LoopStructure:
     notes: tuple[str, ...] = field(default=())
     #: the structures compared (`structures`: the declared controller's too, if any)
     candidates: dict[str, Structure] = field(default_factory=lambda: dict(STRUCTURES))
+    #: the resonator's fit where it was fitted and found no resonance (`is_resonance`, or
+    #: not better by `AIC_MARGIN`), left out of the comparison; None otherwise
+    rejected: Fit | None = None
 
     @property
     def dc(self) -> tuple[float, float]:
@@ -424,8 +427,10 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
     fits = {k: fit_structure(k, data, prior, delay_dt) for k in cands}
     crit = {k: aic(f) for k, f in fits.items()}
     others = {k: a for k, a in crit.items() if k != "resonator"}
+    rejected = None
     if "resonator" in crit and not (crit["resonator"] + AIC_MARGIN < min(others.values())
                                     and is_resonance(fits["resonator"])):
+        rejected = fits["resonator"]
         cands = {k: v for k, v in cands.items() if k != "resonator"}  # no resonance found
         fits = {k: fits[k] for k in cands}
         crit = others
@@ -467,7 +472,7 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
                     if not cands[best].type1 else "; no candidate structure fits")
         why = "x_t/x_c does not fit eq 6.15: " + "; ".join(reasons) + fit_note
     return LoopStructure(fits, crit, best, dc, ok, why, delay_dt is not None, tuple(notes),
-                         dict(cands))
+                         dict(cands), rejected)
 
 
 def fit_delay_held(data: LoopData, prior: Prior, delay_dt: float) -> Fit:

@@ -13,7 +13,7 @@ import numpy as np
 from vtable.errors import VtableError
 from vtable.ident import channels
 from vtable.ident.frames import MIN_AVERAGES, frame_for_averages
-from vtable.ident.loop import AIC_MARGIN, LoopData, aic, compare_structures, fit_structure, prior_of
+from vtable.ident.loop import AIC_MARGIN, LoopData, aic, compare_structures, prior_of
 from vtable.ident.report import servo_band
 from vtable.ident.resonator import RESONANCE_MAX_DAMPING
 from vtable.ident.tf import transfer_function
@@ -80,8 +80,8 @@ def undeclared_resonance(run: Run) -> Resonance | None:
             return None
         tf = transfer_function(x_c, x_t, run.fs, n)
         lo, hi = servo_band(run, table)
-        data = LoopData.from_tf(tf, (lo, min(hi, _agreeing(run, tf, n))))
-        ls = compare_structures(data, prior_of(table))
+        ls = compare_structures(LoopData.from_tf(tf, (lo, min(hi, _agreeing(run, tf, n)))),
+                                prior_of(table))
     except VtableError:
         return None
     if not ls.fits_eq_6_15:
@@ -89,22 +89,23 @@ def undeclared_resonance(run: Run) -> Resonance | None:
     if ls.best == "resonator":
         fit = ls.fits["resonator"]
         return Resonance(run.name, float(fit["f_s"]), float(fit["xi_s"]), float(fit["u"]))
-    return _frequency_only(run, data, table, ls)
+    return _frequency_only(run, ls)
 
 
-def _frequency_only(run: Run, data: LoopData, table, ls) -> Resonance | None:
-    """A resonance whose frequency alone the record resolves: the resonator structure
-    wins by `AIC_MARGIN` over every other, its f_s unflagged, but its damping or mass
-    flagged (`is_resonance` then keeps it out of identify's structures); those are None,
-    the ones resolved kept. None otherwise."""
-    try:
-        fit = fit_structure("resonator", data, prior_of(table))
-    except VtableError:
+def _frequency_only(run: Run, ls) -> Resonance | None:
+    """A resonance the record resolves only in part: the resonator's fit that the
+    comparison left out (`LoopStructure.rejected`: its damping or mass flagged) wins by
+    `AIC_MARGIN` over every other structure, its frequency resolved, its mass not at a
+    bound (a PI controller's low-frequency peak once asked for a resonator at the table's
+    payload); what it does not resolve is None. None otherwise."""
+    fit = ls.rejected
+    if fit is None or not ls.aic:
         return None
-    others = [aic(f) for k, f in ls.fits.items() if k != "resonator"]
-    flagged = {f.param for f in fit.flags if f.code != "correlated"}
-    if not others or not aic(fit) + AIC_MARGIN < min(others) or "f_s" in flagged \
-            or fit["xi_s"] > RESONANCE_MAX_DAMPING:
+    flags = {(f.param, f.code) for f in fit.flags if f.code != "correlated"}
+    flagged = {p for p, _ in flags}
+    if not aic(fit) + AIC_MARGIN < min(ls.aic.values()) or "f_s" in flagged \
+            or ("u", "at_bound") in flags \
+            or ("xi_s" not in flagged and fit["xi_s"] > RESONANCE_MAX_DAMPING):
         return None
     return Resonance(run.name, float(fit["f_s"]),
                      None if "xi_s" in flagged else float(fit["xi_s"]),

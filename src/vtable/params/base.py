@@ -197,15 +197,17 @@ def check_number(v: Any, where: str, unit: str = "1") -> float:
 
 
 
-def respelled(d: dict[str, Any], spellings: dict[str, tuple[str, dict[str, str]]],
+def respelled(d: dict[str, Any], spellings: dict[str, tuple[str, dict[str, str], bool | None]],
               where: str) -> dict[str, Any]:
     """`d` with each quantity given by another unit's key turned into the format's key:
-    `spellings` maps the format's key to (its unit, {other key: its unit}) —
-    ``"weight_kip": ("kip", {"mass_kg": "kg", ...})``. The value (a number, or a list of
-    them) is checked under the key given (`check_number`) and converted; a mass given for a
-    weight is its weight under standard gravity. Two keys of one quantity are an error."""
+    `spellings` maps the format's key to (its unit, {other key: its unit}, whether it takes
+    a list: True, a number: False, either: None) —
+    ``"weight_kip": ("kip", {"mass_kg": "kg", ...}, False)``. The value is checked under
+    the key given (`check_number`: a number, or a list of them; each ≥ 0, as every quantity
+    spelled so is a magnitude) and converted; a mass given for a weight is its weight under
+    standard gravity. Two keys of one quantity are an error."""
     out = dict(d)
-    for key, (unit, others) in spellings.items():
+    for key, (unit, others, lists) in spellings.items():
         given = [k for k in (key, *others) if k in d]
         if len(given) > 1:
             raise VtableError(f"{where}: {given[0]!r} and {given[1]!r} give the same "
@@ -214,6 +216,10 @@ def respelled(d: dict[str, Any], spellings: dict[str, tuple[str, dict[str, str]]
             continue
         k = given[0]
         v = out.pop(k)
+        if lists is not None and isinstance(v, list) != lists:
+            raise VtableError(f"{where}.{k}: expected "
+                              + (f"a list of numbers in {others[k]}" if lists else
+                                 f"a number in {others[k]}") + f", got {_show(v)}")
         out[key] = [_respelled(x, f"{where}.{k}[{i}]", others[k], unit)
                     for i, x in enumerate(v)] if isinstance(v, list) else \
             _respelled(v, f"{where}.{k}", others[k], unit)
@@ -224,6 +230,8 @@ def _respelled(x: Any, where: str, given: str, unit: str) -> float:
     """A value `x` given in unit `given` (checked as `where`) in `unit` (a mass given for a
     weight: its weight under standard gravity)."""
     si = check_number(x, where, given)
+    if si < 0:
+        raise VtableError(f"{where}: expected a number >= 0 in {given}, got {x!r}")
     if units.dimension(given) == "mass" and units.dimension(unit) == "force":
         si *= units.G
     return units.from_si(si, unit)

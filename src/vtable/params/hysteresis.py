@@ -33,8 +33,8 @@ from vtable.params.base import Params, check_number, plain, quantity, respelled
 KEYS = ("storeys", "yield_drift_in", "yield_shear_kip", "post_yield_ratio", "n", "beta",
         "gamma")
 #: the keys in other units (`params.base.respelled`)
-SPELLINGS = {"yield_drift_in": ("in", {"yield_drift_m": "m", "yield_drift_mm": "mm"}),
-             "yield_shear_kip": ("kip", {"yield_shear_n": "N", "yield_shear_kn": "kN"})}
+SPELLINGS = {"yield_drift_in": ("in", {"yield_drift_m": "m", "yield_drift_mm": "mm"}, None),
+             "yield_shear_kip": ("kip", {"yield_shear_n": "N", "yield_shear_kn": "kN"}, None)}
 #: the usual shape: β = γ = 0.5 (Baber & Wen 1981), n = 2 (a smooth knee)
 DEFAULT_N, DEFAULT_BETA, DEFAULT_GAMMA = 2.0, 0.5, 0.5
 

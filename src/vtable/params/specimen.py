@@ -403,26 +403,32 @@ def specimen_from_dict(d: dict[str, Any], where: str = "specimen",
 
 
 #: a specimen's keys in other units (`params.base.respelled`): the run format's key -> (its
-#: unit, {another key: its unit}); the format's spec lets every key name SI instead
+#: unit, {another key: its unit}, whether it takes a list); the format's spec lets every
+#: key name SI instead
 _WEIGHT = {"mass_kg": "kg", "weight_lb": "lb", "weight_n": "N", "weight_kn": "kN"}
-SPELLINGS: dict[str, tuple[str, dict[str, str]]] = {
-    "weight_kip": ("kip", _WEIGHT),
-    "height_in": ("in", {"height_m": "m", "height_mm": "mm"}),
-    "size_in": ("in", {"size_m": "m", "size_mm": "mm"}),
+SPELLINGS: dict[str, tuple[str, dict[str, str], bool]] = {
+    "weight_kip": ("kip", _WEIGHT, False),
+    "height_in": ("in", {"height_m": "m", "height_mm": "mm"}, False),
+    "size_in": ("in", {"size_m": "m", "size_mm": "mm"}, True),
     "weights_kip": ("kip", {"masses_kg": "kg", "weights_lb": "lb", "weights_n": "N",
-                            "weights_kn": "kN"}),
-    "heights_in": ("in", {"heights_m": "m", "heights_mm": "mm"}),
+                            "weights_kn": "kN"}, True),
+    "heights_in": ("in", {"heights_m": "m", "heights_mm": "mm"}, True),
     "stiffness_kip_per_in": ("kip/in", {"stiffness_n_per_m": "N/m",
-                                        "stiffness_lb_per_in": "lb/in"}),
+                                        "stiffness_lb_per_in": "lb/in"}, False),
     "stiffnesses_kip_per_in": ("kip/in", {"stiffnesses_n_per_m": "N/m",
-                                          "stiffnesses_lb_per_in": "lb/in"}),
+                                          "stiffnesses_lb_per_in": "lb/in"}, True),
     "damping_lb_s_per_in": ("lb-s/in", {"damping_n_s_per_m": "N-s/m",
-                                        "damping_kip_s_per_in": "kip-s/in"}),
+                                        "damping_kip_s_per_in": "kip-s/in"}, False),
 }
+#: the Table 5.1 way of an sdof (`_sdof_from_stiffness`): keys of no field
+_TABLE_5_1 = ("stiffness_kip_per_in", "damping_lb_s_per_in")
 
 
 def _specimen(kind: str, d: dict[str, Any], where: str) -> Specimen:
-    d = respelled(d, SPELLINGS, where)
+    takes = {f.metadata.get("key") or f.name for f in dataclasses.fields(_BY_KIND[kind])}
+    takes |= set(_TABLE_5_1) if kind == "sdof" else set()
+    # only the kind's own keys are respelled: another's stays as given, an unknown key
+    d = respelled(d, {k: v for k, v in SPELLINGS.items() if k in takes}, where)
     if kind == "shear_building":
         for k in ("weights_kip", "heights_in", "stiffnesses_kip_per_in", "frequencies_hz"):
             if isinstance(d.get(k), list) and len(d[k]) > MAX_STOREYS:

@@ -18,6 +18,7 @@ from vtable.analytic.structure import specimen_frequencies
 from vtable.errors import VtableError, did_you_mean
 from vtable.params.specimen import (
     OPENSEES_DATA_KEYS,
+    SPELLINGS,
     OpenSeesSpecimen,
     Specimen,
     specimen_from_dict,
@@ -158,8 +159,10 @@ def check_against_rate(decl: Declaration, fs: float, where: str) -> None:
     nyq = fs / 2
     if decl.specimen is not None:
         given = decl.meta.get("specimen", {})
-        key = next((k for k in ("frequency_hz", "frequencies_hz", "stiffness_kip_per_in",
-                                "stiffnesses_kip_per_in") if k in given), "frequency")
+        keys = ("frequency_hz", "frequencies_hz",
+                *(k for s in ("stiffness_kip_per_in", "stiffnesses_kip_per_in")
+                  for k in (s, *SPELLINGS[s][1])))  # as the run names them
+        key = next((k for k in keys if k in given), "frequency")
         for f in specimen_frequencies(decl.specimen):
             if f >= nyq:
                 raise VtableError(f"{where} [specimen].{key}: {f:.6g} Hz is at or above "

@@ -123,9 +123,10 @@ def drive(paths: Sequence[str], target: str, out: str, target_unit: str = "in",
     runs = [align(r) for r in campaign(list(paths))]
     measured_runs = [align(r) for r in campaign(list(update))] if update else []
     tgt = read_target(target, target_unit, peak=target_peak)
+    # before the model is calibrated: a bare table has no effective height to drive
+    h = effective_height(runs[0], bare=None if objective == "effective" else 0.0)
     model, how = calibrated(runs, list(dict.fromkeys(with_)), Calibration.parse(calibrate),
                             from_, measured_runs)
-    h = effective_height(runs[0], bare=None if objective == "effective" else 0.0)
     measured = None
     if measured_runs:
         measured = _measured(measured_runs[-1], tgt, h, objective)
