@@ -334,9 +334,7 @@ class LoopStructure:
     notes: tuple[str, ...] = field(default=())
     #: the structures compared (`structures`: the declared controller's too, if any)
     candidates: dict[str, Structure] = field(default_factory=lambda: dict(STRUCTURES))
-    #: the resonator's fit where it was fitted and found no resonance (`is_resonance`, or
-    #: not better by `AIC_MARGIN`), left out of the comparison; None otherwise
-    rejected: Fit | None = None
+    rejected: Fit | None = None  # the resonator's fit left out: no resonance found
 
     @property
     def dc(self) -> tuple[float, float]:
@@ -430,10 +428,8 @@ def compare_structures(data: LoopData, prior: Prior | None = None,
     rejected = None
     if "resonator" in crit and not (crit["resonator"] + AIC_MARGIN < min(others.values())
                                     and is_resonance(fits["resonator"])):
-        rejected = fits["resonator"]
         cands = {k: v for k, v in cands.items() if k != "resonator"}  # no resonance found
-        fits = {k: fits[k] for k in cands}
-        crit = others
+        rejected, crit = fits.pop("resonator"), others
     best = min(crit, key=crit.__getitem__)
     ones = [k for k in cands if cands[k].type1]
     type1 = min(crit[k] for k in ones)
