@@ -32,7 +32,7 @@ from vtable.diagnose.bounds import leaning_start, pushed_beyond, widened
 from vtable.diagnose.calibration import Calibration
 from vtable.diagnose.campaign import Campaign, check_campaign
 from vtable.diagnose.compare import compare
-from vtable.diagnose.evidence import evidence_view
+from vtable.diagnose.evidence import evidence_view, started
 from vtable.diagnose.judge import admissible, judged, not_fitted, select
 from vtable.diagnose.model import BASE_PARAMS, TableModel, one_blas_thread, refit_without
 from vtable.diagnose.pool import WORKERS, Fits, in_thread
@@ -96,12 +96,13 @@ class Diagnoser:
         self.catalog = list(catalog or default_candidates())
         for e in self.catalog:
             effect(e)
-        # the effects' defaults and what the runs show of them (`SELECTION`'s prior; the
-        # starting model's effects start there, as `compare --with` starts them)
-        self.table_view = evidence_view(self.vt, self.catalog, self.campaign, self.notes,
-                                        start_effects)
-        self.start = Physics(nominal_open_loop(self.vt), self.specimen, {
-            e: dict(self.table_view.evidence.get(e, ({}, ""))[0]) for e in start_effects})
+        # the starting model's effects where the runs show them (as `compare --with`), the
+        # candidates' defaults and what the runs show of them (`SELECTION`'s prior)
+        self.start = started(Physics(nominal_open_loop(self.vt), self.specimen, {}),
+                             start_effects, self.campaign, self.notes)
+        self.table_view = evidence_view(self.vt, [e for e in self.catalog
+                                                  if e not in start_effects],
+                                        self.campaign, self.notes)
         self.progress, self.max_rounds = progress or (lambda i, n, s: None), max_rounds
         self.floor, self._spectra = self.campaign.floor, {}  # `compare`'s memo of the runs
         self.calibration = calibration or Calibration()

@@ -52,11 +52,8 @@ def started(start: Physics, effects, campaign, notes: list[str]) -> Physics:
     return start
 
 
-def evidence_view(vt, catalog, campaign, notes: list[str], starting=()) -> TableView:
+def evidence_view(vt, catalog, campaign, notes: list[str]) -> TableView:
     """The view of table `vt` the diagnosis takes the effects' defaults and priors on,
-    with what the runs show of each of `catalog` (`shown_by_runs`) and of the starting
-    model's effects `starting` (where they start; they are never charged)."""
-    shown = shown_by_runs(starting, campaign, notes, STARTS)
-    shown.update(shown_by_runs([e for e in catalog if e not in shown and e not in starting],
-                               campaign, notes))
-    return dataclasses.replace(TableView.of(vt), evidence=shown)
+    with what the runs show of each of `catalog` (`shown_by_runs`)."""
+    return dataclasses.replace(TableView.of(vt),
+                               evidence=shown_by_runs(catalog, campaign, notes))

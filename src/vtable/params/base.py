@@ -196,7 +196,6 @@ def check_number(v: Any, where: str, unit: str = "1") -> float:
     return si
 
 
-
 def respelled(d: dict[str, Any], spellings: dict[str, tuple[str, dict[str, str], bool | None]],
               where: str) -> dict[str, Any]:
     """`d` with each quantity given by another unit's key turned into the format's key:
