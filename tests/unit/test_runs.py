@@ -124,6 +124,52 @@ def test_campaign_must_be_one_configuration(tmp_path):
         campaign([a, b])
 
 
+
+def test_campaign_one_specimen_in_other_units(tmp_path):
+    """68.4 kip and 219 in written as kilograms and metres in another run are one specimen
+    (exactly converted: nothing said; rounded to the kilogram: within 1e-4, said, the first
+    run's values taken); 1 % off is another specimen. A table's platen of 90 000 lb
+    given in pounds and in kilograms: one table; against the preset's own (100 kip): not."""
+    kg = 68.4 * 4448.2216152605 / 9.80665  # the kip-force's mass in kg
+    si = TOML.replace("weight_kip = 68.4", f"mass_kg = {kg!r}").replace(
+        "height_in = 219.0", f"height_m = {219.0 * 0.0254!r}")
+    a = write(tmp_path, "a", CSV_OK)
+    runs = campaign([a, write(tmp_path, "b", CSV_OK, si)])
+    assert runs[1].specimen() == runs[0].specimen() and not any(
+        "agrees with" in m for m in runs[1].reports)
+    rounded = campaign([a, write(tmp_path, "c", CSV_OK,
+                                 si.replace(f"mass_kg = {kg!r}", f"mass_kg = {round(kg)}"))])
+    assert abs(round(kg) / kg - 1) < 1e-4
+    said = [m for m in rounded[1].reports if "agrees with" in m]
+    a_ = re.escape(str(a.with_suffix("")))
+    assert len(said) == 1 and re.fullmatch(
+        rf"its \[specimen\] agrees with {a_}'s only within 0\.0001 \(relative\) once in one "
+        rf"unit, not exactly: the campaign takes {a_}'s values", said[0])
+    with pytest.raises(VtableError, match=r"d: \[specimen\] differs from .*a's"):
+        campaign([a, write(tmp_path, "d", CSV_OK, si.replace(f"mass_kg = {kg!r}",
+                                                             f"mass_kg = {1.01 * kg!r}"))])
+    lb = TOML.replace('preset = "eerc"', 'preset = "eerc"\nplaten_weight_lb = 90000.0')
+    kgt = TOML.replace('preset = "eerc"',
+                       f'preset = "eerc"\nplaten_mass_kg = {90000.0 * 0.45359237!r}')
+    e, f = write(tmp_path, "e", CSV_OK, lb), write(tmp_path, "f", CSV_OK, kgt)
+    assert len(campaign([e, f])) == 2
+    with pytest.raises(VtableError, match=r"f: \[table\] differs from .*a's"):
+        campaign([a, f])
+
+
+
+def test_agree_compares_declarations_value_by_value():
+    from vtable.runs.agree import agree
+
+    assert agree({"a": (1.0, 2.0)}, {"a": [1.00005, 2.0]})
+    assert not agree({"a": (1.0, 2.0)}, {"a": [1.0002, 2.0]})
+    assert not agree({"a": 1.0}, {"a": 1.0, "b": 2.0}) and not agree((1.0,), (1.0, 1.0))
+    assert agree(np.array([1.0, np.nan]), np.array([1.0, np.nan]))
+    assert not agree(np.array([1.0, 2.0]), np.array([1.0]))
+    assert not agree(True, 1.0) and not agree("eerc", "EERC") and agree(None, None)
+    assert not agree(0.0, 1e-300) and not agree(1.0, 1.00005, 0.0)
+
+
 # ---- property tests: malformed files never give a traceback or a silently wrong run ----
 cells = st.one_of(st.floats(allow_nan=True, allow_infinity=True).map(repr),
                   st.text(alphabet=string.printable, max_size=6), st.just(""))

@@ -18,6 +18,7 @@ import tomllib
 from pathlib import Path
 
 from vtable.errors import VtableError
+from vtable.runs.agree import RTOL, agree
 from vtable.runs.assemble import assemble
 from vtable.runs.csvfile import read_csv
 from vtable.runs.hdf5 import read_hdf5
@@ -84,18 +85,18 @@ def check_configuration(runs: list[Run]) -> None:
     """A campaign is one configuration: the runs' [table] and [control] agree, and their
     [specimen] agrees among the runs of one state ([specimen] state; the runs that declare
     none are one state). Runs of different states may declare different values of one kind
-    of specimen (a building of as many storeys)."""
-    ref = runs[0].configuration()
+    of specimen (a building of as many storeys). Tables that differ as written agree when
+    their declarations do (`vtable.runs.agree`: in one unit, within its tolerance), which
+    a run's reports say when not exactly."""
     first: dict[str | None, Run] = {}
     for r in runs[1:]:
-        cfg = r.configuration()
         for k in ("table", "control"):
-            if cfg[k] != ref[k]:
+            if not _same(r, runs[0], k):
                 raise VtableError(f"{r.name}: [{k}] differs from {runs[0].name}'s; a campaign "
                                   "is one configuration")
     for r in runs:
         f = first.setdefault(r.state, r)
-        if r.configuration()["specimen"] != f.configuration()["specimen"]:
+        if not _same(r, f, "specimen"):
             where = f" (state {r.state!r})" if r.state else ""
             raise VtableError(f"{r.name}: [specimen] differs from {f.name}'s{where}; runs of "
                               "one specimen state declare one specimen (declare [specimen] "
@@ -108,3 +109,20 @@ def check_configuration(runs: list[Run]) -> None:
             raise VtableError(f"{r.name}: its [specimen] (state {r.state!r}) is not the kind "
                               f"of specimen {runs[0].name} declares; the states of a campaign "
                               "are states of one specimen")
+
+
+def _same(r: Run, f: Run, table: str) -> bool:
+    """Whether run `r` declares `table` ("table", "control", "specimen") as run `f` does:
+    as written, else as parsed within `agree.RTOL` (a unit or a key spelled otherwise);
+    not exactly so, `r`'s reports say whose values the campaign takes (`f`'s)."""
+    if r is f or r.configuration()[table] == f.configuration()[table]:
+        return True
+    a, b = getattr(f.declared, table), getattr(r.declared, table)
+    if not agree(a, b):
+        return False
+    if not agree(a, b, 0.0):
+        line = (f"its [{table}] agrees with {f.name}'s only within {RTOL:g} "
+                f"(relative) once in one unit, not exactly: the campaign takes {f.name}'s values")
+        if line not in r.reports:
+            r.reports.append(line)
+    return True
