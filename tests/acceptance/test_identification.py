@@ -458,3 +458,15 @@ def _cli(capsys, *argv):
     code = main(list(argv))
     out, err = capsys.readouterr()
     return code, out, err
+
+
+def test_eq_6_15_on_every_line_including_1_hz():
+    """Eq 6.15b k_o/(s(s²/ω_o² + 2ξ_o s/ω_o + 1) + k_o) written out, on lines that include
+    1.0 Hz, where the resonator form it is computed through (u = 0) had an undamped
+    dummy resonator: NaN there, and every loop fit (identify, the drive offset) on a
+    record with that line stopped ("residuals are not finite")."""
+    f = np.array([0.5, 1.0, 2.0, 15.0])
+    s = 2j * np.pi * f
+    w = 2 * np.pi * 14.97
+    expected = 26.1 / (s * (s * s / w**2 + 2 * 0.71 * s / w + 1) + 26.1)
+    np.testing.assert_allclose(h_open_loop(f, 14.97, 0.71, 26.1), expected, rtol=1e-12)

@@ -167,7 +167,10 @@ def h_resonator_lag(f_hz, f_o: float, xi_o: float, k_o: float, tau: float, f_s: 
     is `h_open_loop_lag`."""
     s = 1j * TWO_PI * np.asarray(f_hz, dtype=float)
     w = TWO_PI * f_o
-    d = (1 + u * transmissibility(f_hz, f_s, xi_s)) * (s * s / w**2 + 2 * xi_o * s / w) + 1
+    # no resonator (u = 0): no transmissibility either (an undamped one at f_s is
+    # infinite on that line, and 0 x inf is not 0)
+    dynamic = 1 + u * transmissibility(f_hz, f_s, xi_s) if u else 1.0
+    d = dynamic * (s * s / w**2 + 2 * xi_o * s / w) + 1
     return k_o / (s * (1 + tau * s) * d + k_o)
 
 
