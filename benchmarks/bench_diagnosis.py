@@ -24,6 +24,12 @@ Targets (issue 31): 1a <= 2 s, 1b <= 3 s, 2 <= 10 s, 3 <= 5 s warm and <= 20 s c
     python benchmarks/bench_diagnosis.py [--fs 200] [--only 1a,1b,2,3] [--repeat 5]
                                          [--no-bytecode]
 
+Each figure is preceded and the run ended by a yardstick: the same fixed work (a pure-Python
+loop and a numpy SVD, one core) timed, so that a slow spell of the machine (a shared host's
+speed drifts by half within minutes here: the README figure took 4.9 s and 8.1 s ten
+minutes apart, its CPU seconds 8.2 and 13.0 for the same work) is told from a slower
+diagnosis: compare figures taken at the same yardstick.
+
 `--fs` samples campaign 1a at another rate (256, 1000, ...): faster runs are analysed at
 200 Hz after anti-alias resampling, so the diagnosis should cost about the same."""
 
@@ -38,6 +44,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from vtable.diagnose import workers
 from vtable.diagnose.engine import Diagnoser
@@ -55,6 +62,23 @@ def _cpu() -> float:
     me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
         resource.RUSAGE_CHILDREN)
     return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def yardstick() -> str:
+    """This machine's speed now: a fixed pure-Python loop and a fixed numpy SVD (one
+    core), their wall times (the module docstring)."""
+    t = time.perf_counter()
+    s = 0
+    for i in range(2_000_000):
+        s += i * i
+    loop = time.perf_counter() - t
+    x = np.random.default_rng(0).random((300, 300))
+    with threadpool_limits(1):
+        t = time.perf_counter()
+        for _ in range(10):
+            np.linalg.svd(x)
+        svd = time.perf_counter() - t
+    return f"  (yardstick: python loop {loop * 1e3:.0f} ms, svd {svd * 1e3:.0f} ms)"
 
 
 class Clock:
@@ -232,15 +256,20 @@ def main() -> None:
     only = {s.strip() for s in a.only.split(",")}
     with tempfile.TemporaryDirectory() as tmp:
         if "1a" in only:
+            print(yardstick())
             campaign_virtual(a.fs)
         if "1b" in only:
+            print(yardstick())
             campaign_cli(Path(tmp))
         if "2" in only:
+            print(yardstick())
             campaign_real_size(Path(tmp))
         if "3" in only:
             if not a.no_bytecode:
                 compile_bytecode()
+            print(yardstick())
             campaign_readme(Path(tmp), max(1, a.repeat), not a.no_bytecode)
+        print(yardstick())
 
 
 if __name__ == "__main__":
