@@ -16,8 +16,7 @@ the analysis rate (`sampling`). The verdict (`verdict`) is honest about what is 
 
 The fits run as Dask tasks (`pool.Fits`, `workers`). Ctrl-C: the loop runs in a thread of
 its own (`pool.in_thread`); an interrupt sets the stop flags every fit checks between
-simulations, cancels what has not started, and `DiagnosisInterrupted` (a
-KeyboardInterrupt) carries the rounds finished.
+simulations, cancels what has not started, and `DiagnosisInterrupted` carries the rounds.
 """
 
 from __future__ import annotations
@@ -302,11 +301,13 @@ class Diagnoser:
         progress(steps - 1, steps, "testing whether the runs hold one plant")
         st.plants = split(self, st)
         final_cmp = self._detail(st)
-        progress(steps - 1, steps, "testing the declarations the final model leans on")
+        said = lambda s: progress(steps - 1, steps, s)  # noqa: E731
+        said("testing the declarations the final model leans on")
         st.pushed = pushed_beyond(self, st.current, st.err, st.stages[-1].predictions) \
             if st.current is not None and self.calibration.enabled else []
+        out = diagnosis_of(self, st, final_cmp, reason, said=said)  # then its checks' lines
         progress(steps, steps, "done")
-        return diagnosis_of(self, st, final_cmp, reason)
+        return out
 
     def _todo(self, current: Physics, late: set[str], drift: bool
               ) -> tuple[list[str], dict[str, str]]:

@@ -9,6 +9,7 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
+from vtable.diagnose.alignment import command_offsets
 from vtable.diagnose.bounds import base_at_bounds, bounds_verdict
 from vtable.diagnose.findings import findings, headline
 from vtable.diagnose.limits import limits
@@ -58,9 +59,10 @@ class State:
 
 
 def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
-                 interrupted: bool = False) -> Diagnosis:
+                 interrupted: bool = False, said=lambda s: None) -> Diagnosis:
     """The `Diagnosis` of diagnoser `d`'s loop state `st` (a `Diagnoser`), its final
-    comparison `final_cmp` (None: not made, an interrupted loop) and why it stopped."""
+    comparison `final_cmp` (None: not made, an interrupted loop) and why it stopped;
+    `said` hears the checks it runs (`alignment.command_offsets`)."""
     current = st.current or d.start
     err = st.err
     added = [r.added for r in st.rounds if r.added]
@@ -137,5 +139,6 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
     plants = st.plants if st.plants is not None else (
         [] if preds is None else plant_differences(d.runs, preds))
     diag.findings = findings(diag, d.campaign.sensors, d.campaign.notches, plants,
-                             getattr(d.table_view, "evidence", None))
+                             getattr(d.table_view, "evidence", None),
+                             command_offsets(d, diag, said))
     return diag

@@ -1,0 +1,136 @@
+"""A command column not time-aligned with the acquisition: what a diagnosis says when its
+final model loses to the black box on a run (`findings`' `command_offset`).
+
+A lab's drive may be logged on another clock than its sensors (LNEC's run file says its
+drive and acquisition were not aligned by the lab). Every response then carries a pure
+delay e^{-jωτ} that no physics of the table holds: the servo loop is fitted to stand in
+for it, nothing is added, and the model ends far above the black box (LNEC's run with its
+command column shifted by 50 ms: 84.9 % against 22.7 %, f_o at its bound; aligned, 18 %).
+
+For each run whose final model's held-out error (the mean over its groups) is above the
+black box's, the lag of the command column behind the acquisition beyond what the servo
+loop explains is estimated as a drive file's "auto" offset is
+(`vtable.ident.drive.estimate_offset`: the loop structures with a pure delay fitted to the
+H1 of x_t over the command). A lag of at least `MIN_SAMPLES` samples and `MIN_Z` standard
+errors is then tried: the starting model is refitted on the campaign with those runs'
+commands shifted by it (whole samples), and it is said only when the run's held-out error
+falls by at least `MIN_GAIN` of the starting model's (a lag that buys nothing, a loop
+structure's delay standing in for an undeclared specimen, is not said). The starting
+model, not the final one: the effects a diagnosis added on the misaligned runs stood in
+for the lag (LNEC's run with its command 50 ms early: two sensor filters and an offset),
+and a refit from there keeps them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from vtable.diagnose.model import TableModel
+from vtable.errors import VtableError
+from vtable.ident.drive import estimate_offset
+from vtable.runs.drive import DriveFile, with_command
+from vtable.runs.model import Run
+
+#: a lag of fewer samples is within what the estimate and the sampling can say ...
+MIN_SAMPLES = 2.0
+#: ... and of fewer standard errors is not told from none
+MIN_Z = 5.0
+#: the run's held-out error must fall by this share of itself with its command shifted
+MIN_GAIN = 0.2
+
+
+@dataclass(frozen=True)
+class CommandOffset:
+    """A run whose command column lags (`offset` > 0) or leads the acquisition by
+    `offset` s (± `stderr`) beyond the servo loop's own delay, and the run's held-out
+    error of the starting model before and after its refit with the command shifted by
+    `samples` whole samples; `reference` is the black box's."""
+
+    run: str
+    offset: float
+    stderr: float
+    fs: float
+    samples: int
+    before: float
+    after: float
+    reference: float
+
+    def text(self) -> str:
+        side = "lags" if self.offset > 0 else "leads"
+        return (f"the command column {side} the acquisition by {abs(self.offset) * 1e3:.3g} "
+                f"± {self.stderr * 1e3:.2g} ms ({abs(self.offset) * self.fs:.1f} samples) "
+                "beyond the servo loop's own delay (x_t's H1 over the command fitted by the "
+                "loop with a pure delay); with it shifted by "
+                f"{abs(self.samples)} samples the starting model refitted reaches "
+                f"{self.after:.1%} on the run, from {self.before:.1%} (the black box "
+                f"{self.reference:.1%})")
+
+    def action(self) -> str:
+        return ("if the drive and the acquisition were not time-aligned, align them and "
+                "diagnose again: give the command as a drive file with drive_offset_s = "
+                f"\"auto\" (docs/run-format.md), or shift the h_span column by {self.samples:+d} "
+                "samples (later values earlier)")
+
+
+def command_offsets(d, diag, said: Callable[[str], None] = lambda s: None
+                    ) -> list[CommandOffset]:
+    """The runs of diagnoser `d` whose command column is found out of time with their
+    acquisition (module docstring), from its `Diagnosis` `diag` (limits per group, the
+    final model). `said` hears what is being tested, when anything is."""
+    lim = diag.limits
+    if lim is None or diag.final is None or diag.interrupted:
+        return []
+    losing = {}
+    for r in d.runs:
+        groups = [g for g in lim.groups if g.run == r.name]
+        if not groups or any(g.error is None or g.reference is None for g in groups):
+            continue
+        err = float(np.mean([g.error for g in groups]))
+        ref = float(np.mean([g.reference for g in groups]))
+        if err > ref:
+            losing[r.name] = (err, ref)
+    if not losing:
+        return []
+    said("testing whether the command column is aligned with the acquisition")
+    found = {}
+    for r in d.runs:
+        if r.name not in losing or not r.has("h_span"):
+            continue
+        drive = DriveFile(Path(f"{r.name} h_span"), r.time, r.channel("h_span"), "m", 1.0)
+        try:
+            est = estimate_offset(r, drive, None, r.name)
+        except VtableError:
+            continue
+        if abs(est.samples) >= MIN_SAMPLES and abs(est.offset) >= MIN_Z * est.stderr:
+            found[r.name] = (est, round(est.samples))
+    if not found:
+        return []
+    start = diag.comparison_start
+    try:  # the starting model (what the later effects stood in for is not theirs to undo)
+        runs = [_shifted(r, found[r.name][1]) if r.name in found else r for r in d.runs]
+        m = TableModel(d.start.effects, calibration=d.calibration, stop=d._stop).fit(runs)
+        after = m.comparison(detail=False).per_run
+    except VtableError:
+        return []
+    out = []
+    for name, (est, k) in found.items():
+        before, ref = float(np.mean(list(start.per_run[name].values()))), losing[name][1]
+        now = float(np.mean(list(after[name].values())))
+        if math.isfinite(now) and now <= (1 - MIN_GAIN) * before:
+            out.append(CommandOffset(name, est.offset, est.stderr, est.fs, k, before, now, ref))
+    return out
+
+
+def _shifted(run: Run, k: int) -> Run:
+    """`run` with its command h_span moved by `k` whole samples (`with_command`: its
+    column as a drive file at that offset)."""
+    drive = DriveFile(Path(f"{run.name} h_span"), run.time, run.channel("h_span"), "m", 1.0)
+    bare = dataclasses.replace(run, channels={c: v for c, v in run.channels.items()
+                                              if c != "h_span"})
+    return with_command(bare, drive, k * run.dt, f"shifted by {k:+d} samples", run.name)

@@ -1,0 +1,82 @@
+"""A command column out of time with the acquisition (`vtable.diagnose.alignment`): runs of
+the independent truth simulator (tests/truth) on LNEC's table, their h_span column moved
+by whole samples after the fact, as a drive logged on another clock would be."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+import truth
+
+from vtable.diagnose.engine import Diagnoser
+from vtable.runs import read_run, write_run
+
+SHIFT = 8  # samples at 200 Hz: 40 ms
+
+
+@functools.cache
+def pink_run() -> str:
+    """LNEC's bare table, pink noise 0.5-25 Hz, 30 s at 0.5 in; 200 Hz; 1 % noise."""
+    folder = Path(tempfile.mkdtemp(prefix="vtable-offset-"))
+    cmd = truth.random_command(30.0, (0.5, 25.0), peak_in=0.5, seed=11, pink=True)
+    res = truth.simulate(truth.lnec_table(), truth.none(), cmd, fs=200.0)
+    return str(truth.write_run(folder / "pink", res, truth.none(), noise=0.01, seed=11)[0])
+
+
+def moved(k: int) -> str:
+    """The run with its command column `k` samples late (k > 0) or early, the end value
+    held where the column runs out."""
+    run = read_run(pink_run())
+    x = run.channels["h_span"]
+    x = np.concatenate([np.full(k, x[0]), x[:-k]]) if k > 0 else \
+        np.concatenate([x[-k:], np.full(-k, x[-1])])
+    out = dataclasses.replace(run, channels={**run.channels, "h_span": x},
+                              name=f"pink_{'late' if k > 0 else 'early'}")
+    stem = Path(pink_run()).with_name(out.name)
+    write_run(out, stem)
+    return str(stem.with_suffix(".toml"))
+
+
+@pytest.mark.parametrize("k", [SHIFT, -SHIFT])
+def test_a_command_column_out_of_time_is_found_and_said(k):
+    """Moved by 8 samples either way, the starting model loses to the black box (the
+    servo loop cannot be a pure delay); the lag is estimated within a sample and the
+    starting model refitted on the command moved back gains at least a fifth of its
+    error; the finding names the lag and the shift that undoes it."""
+    d = Diagnoser([read_run(moved(k))], catalog=["valve_dynamics"]).diagnose()
+    said = [f for f in d.findings if f["kind"] == "command_offset"]
+    assert len(said) == 1, [f["kind"] for f in d.findings]
+    n = said[0]["numbers"]
+    assert n["samples"] == pytest.approx(k, abs=1), n
+    assert n["offset_s"] == pytest.approx(k / 200.0, abs=1.5 / 200.0), n
+    assert n["error_after"] <= 0.8 * n["error_before"], n
+    assert ("lags" if k > 0 else "leads") in said[0]["what"]
+    assert f"shift the h_span column by {n['samples']:+d} samples" in said[0]["action"]
+
+
+def test_an_aligned_run_and_a_lag_that_buys_nothing_are_not_said(monkeypatch):
+    """The run as the truth wrote it: no finding. A lag the estimate gives where there is
+    none (forced to 5 samples here) is tried and, the refit gaining nothing, not said."""
+    import vtable.diagnose.alignment as alignment
+    from vtable.ident.drive import estimate_offset
+
+    run = read_run(pink_run())
+    d = Diagnoser([run], catalog=["valve_dynamics"]).diagnose()
+    assert not [f for f in d.findings if f["kind"] == "command_offset"]
+    assert d.final_error < d.limits.reference
+
+    def false_lag(*a, **kw):
+        return dataclasses.replace(estimate_offset(*a, **kw), offset=5 / 200.0, stderr=1e-4)
+
+    losing = dataclasses.replace(d.limits, groups=tuple(
+        dataclasses.replace(g, reference=0.5 * g.error) for g in d.limits.groups))
+    monkeypatch.setattr(alignment, "estimate_offset", false_lag)
+    tried = []
+    found = alignment.command_offsets(Diagnoser([run], catalog=["valve_dynamics"]),
+                                      dataclasses.replace(d, limits=losing), tried.append)
+    assert tried and found == []
