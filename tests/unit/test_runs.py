@@ -17,6 +17,7 @@ from vtable.errors import VtableError
 from vtable.ident.drive import align
 from vtable.runs import campaign, read_hdf5, read_run, write_hdf5, write_run
 from vtable.runs.model import FORMAT_UNITS, Run
+from vtable.runs.read import check_configuration
 
 TOML = '''format = "vtable-run/1"
 title = "test"
@@ -140,11 +141,12 @@ def test_campaign_one_specimen_in_other_units(tmp_path):
     rounded = campaign([a, write(tmp_path, "c", CSV_OK,
                                  si.replace(f"mass_kg = {kg!r}", f"mass_kg = {round(kg)}"))])
     assert abs(round(kg) / kg - 1) < 1e-4
+    check_configuration(rounded)  # read again (a campaign's runs are checked twice): once
     said = [m for m in rounded[1].reports if "agrees with" in m]
-    a_ = re.escape(str(a.with_suffix("")))
+    a_, c_ = (re.escape(str(p.with_suffix(""))) for p in (a, tmp_path / "c.toml"))
     assert len(said) == 1 and re.fullmatch(
-        rf"its \[specimen\] agrees with {a_}'s only within 0\.0001 \(relative\) once in one "
-        rf"unit, not exactly: the campaign takes {a_}'s values", said[0])
+        rf"{c_}: its \[specimen\] agrees with {a_}'s only within 0\.0001 \(relative\) once in "
+        rf"one unit, not exactly: the campaign takes {a_}'s values", said[0])
     with pytest.raises(VtableError, match=r"d: \[specimen\] differs from .*a's"):
         campaign([a, write(tmp_path, "d", CSV_OK, si.replace(f"mass_kg = {kg!r}",
                                                              f"mass_kg = {1.01 * kg!r}"))])
@@ -167,6 +169,7 @@ def test_agree_compares_declarations_value_by_value():
     assert agree(np.array([1.0, np.nan]), np.array([1.0, np.nan]))
     assert not agree(np.array([1.0, 2.0]), np.array([1.0]))
     assert not agree(True, 1.0) and not agree("eerc", "EERC") and agree(None, None)
+    assert agree([1.0, 2.0], np.array([1.0, 2.0])) and agree(np.array([1.0, 2.0]), [1.0, 2.0])
     assert not agree(0.0, 1e-300) and not agree(1.0, 1.00005, 0.0)
 
 

@@ -17,8 +17,15 @@ commands shifted by it (whole samples), and it is said only when the run's held-
 falls by at least `MIN_GAIN` of the starting model's (a lag that buys nothing, a loop
 structure's delay standing in for an undeclared specimen, is not said). The starting
 model, not the final one: the effects a diagnosis added on the misaligned runs stood in
-for the lag (LNEC's run with its command 50 ms early: two sensor filters and an offset),
-and a refit from there keeps them.
+for the lag (the same run with its command 50 ms early instead: two sensor filters and an
+offset added), and a refit from there keeps them. The check costs a diagnosis nothing
+unless a run loses to the black box; then an estimate (under a second to a few on a
+real-size run) and, for a lag worth trying, one refit of the starting model.
+
+The shift is said in the run file's own samples (its rate, not the analysis rate) and in
+seconds; for a command made from a drive file (`drive_offset_s` given in seconds) as the
+drive_offset_s that undoes it. A run that loses but cannot be tested (no table
+displacement, too short) is said so in the notes.
 """
 
 from __future__ import annotations
@@ -31,7 +38,6 @@ from pathlib import Path
 
 import numpy as np
 
-from vtable.diagnose.model import TableModel
 from vtable.errors import VtableError
 from vtable.ident.drive import estimate_offset
 from vtable.runs.drive import DriveFile, with_command
@@ -55,82 +61,103 @@ class CommandOffset:
     run: str
     offset: float
     stderr: float
-    fs: float
-    samples: int
+    fs: float  # the run file's rate
+    samples: int  # the run file's samples it was moved by
     before: float
     after: float
     reference: float
+    #: the drive_offset_s (s) the run's drive file was played at, None for an h_span column
+    drive_offset: float | None = None
 
     def text(self) -> str:
         side = "lags" if self.offset > 0 else "leads"
-        return (f"the command column {side} the acquisition by {abs(self.offset) * 1e3:.3g} "
-                f"± {self.stderr * 1e3:.2g} ms ({abs(self.offset) * self.fs:.1f} samples) "
-                "beyond the servo loop's own delay (x_t's H1 over the command fitted by the "
-                "loop with a pure delay); with it shifted by "
-                f"{abs(self.samples)} samples the starting model refitted reaches "
+        what = "command" if self.drive_offset is not None else "command column"
+        return (f"the {what} {side} the acquisition by {abs(self.offset) * 1e3:.3g} "
+                f"± {self.stderr * 1e3:.2g} ms ({abs(self.offset) * self.fs:.1f} samples at "
+                f"{self.fs:g} Hz) beyond the servo loop's own delay (x_t's H1 over the "
+                "command fitted by the loop with a pure delay); moved back by "
+                f"{abs(self.samples)} samples, the starting model refitted reaches "
                 f"{self.after:.1%} on the run, from {self.before:.1%} (the black box "
                 f"{self.reference:.1%})")
 
     def action(self) -> str:
+        if self.drive_offset is not None:
+            return ("if the drive file's offset is off, set drive_offset_s = "
+                    f"{self.drive_offset + self.samples / self.fs:.6g} (now "
+                    f"{self.drive_offset:g}) and diagnose again")
         return ("if the drive and the acquisition were not time-aligned, align them and "
                 "diagnose again: give the command as a drive file with drive_offset_s = "
-                f"\"auto\" (docs/run-format.md), or shift the h_span column by {self.samples:+d} "
-                "samples (later values earlier)")
+                f'"auto" (docs/run-format.md), or shift the h_span column by {self.samples:+d} '
+                f"samples ({self.samples / self.fs:+.4g} s; later values earlier)")
 
 
 def command_offsets(d, diag, said: Callable[[str], None] = lambda s: None
                     ) -> list[CommandOffset]:
     """The runs of diagnoser `d` whose command column is found out of time with their
     acquisition (module docstring), from its `Diagnosis` `diag` (limits per group, the
-    final model). `said` hears what is being tested, when anything is."""
-    lim = diag.limits
-    if lim is None or diag.final is None or diag.interrupted:
+    starting model's comparison); a losing run that cannot be tested is said in its notes.
+    `said` hears what is being tested, when anything is."""
+    lim, start = diag.limits, diag.comparison_start
+    if lim is None or start is None or diag.interrupted:
         return []
     losing = {}
     for r in d.runs:
         groups = [g for g in lim.groups if g.run == r.name]
-        if not groups or any(g.error is None or g.reference is None for g in groups):
+        if not groups or not start.per_run.get(r.name) or \
+                any(g.error is None or g.reference is None for g in groups):
             continue
         err = float(np.mean([g.error for g in groups]))
         ref = float(np.mean([g.reference for g in groups]))
         if err > ref:
-            losing[r.name] = (err, ref)
+            losing[r.name] = ref
     if not losing:
         return []
     said("testing whether the command column is aligned with the acquisition")
     found = {}
     for r in d.runs:
-        if r.name not in losing or not r.has("h_span"):
+        if r.name not in losing:
             continue
-        drive = DriveFile(Path(f"{r.name} h_span"), r.time, r.channel("h_span"), "m", 1.0)
         try:
-            est = estimate_offset(r, drive, None, r.name)
-        except VtableError:
+            est = estimate_offset(r, _column(r), None, r.name)
+        except VtableError as e:
+            diag.notes.append(f"{r.name}: the model loses to the black box, and whether its "
+                           f"command is aligned with the acquisition could not be tested: {e}")
             continue
         if abs(est.samples) >= MIN_SAMPLES and abs(est.offset) >= MIN_Z * est.stderr:
             found[r.name] = (est, round(est.samples))
     if not found:
         return []
-    start = diag.comparison_start
     try:  # the starting model (what the later effects stood in for is not theirs to undo)
         runs = [_shifted(r, found[r.name][1]) if r.name in found else r for r in d.runs]
-        m = TableModel(d.start.effects, calibration=d.calibration, stop=d._stop).fit(runs)
-        after = m.comparison(detail=False).per_run
+        after = d.model(d.start).fit(runs).comparison(detail=False).per_run
     except VtableError:
         return []
+    source = {r.name: r for r in d.source_runs}
     out = []
-    for name, (est, k) in found.items():
-        before, ref = float(np.mean(list(start.per_run[name].values()))), losing[name][1]
-        now = float(np.mean(list(after[name].values())))
-        if math.isfinite(now) and now <= (1 - MIN_GAIN) * before:
-            out.append(CommandOffset(name, est.offset, est.stderr, est.fs, k, before, now, ref))
+    for name, (est, _) in found.items():
+        before = float(np.mean(list(start.per_run[name].values())))
+        now = float(np.mean(list(after.get(name, {}).values()) or [math.nan]))
+        if not (math.isfinite(now) and now <= (1 - MIN_GAIN) * before):
+            continue
+        src = source.get(name, d.runs[0])
+        cmd = src.drive()
+        given = cmd.drive_offset if cmd is not None and cmd.drive_file is not None and \
+            isinstance(cmd.drive_offset, int | float) else None
+        out.append(CommandOffset(name, est.offset, est.stderr, src.fs,
+                                 round(est.offset * src.fs), before, now, losing[name],
+                                 given))
     return out
+
+
+def _column(run: Run) -> DriveFile:
+    """The run's command h_span as a drive file (what `estimate_offset` and
+    `with_command` take)."""
+    return DriveFile(Path(f"{run.name} h_span"), run.time, run.channel("h_span"), "m", 1.0)
 
 
 def _shifted(run: Run, k: int) -> Run:
     """`run` with its command h_span moved by `k` whole samples (`with_command`: its
     column as a drive file at that offset)."""
-    drive = DriveFile(Path(f"{run.name} h_span"), run.time, run.channel("h_span"), "m", 1.0)
     bare = dataclasses.replace(run, channels={c: v for c, v in run.channels.items()
                                               if c != "h_span"})
-    return with_command(bare, drive, k * run.dt, f"shifted by {k:+d} samples", run.name)
+    return with_command(bare, _column(run), k * run.dt, f"shifted by {k:+d} samples", run.name)

@@ -24,6 +24,11 @@ def agree(a: Any, b: Any, rtol: float = RTOL) -> bool:
     """`a` and `b` (declarations: dataclasses, dicts, sequences, arrays, numbers,
     strings) equal, numbers within `rtol`; a dataclass's fields that take no part in its
     equality (`compare=False`: notes) are not compared."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        a, b = np.asarray(a), np.asarray(b)
+        return a.shape == b.shape and a.dtype.kind == b.dtype.kind and (
+            bool(np.array_equal(a, b)) if a.dtype.kind not in "fc"
+            else bool(np.allclose(a, b, rtol=rtol, atol=0.0, equal_nan=True)))
     if dataclasses.is_dataclass(a) and not isinstance(a, type):
         return type(a) is type(b) and all(
             agree(getattr(a, f.name), getattr(b, f.name), rtol)
@@ -34,11 +39,6 @@ def agree(a: Any, b: Any, rtol: float = RTOL) -> bool:
     if isinstance(a, list | tuple):
         return isinstance(b, list | tuple) and len(a) == len(b) and \
             all(agree(x, y, rtol) for x, y in zip(a, b, strict=True))
-    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
-        a, b = np.asarray(a), np.asarray(b)
-        return a.shape == b.shape and a.dtype.kind == b.dtype.kind and (
-            bool(np.array_equal(a, b)) if a.dtype.kind not in "fc"
-            else bool(np.allclose(a, b, rtol=rtol, atol=0.0, equal_nan=True)))
     if isinstance(a, bool) or isinstance(b, bool):
         return type(a) is type(b) and a == b
     if _number(a) and _number(b):

@@ -113,16 +113,23 @@ def check_configuration(runs: list[Run]) -> None:
 
 def _same(r: Run, f: Run, table: str) -> bool:
     """Whether run `r` declares `table` ("table", "control", "specimen") as run `f` does:
-    as written, else as parsed within `agree.RTOL` (a unit or a key spelled otherwise);
-    not exactly so, `r`'s reports say whose values the campaign takes (`f`'s)."""
+    as written, else as parsed within `agree.RTOL` (a unit or a key spelled otherwise;
+    [control]'s knob positions, which have no units, exactly); not to the last digits,
+    `r`'s reports say whose values the campaign takes (`f`'s)."""
     if r is f or r.configuration()[table] == f.configuration()[table]:
         return True
     a, b = getattr(f.declared, table), getattr(r.declared, table)
-    if not agree(a, b):
+    if not agree(a, b, RTOL if table != "control" else 0.0):
         return False
-    if not agree(a, b, 0.0):
-        line = (f"its [{table}] agrees with {f.name}'s only within {RTOL:g} "
-                f"(relative) once in one unit, not exactly: the campaign takes {f.name}'s values")
+    if not agree(a, b, EXACT):
+        line = (f"{r.name}: its [{table}] agrees with {f.name}'s only within {RTOL:g} "
+                f"(relative) once in one unit, not exactly: the campaign takes {f.name}'s "
+                "values")
         if line not in r.reports:
-            r.reports.append(line)
+            r.reports = [*r.reports, line]  # a new list: copies of the run keep theirs
     return True
+
+
+#: two declared numbers closer than this (relative) are the same number (a unit's
+#: conversion's last bits)
+EXACT = 1e-12
