@@ -67,15 +67,16 @@ def finding(kind: str, what: str, action: str, runs: list[str] | None = None,
 
 
 def findings(d, sensors=(), notches: dict | None = None, plants=(),
-             shown: dict | None = None, offsets=()) -> list[dict[str, Any]]:
+             shown: dict | None = None, commands=()) -> list[dict[str, Any]]:
     """The findings of a `Diagnosis` `d` (its rounds, unexplained residual, limits,
     declarations at their bounds, interruption), the campaign's acceleration channels that
     disagree with its displacement (`sensors`: `sensors.SensorCheck`) and the notches of
     x_t/x_c that move within a run (`notches`: run -> (first Hz, last Hz, window s)) and
     the pairs of runs that do not hold one plant (`plants`: `plants.PlantDifference`), and
     what the runs show of effects the final model does not hold (`shown`: effect ->
-    (values, where from), `Effect.evidence`) and the runs whose command column is out of
-    time with their acquisition (`offsets`: `alignment.CommandOffset`)."""
+    (values, where from), `Effect.evidence`) and the runs whose command column is not
+    the command their table followed (`commands`: `command_check.CommandOffset`,
+    `CommandScale`)."""
     out = []
     if d.interrupted:
         out.append(finding("interrupted", f"the diagnosis was interrupted after round "
@@ -100,11 +101,8 @@ def findings(d, sensors=(), notches: dict | None = None, plants=(),
     lim = d.limits
     if lim is not None and d.final_error is not None:
         out += _limit_findings(d, lim)
-    for o in offsets:
-        out.append(finding("command_offset", o.text(), o.action(), runs=[o.run],
-                           numbers={"offset_s": o.offset, "stderr_s": o.stderr,
-                                    "samples": o.samples, "error_before": o.before,
-                                    "error_after": o.after, "reference": o.reference}))
+    for c in commands:
+        out.append(finding(c.kind, c.text(), c.action(), runs=[c.run], numbers=c.numbers()))
     for b in d.base_at_bounds:
         moved = b["fitted"] / b["declared"] - 1 if b["declared"] else None
         out.append(finding(

@@ -9,8 +9,8 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
-from vtable.diagnose.alignment import command_offsets
 from vtable.diagnose.bounds import base_at_bounds, bounds_verdict
+from vtable.diagnose.command_check import command_checks
 from vtable.diagnose.findings import findings, headline
 from vtable.diagnose.limits import limits
 from vtable.diagnose.noise import NOISE_FACTOR, within_noise
@@ -62,7 +62,7 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
                  interrupted: bool = False, said=lambda s: None) -> Diagnosis:
     """The `Diagnosis` of diagnoser `d`'s loop state `st` (a `Diagnoser`), its final
     comparison `final_cmp` (None: not made, an interrupted loop) and why it stopped;
-    `said` hears the checks it runs (`alignment.command_offsets`)."""
+    `said` hears the checks it runs (`command_check.command_checks`)."""
     current = st.current or d.start
     err = st.err
     added = [r.added for r in st.rounds if r.added]
@@ -140,5 +140,5 @@ def diagnosis_of(d, st: State, final_cmp: Comparison | None, reason: str,
         [] if preds is None else plant_differences(d.runs, preds))
     diag.findings = findings(diag, d.campaign.sensors, d.campaign.notches, plants,
                              getattr(d.table_view, "evidence", None),
-                             command_offsets(d, diag, said))
+                             command_checks(d, diag, said))
     return diag

@@ -1,5 +1,6 @@
-"""A command column not time-aligned with the acquisition: what a diagnosis says when its
-final model loses to the black box on a run (`findings`' `command_offset`).
+"""Whether a run's command column is the command its table followed, in time and in scale:
+what a diagnosis says when its final model loses to the black box on a run (`findings`'
+`command_offset` and `command_scale`).
 
 A lab's drive may be logged on another clock than its sensors (LNEC's run file says its
 drive and acquisition were not aligned by the lab). Every response then carries a pure
@@ -26,6 +27,14 @@ The shift is said in the run file's own samples (its rate, not the analysis rate
 seconds; for a command made from a drive file (`drive_offset_s` given in seconds) as the
 drive_offset_s that undoes it. A run that loses but cannot be tested (no table
 displacement, too short) is said so in the notes.
+
+The same estimate measures x_t/x_c's DC gain (`vtable.ident.loop.dc_gain`, from the
+lowest resolved lines, no model of the loop). A valve-integrator loop follows a static
+command exactly (type 1: gain 1, a specimen on the table or not); a gain off 1 by more than
+`vtable.ident.loop.DC_TOL` and `MIN_Z` standard errors, on a table whose declared loop is
+type 1, says the column does not read the command the table was given (its unit, a span's
+calibration: a column in mm read as inches is off 25.4 times). It is tried and said as the
+lag is: the starting model refitted with the command scaled by the gain.
 """
 
 from __future__ import annotations
@@ -40,7 +49,9 @@ import numpy as np
 
 from vtable.errors import VtableError
 from vtable.ident.drive import estimate_offset
+from vtable.ident.loop import DC_TOL, prior_of
 from vtable.runs.drive import DriveFile, with_command
+from vtable.runs.lab import run_table
 from vtable.runs.model import Run
 
 #: a lag of fewer samples is within what the estimate and the sampling can say ...
@@ -68,6 +79,12 @@ class CommandOffset:
     reference: float
     #: the drive_offset_s (s) the run's drive file was played at, None for an h_span column
     drive_offset: float | None = None
+    kind = "command_offset"
+
+    def numbers(self) -> dict[str, float]:
+        return {"offset_s": self.offset, "stderr_s": self.stderr, "samples": self.samples,
+                "error_before": self.before, "error_after": self.after,
+                "reference": self.reference}
 
     def text(self) -> str:
         side = "lags" if self.offset > 0 else "leads"
@@ -91,12 +108,51 @@ class CommandOffset:
                 f"samples ({self.samples / self.fs:+.4g} s; later values earlier)")
 
 
-def command_offsets(d, diag, said: Callable[[str], None] = lambda s: None
-                    ) -> list[CommandOffset]:
-    """The runs of diagnoser `d` whose command column is found out of time with their
-    acquisition (module docstring), from its `Diagnosis` `diag` (limits per group, the
-    starting model's comparison); a losing run that cannot be tested is said in its notes.
-    `said` hears what is being tested, when anything is."""
+@dataclass(frozen=True)
+class CommandScale:
+    """A run whose table follows `gain` (± `stderr`) times its command column at DC where
+    its type-1 loop follows 1 x, and the run's held-out error of the starting model before
+    and after its refit with the command scaled by `gain`; `reference` is the black
+    box's."""
+
+    run: str
+    gain: float
+    stderr: float
+    before: float
+    after: float
+    reference: float
+    #: the drive_scale the run's drive file was played at, None for an h_span column
+    drive_scale: float | None = None
+    kind = "command_scale"
+
+    def text(self) -> str:
+        return (f"the table's displacement follows the command with a DC gain of "
+                f"{self.gain:.4g} ± {self.stderr:.2g}, where its servo loop's is 1 (a "
+                "valve-integrator loop follows a static command exactly): the command reads "
+                f"{1 / self.gain:.4g} x what the table was given; scaled by {self.gain:.4g}, "
+                f"the starting model refitted reaches {self.after:.1%} on the run, from "
+                f"{self.before:.1%} (the black box {self.reference:.1%})")
+
+    def action(self) -> str:
+        if self.drive_scale is not None:
+            return ("check the drive file's unit and scale: if they are off, set drive_scale "
+                    f"= {self.drive_scale * self.gain:.4g} (now {self.drive_scale:g}) and "
+                    "diagnose again")
+        return ("check the command column's unit ([units] h_span) and the span's "
+                f"calibration: if it is off, correct it (x {self.gain:.4g}) and diagnose "
+                "again")
+
+    def numbers(self) -> dict[str, float]:
+        return {"gain": self.gain, "stderr": self.stderr, "error_before": self.before,
+                "error_after": self.after, "reference": self.reference}
+
+
+def command_checks(d, diag, said: Callable[[str], None] = lambda s: None
+                   ) -> list[CommandOffset | CommandScale]:
+    """The runs of diagnoser `d` whose command column is found out of time or out of scale
+    with what their table followed (module docstring), from its `Diagnosis` `diag`
+    (limits per group, the starting model's comparison); a losing run that cannot be
+    tested is said in its notes. `said` hears what is being tested, when anything is."""
     lim, start = diag.limits, diag.comparison_start
     if lim is None or start is None or diag.interrupted:
         return []
@@ -112,8 +168,8 @@ def command_offsets(d, diag, said: Callable[[str], None] = lambda s: None
             losing[r.name] = ref
     if not losing:
         return []
-    said("testing whether the command column is aligned with the acquisition")
-    found = {}
+    said("testing whether the command column is the command the table followed")
+    lags, gains = {}, {}
     for r in d.runs:
         if r.name not in losing:
             continue
@@ -121,24 +177,20 @@ def command_offsets(d, diag, said: Callable[[str], None] = lambda s: None
             est = estimate_offset(r, _column(r), None, r.name)
         except VtableError as e:
             diag.notes.append(f"{r.name}: the model loses to the black box, and whether its "
-                           f"command is aligned with the acquisition could not be tested: {e}")
+                              f"command column is the command the table followed could not "
+                              f"be tested: {e}")
             continue
         if abs(est.samples) >= MIN_SAMPLES and abs(est.offset) >= MIN_Z * est.stderr:
-            found[r.name] = (est, round(est.samples))
-    if not found:
-        return []
-    try:  # the starting model (what the later effects stood in for is not theirs to undo)
-        runs = [_shifted(r, found[r.name][1]) if r.name in found else r for r in d.runs]
-        after = d.model(d.start).fit(runs).comparison(detail=False).per_run
-    except VtableError:
-        return []
+            lags[r.name] = (est, round(est.samples))
+        g, sg = est.structure.dc
+        declared = prior_of(run_table(r)).declared
+        if (declared is None or declared.type1) and math.isfinite(g) and g > 0 and \
+                abs(g - 1) > max(MIN_Z * sg, DC_TOL):
+            gains[r.name] = (g, sg)
     source = {r.name: r for r in d.source_runs}
-    out = []
-    for name, (est, _) in found.items():
-        before = float(np.mean(list(start.per_run[name].values())))
-        now = float(np.mean(list(after.get(name, {}).values()) or [math.nan]))
-        if not (math.isfinite(now) and now <= (1 - MIN_GAIN) * before):
-            continue
+    out: list[CommandOffset | CommandScale] = []
+    for name, (est, _), before, now in _gained(d, start, lags,
+                                                lambda r, v: _shifted(r, v[1])):
         src = source.get(name, d.runs[0])
         cmd = src.drive()
         given = cmd.drive_offset if cmd is not None and cmd.drive_file is not None and \
@@ -146,7 +198,38 @@ def command_offsets(d, diag, said: Callable[[str], None] = lambda s: None
         out.append(CommandOffset(name, est.offset, est.stderr, src.fs,
                                  round(est.offset * src.fs), before, now, losing[name],
                                  given))
+    for name, (g, sg), before, now in _gained(d, start, gains,
+                                               lambda r, v: _scaled(r, v[0])):
+        cmd = source.get(name, d.runs[0]).drive()
+        given = cmd.drive_scale if cmd is not None and cmd.drive_file is not None else None
+        out.append(CommandScale(name, g, sg, before, now, losing[name], given))
     return out
+
+
+def _gained(d, start, found: dict, change: Callable) -> list[tuple]:
+    """(name, what was found, error before, after) for the entries of `found` (run name ->
+    what was found) whose run's held-out error of the starting model falls by `MIN_GAIN`
+    when it is refitted on the campaign with each such run changed by
+    `change(run, found[name])`."""
+    if not found:
+        return []
+    try:  # the starting model (what the later effects stood in for is not theirs to undo)
+        runs = [change(r, found[r.name]) if r.name in found else r for r in d.runs]
+        after = d.model(d.start).fit(runs).comparison(detail=False).per_run
+    except VtableError:
+        return []
+    out = []
+    for name, v in found.items():
+        before = float(np.mean(list(start.per_run[name].values())))
+        now = list(after.get(name, {}).values())
+        if now and float(np.mean(now)) <= (1 - MIN_GAIN) * before:
+            out.append((name, v, before, float(np.mean(now))))
+    return out
+
+
+def _scaled(run: Run, g: float) -> Run:
+    """`run` with its command h_span times `g`."""
+    return dataclasses.replace(run, channels={**run.channels, "h_span": g * run.channel("h_span")})
 
 
 def _column(run: Run) -> DriveFile:

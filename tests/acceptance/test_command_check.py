@@ -1,6 +1,8 @@
-"""A command column out of time with the acquisition (`vtable.diagnose.alignment`): runs of
-the independent truth simulator (tests/truth) on LNEC's table, their h_span column moved
-by whole samples after the fact, as a drive logged on another clock would be."""
+"""A command column that is not the command the table followed
+(`vtable.diagnose.command_check`): runs of the independent truth simulator (tests/truth) on
+LNEC's table, their h_span column moved by whole samples after the fact, as a drive logged
+on another clock would be, or scaled, as a column in another unit or of a miscalibrated
+span would be."""
 
 from __future__ import annotations
 
@@ -61,7 +63,7 @@ def test_a_command_column_out_of_time_is_found_and_said(k, fs):
 
 
 def test_a_drive_files_offset_is_said_as_the_one_to_give():
-    from vtable.diagnose.alignment import CommandOffset
+    from vtable.diagnose.command_check import CommandOffset
 
     c = CommandOffset("r", 0.0405, 0.0008, 200.0, 8, 0.8, 0.4, 0.2, drive_offset=0.1)
     assert "drive_offset_s = 0.14 (now 0.1)" in c.action() and "command lags" in c.text()
@@ -69,13 +71,14 @@ def test_a_drive_files_offset_is_said_as_the_one_to_give():
 
 def test_an_aligned_run_and_a_lag_that_buys_nothing_are_not_said(monkeypatch):
     """The run as the truth wrote it: no finding. A lag the estimate gives where there is
-    none (forced to 5 samples here) is tried and, the refit gaining nothing, not said."""
-    import vtable.diagnose.alignment as alignment
+    none (forced to 5 samples here, the DC gain as measured: 1) is tried and, the refit
+    gaining nothing, not said."""
+    import vtable.diagnose.command_check as check
     from vtable.ident.drive import estimate_offset
 
     run = read_run(pink_run())
     d = Diagnoser([run], catalog=["valve_dynamics"]).diagnose()
-    assert not [f for f in d.findings if f["kind"] == "command_offset"]
+    assert not [f for f in d.findings if f["kind"].startswith("command_")]
     assert d.final_error < d.limits.reference
 
     def false_lag(*a, **kw):
@@ -83,8 +86,31 @@ def test_an_aligned_run_and_a_lag_that_buys_nothing_are_not_said(monkeypatch):
 
     losing = dataclasses.replace(d.limits, groups=tuple(
         dataclasses.replace(g, reference=0.5 * g.error) for g in d.limits.groups))
-    monkeypatch.setattr(alignment, "estimate_offset", false_lag)
+    monkeypatch.setattr(check, "estimate_offset", false_lag)
     tried = []
-    found = alignment.command_offsets(Diagnoser([run], catalog=["valve_dynamics"]),
-                                      dataclasses.replace(d, limits=losing), tried.append)
+    found = check.command_checks(Diagnoser([run], catalog=["valve_dynamics"]),
+                                 dataclasses.replace(d, limits=losing), tried.append)
     assert tried and found == []
+
+
+@pytest.mark.parametrize("scale", [1.1, 0.5, 1 / 25.4])
+def test_a_command_column_out_of_scale_is_found_and_said(scale):
+    """The column 10 % too large, half what was played, or in mm read as inches (1/25.4 of
+    the command in the file's inches): the starting model loses to the black box; the
+    table's DC gain over the column (a valve-integrator loop's is 1) gives the scale within
+    1 %, and the starting model refitted on the column rescaled gains at least a fifth;
+    the finding gives the factor to correct it by. No lag is said."""
+    run = read_run(pink_run())
+    out = dataclasses.replace(run, channels={**run.channels,
+                                              "h_span": scale * run.channels["h_span"]},
+                              name=f"pink_x{round(scale * 1000)}")
+    stem = Path(pink_run()).with_name(out.name)
+    write_run(out, stem)
+    d = Diagnoser([read_run(stem.with_suffix(".toml"))], catalog=["valve_dynamics"]).diagnose()
+    said = [f for f in d.findings if f["kind"] == "command_scale"]
+    assert len(said) == 1 and not [f for f in d.findings if f["kind"] == "command_offset"], \
+        [f["kind"] for f in d.findings]
+    n = said[0]["numbers"]
+    assert n["gain"] == pytest.approx(1 / scale, rel=0.01), n
+    assert n["error_after"] <= 0.8 * n["error_before"], n
+    assert f"correct it (x {n['gain']:.4g})" in said[0]["action"]
