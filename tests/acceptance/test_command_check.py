@@ -62,17 +62,23 @@ def test_a_command_column_out_of_time_is_found_and_said(k, fs):
     assert f"shift the h_span column by {n['samples']:+d} samples" in said[0]["action"]
 
 
-def test_a_drive_files_offset_is_said_as_the_one_to_give():
-    from vtable.diagnose.command_check import CommandOffset
+def test_a_drive_files_offset_and_scale_are_said_as_the_ones_to_give():
+    from vtable.diagnose.command_check import CommandOffset, CommandScale
 
     c = CommandOffset("r", 0.0405, 0.0008, 200.0, 8, 0.8, 0.4, 0.2, drive_offset=0.1)
     assert "drive_offset_s = 0.14 (now 0.1)" in c.action() and "command lags" in c.text()
+    s = CommandScale("r", 0.5, 0.001, 0.3, 0.02, 0.02, drive_scale=2.0)
+    assert "drive_scale = 1 (now 2)" in s.action() and "reads 2 x" in s.text()
+    assert "correct it (x 0.5)" in CommandScale("r", 0.5, 0.001, 0.3, 0.02, 0.02).action()
 
 
-def test_an_aligned_run_and_a_lag_that_buys_nothing_are_not_said(monkeypatch):
-    """The run as the truth wrote it: no finding. A lag the estimate gives where there is
-    none (forced to 5 samples here, the DC gain as measured: 1) is tried and, the refit
-    gaining nothing, not said."""
+@pytest.mark.parametrize("lag, gain", [(5, None), (0, 1.2)])
+def test_an_aligned_run_and_a_lag_or_scale_that_buys_nothing_are_not_said(
+        monkeypatch, lag, gain):
+    """The run as the truth wrote it: its final model beats the black box, nothing is
+    tested. Made to lose (the black box's errors halved), a lag or a DC gain the estimate
+    gives where there is none (forced to 5 samples, or to 1.2) is tried: the starting model
+    is refitted with it and, gaining nothing, it is not said."""
     import vtable.diagnose.command_check as check
     from vtable.ident.drive import estimate_offset
 
@@ -81,22 +87,31 @@ def test_an_aligned_run_and_a_lag_that_buys_nothing_are_not_said(monkeypatch):
     assert not [f for f in d.findings if f["kind"].startswith("command_")]
     assert d.final_error < d.limits.reference
 
-    def false_lag(*a, **kw):
-        return dataclasses.replace(estimate_offset(*a, **kw), offset=5 / 200.0, stderr=1e-4)
+    def false(*a, **kw):
+        est = estimate_offset(*a, **kw)
+        if gain is not None:
+            dc = dataclasses.replace(est.structure.dc_gain, params={"gain": gain},
+                                     stderr={"gain": 1e-3})
+            est = dataclasses.replace(est, structure=dataclasses.replace(est.structure,
+                                                                         dc_gain=dc))
+        return dataclasses.replace(est, offset=lag / 200.0, stderr=1e-4)
 
     losing = dataclasses.replace(d.limits, groups=tuple(
         dataclasses.replace(g, reference=0.5 * g.error) for g in d.limits.groups))
-    monkeypatch.setattr(check, "estimate_offset", false_lag)
+    monkeypatch.setattr(check, "estimate_offset", false)
+    refits = []
+    diagnoser = Diagnoser([run], catalog=["valve_dynamics"])
+    model = diagnoser.model
+    monkeypatch.setattr(diagnoser, "model", lambda *a, **kw: refits.append(1) or model(*a, **kw))
     tried = []
-    found = check.command_checks(Diagnoser([run], catalog=["valve_dynamics"]),
-                                 dataclasses.replace(d, limits=losing), tried.append)
-    assert tried and found == []
+    found = check.command_checks(diagnoser, dataclasses.replace(d, limits=losing), tried.append)
+    assert tried and refits == [1] and found == []
 
 
-@pytest.mark.parametrize("scale", [1.1, 0.5, 1 / 25.4])
+@pytest.mark.parametrize("scale", [1.1, 0.5, 1 / 25.4, 25.4])
 def test_a_command_column_out_of_scale_is_found_and_said(scale):
-    """The column 10 % too large, half what was played, or in mm read as inches (1/25.4 of
-    the command in the file's inches): the starting model loses to the black box; the
+    """The column 10 % too large, half what was played, in inches read as mm (1/25.4 of the
+    command) or the other way round: the starting model loses to the black box; the
     table's DC gain over the column (a valve-integrator loop's is 1) gives the scale within
     1 %, and the starting model refitted on the column rescaled gains at least a fifth;
     the finding gives the factor to correct it by. No lag is said."""
@@ -114,3 +129,21 @@ def test_a_command_column_out_of_scale_is_found_and_said(scale):
     assert n["gain"] == pytest.approx(1 / scale, rel=0.01), n
     assert n["error_after"] <= 0.8 * n["error_before"], n
     assert f"correct it (x {n['gain']:.4g})" in said[0]["action"]
+
+
+def test_a_column_late_and_out_of_scale_says_both():
+    """8 samples late and 10 % too large: the lag found alone (98.5 % -> 4.8 % measured),
+    the scale found after it (4.8 % -> 1.0 %: alone it gains nothing against the lag)."""
+    run = read_run(pink_run())
+    x = run.channels["h_span"]
+    x = 1.1 * np.concatenate([np.full(SHIFT, x[0]), x[:-SHIFT]])
+    stem = Path(pink_run()).with_name("pink_both")
+    write_run(dataclasses.replace(run, channels={**run.channels, "h_span": x},
+                                  name="pink_both"), stem)
+    d = Diagnoser([read_run(stem.with_suffix(".toml"))], catalog=["valve_dynamics"]).diagnose()
+    said = {f["kind"]: f["numbers"] for f in d.findings if f["kind"].startswith("command_")}
+    assert set(said) == {"command_offset", "command_scale"}, said
+    lag, scale = said["command_offset"], said["command_scale"]
+    assert lag["samples"] == SHIFT and scale["gain"] == pytest.approx(1 / 1.1, rel=0.01)
+    assert scale["error_before"] == pytest.approx(lag["error_after"], rel=1e-9)
+    assert scale["error_after"] < 2 * d.noise_floor < lag["error_after"], (lag, scale)

@@ -21,7 +21,8 @@ model, not the final one: the effects a diagnosis added on the misaligned runs s
 for the lag (the same run with its command 50 ms early instead: two sensor filters and an
 offset added), and a refit from there keeps them. The check costs a diagnosis nothing
 unless a run loses to the black box; then an estimate (under a second to a few on a
-real-size run) and, for a lag worth trying, one refit of the starting model.
+real-size run) and, for a lag or a scale worth trying, one to three refits of the
+starting model.
 
 The shift is said in the run file's own samples (its rate, not the analysis rate) and in
 seconds; for a command made from a drive file (`drive_offset_s` given in seconds) as the
@@ -31,10 +32,12 @@ displacement, too short) is said so in the notes.
 The same estimate measures x_t/x_c's DC gain (`vtable.ident.loop.dc_gain`, from the
 lowest resolved lines, no model of the loop). A valve-integrator loop follows a static
 command exactly (type 1: gain 1, a specimen on the table or not); a gain off 1 by more than
-`vtable.ident.loop.DC_TOL` and `MIN_Z` standard errors, on a table whose declared loop is
-type 1, says the column does not read the command the table was given (its unit, a span's
-calibration: a column in mm read as inches is off 25.4 times). It is tried and said as the
-lag is: the starting model refitted with the command scaled by the gain.
+`vtable.ident.loop.DC_TOL` and `MIN_Z` standard errors (every table vtable models is a
+valve-integrator's, its declared controller's loop included) says the column does not
+read the command the table was given (its unit, a span's calibration: a column in inches
+read as mm is off 25.4 times). It is tried and said as the lag is: the starting model
+refitted with the command scaled by the gain; on a run with both, each is also tried
+after the other (`_taken`).
 """
 
 from __future__ import annotations
@@ -49,9 +52,8 @@ import numpy as np
 
 from vtable.errors import VtableError
 from vtable.ident.drive import estimate_offset
-from vtable.ident.loop import DC_TOL, prior_of
-from vtable.runs.drive import DriveFile, with_command
-from vtable.runs.lab import run_table
+from vtable.ident.loop import DC_TOL
+from vtable.runs.drive import FROM_DRIVE, DriveFile, with_command
 from vtable.runs.model import Run
 
 #: a lag of fewer samples is within what the estimate and the sampling can say ...
@@ -175,55 +177,75 @@ def command_checks(d, diag, said: Callable[[str], None] = lambda s: None
             continue
         try:
             est = estimate_offset(r, _column(r), None, r.name)
-        except VtableError as e:
+        except (VtableError, ValueError, ArithmeticError, np.linalg.LinAlgError) as e:
             diag.notes.append(f"{r.name}: the model loses to the black box, and whether its "
                               f"command column is the command the table followed could not "
                               f"be tested: {e}")
             continue
         if abs(est.samples) >= MIN_SAMPLES and abs(est.offset) >= MIN_Z * est.stderr:
-            lags[r.name] = (est, round(est.samples))
+            lags[r.name] = est
         g, sg = est.structure.dc
-        declared = prior_of(run_table(r)).declared
-        if (declared is None or declared.type1) and math.isfinite(g) and g > 0 and \
-                abs(g - 1) > max(MIN_Z * sg, DC_TOL):
+        if math.isfinite(g) and g > 0 and abs(g - 1) > max(MIN_Z * sg, DC_TOL):
             gains[r.name] = (g, sg)
+    taken = _taken(d, diag, start, lags, gains)
     source = {r.name: r for r in d.source_runs}
     out: list[CommandOffset | CommandScale] = []
-    for name, (est, _), before, now in _gained(d, start, lags,
-                                                lambda r, v: _shifted(r, v[1])):
-        src = source.get(name, d.runs[0])
-        cmd = src.drive()
-        given = cmd.drive_offset if cmd is not None and cmd.drive_file is not None and \
-            isinstance(cmd.drive_offset, int | float) else None
-        out.append(CommandOffset(name, est.offset, est.stderr, src.fs,
-                                 round(est.offset * src.fs), before, now, losing[name],
-                                 given))
-    for name, (g, sg), before, now in _gained(d, start, gains,
-                                               lambda r, v: _scaled(r, v[0])):
-        cmd = source.get(name, d.runs[0]).drive()
-        given = cmd.drive_scale if cmd is not None and cmd.drive_file is not None else None
-        out.append(CommandScale(name, g, sg, before, now, losing[name], given))
+    for (kind, name), (before, now) in taken.items():
+        src = source.get(name)
+        cmd = None if src is None or not any(FROM_DRIVE in x for x in src.reports) \
+            else src.drive()  # a command the reader made from a drive file
+        if kind == "lag":
+            est = lags[name]
+            fs = src.fs if src is not None else est.fs
+            given = cmd.drive_offset if cmd is not None and \
+                isinstance(cmd.drive_offset, int | float) else None
+            out.append(CommandOffset(name, est.offset, est.stderr, fs, round(est.offset * fs),
+                                     before, now, losing[name], given))
+        else:
+            given = (cmd.drive_scale or 1.0) if cmd is not None else None
+            out.append(CommandScale(name, *gains[name], before, now, losing[name], given))
     return out
 
 
-def _gained(d, start, found: dict, change: Callable) -> list[tuple]:
-    """(name, what was found, error before, after) for the entries of `found` (run name ->
-    what was found) whose run's held-out error of the starting model falls by `MIN_GAIN`
-    when it is refitted on the campaign with each such run changed by
-    `change(run, found[name])`."""
-    if not found:
-        return []
-    try:  # the starting model (what the later effects stood in for is not theirs to undo)
-        runs = [change(r, found[r.name]) if r.name in found else r for r in d.runs]
-        after = d.model(d.start).fit(runs).comparison(detail=False).per_run
-    except VtableError:
-        return []
-    out = []
-    for name, v in found.items():
-        before = float(np.mean(list(start.per_run[name].values())))
-        now = list(after.get(name, {}).values())
-        if now and float(np.mean(now)) <= (1 - MIN_GAIN) * before:
-            out.append((name, v, before, float(np.mean(now))))
+def _taken(d, diag, start, lags: dict, gains: dict) -> dict[tuple[str, str], tuple]:
+    """The lags and scales found that the starting model's refit confirms: ("lag" or
+    "scale", run) -> (the run's held-out error without it, with it). Each is applied
+    alone (its run's error must fall by `MIN_GAIN` of the starting model's) and, on a run
+    with both, also after the other (its error must fall by `MIN_GAIN` of the other's
+    alone): a lag and a scale error together may each gain little alone. At most three
+    refits (lags, scales, both)."""
+    def err(after: dict, name: str) -> float:
+        v = list(after.get(name, {}).values())
+        return float(np.mean(v)) if v else math.inf
+
+    def refit(shift: bool, scale: bool) -> dict:
+        runs = []
+        for r in d.runs:
+            if scale and r.name in gains:
+                r = _scaled(r, gains[r.name][0])
+            if shift and r.name in lags:
+                r = _shifted(r, round(lags[r.name].samples))
+            runs.append(r)
+        try:  # the starting model (what later effects stood in for is not theirs to undo)
+            return d.model(d.start).fit(runs).comparison(detail=False).per_run
+        except (VtableError, ValueError, ArithmeticError, np.linalg.LinAlgError) as e:
+            diag.notes.append(f"the starting model could not be refitted with the runs' "
+                              f"commands as the checks of their columns found them: {e}")
+            return {}
+
+    before = {name: float(np.mean(list(start.per_run[name].values())))
+              for name in {*lags, *gains}}
+    alone = {"lag": refit(True, False) if lags else {},
+             "scale": refit(False, True) if gains else {}}
+    both = refit(True, True) if set(lags) & set(gains) else {}
+    out = {}
+    for kind, found, other in (("lag", lags, "scale"), ("scale", gains, "lag")):
+        for name in found:
+            if err(alone[kind], name) <= (1 - MIN_GAIN) * before[name]:
+                out[(kind, name)] = (before[name], err(alone[kind], name))
+            elif name in lags and name in gains and \
+                    err(both, name) <= (1 - MIN_GAIN) * err(alone[other], name):
+                out[(kind, name)] = (err(alone[other], name), err(both, name))
     return out
 
 

@@ -156,6 +156,9 @@ def _check_column(run: Run, drive: DriveFile, offset: float) -> str:
             f"{ratio:.4g}" + (" ⚠ they disagree" if warn else " (they agree)"))
 
 
+#: the report line of a run whose command h_span the reader made from its drive file
+#: begins so (after the run's name)
+FROM_DRIVE = "command h_span from the drive file"
 #: the report line a run with drive_offset_s = "auto" carries until it is aligned
 AUTO_PENDING = ("command h_span not made: drive_offset_s = \"auto\" is estimated from the "
                 "table's response when the run is aligned (vtable.ident.drive.align)")
@@ -195,7 +198,7 @@ def with_command(run: Run, drive: DriveFile, offset: float, how: str, where: str
                           f"({t[0]:g}-{t[-1]:g} s)")
     x, outside = on_grid(drive, t, offset)
     faster = " (low-passed at 0.45 fs)" if drive.dt < run.dt * (1 - 1e-3) else ""
-    line = (f"{where}: command h_span from the drive file {name} ({drive.unit}, scale "
+    line = (f"{where}: {FROM_DRIVE} {name} ({drive.unit}, scale "
             f"{drive.scale:g}{faster}), {how}")
     if outside:
         line += (f"; {outside} samples outside the drive's span are held at its end "
