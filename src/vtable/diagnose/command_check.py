@@ -94,10 +94,8 @@ class CommandOffset:
         return (f"the {what} {side} the acquisition by {abs(self.offset) * 1e3:.3g} "
                 f"± {self.stderr * 1e3:.2g} ms ({abs(self.offset) * self.fs:.1f} samples at "
                 f"{self.fs:g} Hz) beyond the servo loop's own delay (x_t's H1 over the "
-                "command fitted by the loop with a pure delay); moved back by "
-                f"{abs(self.samples)} samples, the starting model refitted reaches "
-                f"{self.after:.1%} on the run, from {self.before:.1%} (the black box "
-                f"{self.reference:.1%})")
+                f"command fitted by the loop with a pure delay); moved back by "
+                f"{abs(self.samples)} samples, {_refitted(self)}")
 
     def action(self) -> str:
         if self.drive_offset is not None:
@@ -132,8 +130,7 @@ class CommandScale:
                 f"{self.gain:.4g} ± {self.stderr:.2g}, where its servo loop's is 1 (a "
                 "valve-integrator loop follows a static command exactly): the command reads "
                 f"{1 / self.gain:.4g} x what the table was given; scaled by {self.gain:.4g}, "
-                f"the starting model refitted reaches {self.after:.1%} on the run, from "
-                f"{self.before:.1%} (the black box {self.reference:.1%})")
+                f"{_refitted(self)}")
 
     def action(self) -> str:
         if self.drive_scale is not None:
@@ -147,6 +144,12 @@ class CommandScale:
     def numbers(self) -> dict[str, float]:
         return {"gain": self.gain, "stderr": self.stderr, "error_before": self.before,
                 "error_after": self.after, "reference": self.reference}
+
+
+def _refitted(c: CommandOffset | CommandScale) -> str:
+    """What the starting model's refit with the command so changed gives on the run."""
+    return (f"the starting model refitted reaches {c.after:.1%} on the run, from "
+            f"{c.before:.1%} (the black box {c.reference:.1%})")
 
 
 def command_checks(d, diag, said: Callable[[str], None] = lambda s: None
