@@ -67,6 +67,8 @@ def test_a_drive_files_offset_and_scale_are_said_as_the_ones_to_give():
 
     c = CommandOffset("r", 0.0405, 0.0008, 200.0, 8, 0.8, 0.4, 0.2, drive_offset=0.1)
     assert "drive_offset_s = 0.14 (now 0.1)" in c.action() and "command lags" in c.text()
+    auto = dataclasses.replace(c, drive_offset="auto").action()
+    assert "the lag the reader's note gives +0.04 s" in auto
     s = CommandScale("r", 0.5, 0.001, 0.3, 0.02, 0.02, drive_scale=2.0)
     assert "drive_scale = 1 (now 2)" in s.action() and "reads 2 x" in s.text()
     assert "correct it (x 0.5)" in CommandScale("r", 0.5, 0.001, 0.3, 0.02, 0.02).action()

@@ -25,9 +25,9 @@ real-size run) and, for a lag or a scale worth trying, one to three refits of th
 starting model.
 
 The shift is said in the run file's own samples (its rate, not the analysis rate) and in
-seconds; for a command made from a drive file (`drive_offset_s` given in seconds) as the
-drive_offset_s that undoes it. A run that loses but cannot be tested (no table
-displacement, too short) is said so in the notes.
+seconds; for a command made from a drive file as the drive_offset_s that undoes it. A run
+that loses but cannot be tested (no table displacement, too short) is said so in the
+notes.
 
 The same estimate measures x_t/x_c's DC gain (`vtable.ident.loop.dc_gain`, from the
 lowest resolved lines, no model of the loop). A valve-integrator loop follows a static
@@ -79,8 +79,9 @@ class CommandOffset:
     before: float
     after: float
     reference: float
-    #: the drive_offset_s (s) the run's drive file was played at, None for an h_span column
-    drive_offset: float | None = None
+    #: the drive_offset_s the run's drive file was played at (s, or "auto"), None for an
+    #: h_span column
+    drive_offset: float | str | None = None
     kind = "command_offset"
 
     def numbers(self) -> dict[str, float]:
@@ -98,6 +99,10 @@ class CommandOffset:
                 f"{abs(self.samples)} samples, {_refitted(self)}")
 
     def action(self) -> str:
+        if self.drive_offset == "auto":
+            return ("drive_offset_s = \"auto\" left this lag: give drive_offset_s in seconds, "
+                    f"the lag the reader's note gives {self.samples / self.fs:+.4g} s, and "
+                    "diagnose again")
         if self.drive_offset is not None:
             return ("if the drive file's offset is off, set drive_offset_s = "
                     f"{self.drive_offset + self.samples / self.fs:.6g} (now "
@@ -200,8 +205,7 @@ def command_checks(d, diag, said: Callable[[str], None] = lambda s: None
         if kind == "lag":
             est = lags[name]
             fs = src.fs if src is not None else est.fs
-            given = cmd.drive_offset if cmd is not None and \
-                isinstance(cmd.drive_offset, int | float) else None
+            given = cmd.drive_offset if cmd is not None else None
             out.append(CommandOffset(name, est.offset, est.stderr, fs, round(est.offset * fs),
                                      before, now, losing[name], given))
         else:
