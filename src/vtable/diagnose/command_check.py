@@ -166,16 +166,8 @@ def command_checks(d, diag, said: Callable[[str], None] = lambda s: None
     lim, start = diag.limits, diag.comparison_start
     if lim is None or start is None or diag.interrupted:
         return []
-    losing = {}
-    for r in d.runs:
-        groups = [g for g in lim.groups if g.run == r.name]
-        if not groups or not start.per_run.get(r.name) or \
-                any(g.error is None or g.reference is None for g in groups):
-            continue
-        err = float(np.mean([g.error for g in groups]))
-        ref = float(np.mean([g.reference for g in groups]))
-        if err > ref:
-            losing[r.name] = ref
+    losing = {run: ref for run, (err, ref) in lim.by_run().items()
+              if err > ref and start.per_run.get(run)}  # run -> the black box's error
     if not losing:
         return []
     said("testing whether the command column is the command the table followed")

@@ -163,6 +163,17 @@ class Limits:
         """The mean over the groups whose split was resolved."""
         return self._known("beyond")
 
+    def by_run(self) -> dict[str, tuple[float, float]]:
+        """Each run's model error and black box's error (the means over its groups), for
+        the runs whose every group has both."""
+        runs: dict[str, list[GroupLimit]] = {}
+        for g in self.groups:
+            runs.setdefault(g.run, []).append(g)
+        return {run: (float(np.mean([g.error for g in gs])),
+                      float(np.mean([g.reference for g in gs])))
+                for run, gs in runs.items()
+                if all(g.error is not None and g.reference is not None for g in gs)}
+
     def to_json(self) -> dict:
         return {"reference": self.reference, "bound": self.bound, "noise": self.noise,
                 "within_reach": self.within_reach, "beyond": self.beyond,
