@@ -318,3 +318,21 @@ def test_si_specimen_keys_are_checked_under_their_own_names(d, msg):
     with pytest.raises(VtableError, match=msg) as e:
         specimen_from_dict(d, "run.toml [specimen]")
     assert "\n" not in str(e.value)
+
+
+def test_physics_effects_checked_once_and_passed_on():
+    """A Physics fills its effects' defaults and bounds-checks them; a replace of another
+    field passes the checked effects on as they are (a fit sets parameters hundreds of
+    times), while a new effects dict is checked again."""
+    from vtable.models.physics import Physics, nominal_open_loop
+
+    spec = SDOFSpecimen(weight=units.to_si(68.4, "kip"), frequency=2.8, damping=0.02,
+                        height=units.to_si(100.0, "in"))
+    ph = Physics(nominal_open_loop(), spec, {"actuator_friction": {}})
+    assert ph.effects["actuator_friction"]["friction"] == pytest.approx(1.0)  # its default
+    moved = dataclasses.replace(ph, specimen=dataclasses.replace(spec, frequency=3.1))
+    assert moved.effects is ph.effects and moved.specimen.frequency == pytest.approx(3.1)
+    with pytest.raises(VtableError, match=r"friction = 40 kip is outside \[0.01, 30\]"):
+        ph.with_effect("actuator_friction", {"friction": 40.0})
+    with pytest.raises(VtableError, match="outside"):
+        dataclasses.replace(ph, effects={"actuator_friction": {"friction": 0.0}})

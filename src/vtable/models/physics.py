@@ -19,6 +19,15 @@ from vtable.params.virtual import VirtualTable
 from vtable.tables.eerc import virtual_table
 
 
+class Checked(dict):
+    """A `Physics`'s effects as checked (`Effect.check`: every parameter present and within
+    its bounds), passed on unchanged by `dataclasses.replace` of another field: a fit sets
+    a parameter hundreds of times, and the effects need not be checked again each time (a
+    new dict, as `with_effect` and a fitted effect parameter make, is)."""
+
+    __slots__ = ()
+
+
 @dataclass(frozen=True)
 class Physics:
     """Base model plus effects {name: {param: value in the effect's units}}."""
@@ -44,7 +53,9 @@ class Physics:
     force_measured: str | None = None
 
     def __post_init__(self) -> None:
-        checked = {name: get(name).check(p, name) for name, p in self.effects.items()}
+        if type(self.effects) is Checked:  # another model's, checked: nothing to fill
+            return
+        checked = Checked({name: get(name).check(p, name) for name, p in self.effects.items()})
         filled = dict(self.defaulted)
         for name, p in self.effects.items():
             for q in get(name).params:
