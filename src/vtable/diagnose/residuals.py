@@ -3,9 +3,9 @@ campaign's training segments (`_train_outputs`: only the channels and samples th
 need), the targets' normalised residuals (`_residuals`), and the calibration's priors
 beside them (`_cost`). The last `COSTS_KEPT` residual vectors are kept: a point a fit asks
 again (a least-squares run starting where the last ended, a screen's start confirmed and
-then fitted from) is not simulated again (8 % of a README campaign's evaluations; with 16
-kept, a winner's fit still simulated 3-5 % of its points twice, its forward differences
-having pushed them out).
+then fitted from) is not simulated again (8 % of a README campaign's evaluations with 16
+kept; with 16, a winner's fit still simulated 3-5 % of its points twice, its forward
+differences having pushed them out).
 """
 
 from __future__ import annotations

@@ -23,7 +23,8 @@ class Checked(dict):
     """A `Physics`'s effects as checked (`Effect.check`: every parameter present and within
     its bounds), passed on unchanged by `dataclasses.replace` of another field: a fit sets
     a parameter hundreds of times, and the effects need not be checked again each time (a
-    new dict, as `with_effect` and a fitted effect parameter make, is)."""
+    new dict, as `with_effect` and a fitted effect parameter make, is). Checked against the
+    effects registered when it was made."""
 
     __slots__ = ()
 
