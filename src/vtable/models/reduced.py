@@ -34,6 +34,7 @@ from vtable.hydraulics.stage import Stage, add_stage
 from vtable.hydraulics.table_stages import table_stages
 from vtable.interpolate import upsampled
 from vtable.models import physics as phys
+from vtable.models import reduced_unrolled as unrolled
 from vtable.models.modal import ModalOutputs
 from vtable.models.reduced_kernel import (
     KERNELS,
@@ -398,6 +399,9 @@ class ReducedModel(ModalOutputs):
         again. Ctrl-C while numba compiles is an interrupt, not such a law."""
         module = self.element.module
         try:
+            steps = unrolled.kernel(self)
+            if steps is not None:  # its mechanics unrolled for its shape (same histories)
+                return unrolled.simulate(steps, self, args[0], args[1])
             if self.elem is None:
                 return simulate_reduced(module, *args)
             return simulate_reduced(module, *args, self.pe, self.ia, self.ib, self.ne)
