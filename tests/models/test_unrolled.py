@@ -22,9 +22,19 @@ X_C = 0.02 * np.sin(2 * np.pi * 0.7 * T) + 0.004 * np.sin(2 * np.pi * 6.3 * T + 
 
 
 def _both(model: ReducedModel, monkeypatch) -> tuple:
-    """(unrolled, generic) histories of `model` over the test command."""
+    """(unrolled, generic) histories of `model` over the test command; the first made by
+    the unrolled loop (counted), the second by the generic one."""
     assert reduced_unrolled.kernel(model) is not None
-    fast = model.histories(T, X_C)
+    calls, simulate = [], reduced_unrolled.simulate
+
+    def counted(*a):
+        calls.append(1)
+        return simulate(*a)
+
+    with monkeypatch.context() as m:
+        m.setattr(reduced_unrolled, "simulate", counted)
+        fast = model.histories(T, X_C)
+    assert calls == [1] and model.element.key.endswith("u")
     with monkeypatch.context() as m:
         m.setattr(reduced_unrolled, "kernel", lambda model: None)
         slow = model.histories(T, X_C)
@@ -83,3 +93,23 @@ def test_force_elements_keep_the_generic_loop():
     model = ReducedModel(Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                                  {"storey_yield": {}}))
     assert model.elem is not None and reduced_unrolled.kernel(model) is None
+
+
+def test_a_kernel_that_does_not_compile_leaves_the_shape_to_the_generic_loop(monkeypatch):
+    """A stage law that allocates does not compile in the unrolled loop (no reference
+    counting): that stage set and shape are stepped by the generic loop from then on, with
+    the same histories, and the stage set is not moved to the counted loop for it."""
+    import numba
+
+    model = ReducedModel(Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
+                                 {"actuator_friction": {"friction": 2.5}}))
+    ref = model.histories(T, X_C)
+
+    def fails(*a):
+        raise numba.core.errors.TypingError("a law that allocates")
+
+    monkeypatch.setattr(reduced_unrolled, "simulate", fails)
+    monkeypatch.setattr(reduced_unrolled, "_KERNELS", dict(reduced_unrolled._KERNELS))
+    again = model.histories(T, X_C)
+    _same(again, ref)
+    assert reduced_unrolled.kernel(model) is None and model.element.key.endswith("u")

@@ -393,15 +393,21 @@ class ReducedModel(ModalOutputs):
         return Histories(h, up, xc, Q, Qd, Qdd, F, PL)
 
     def _integrated(self, args: tuple):
-        """The compiled integrator on `args` (`reduced_kernel.simulate_reduced`, with the
-        force elements when there are); a law that needs numba's reference counting (it
+        """The compiled integrator on `args`: the loop unrolled for the model's shape
+        (`reduced_unrolled`) when it has one, else `reduced_kernel.simulate_reduced` (with
+        the force elements when there are); a law that needs numba's reference counting (it
         allocates) gets the element compiled with it (`compose.counted`) and the same call
         again. Ctrl-C while numba compiles is an interrupt, not such a law."""
+        steps = unrolled.kernel(self)  # its mechanics unrolled for its shape (the same
+        if steps is not None:  # histories, a quarter faster: `reduced_unrolled`)
+            try:
+                return unrolled.simulate(steps, self, args[0], args[1])
+            except numba.core.errors.NumbaError as e:
+                if interrupted(e):
+                    raise KeyboardInterrupt from e
+                unrolled.refuse(self)  # the generic loop, below, from now on
         module = self.element.module
         try:
-            steps = unrolled.kernel(self)
-            if steps is not None:  # its mechanics unrolled for its shape (same histories)
-                return unrolled.simulate(steps, self, args[0], args[1])
             if self.elem is None:
                 return simulate_reduced(module, *args)
             return simulate_reduced(module, *args, self.pe, self.ia, self.ib, self.ne)

@@ -13,7 +13,8 @@ servo states left in their array and stepped by the stage set's own `dof_drive`,
 `tests/models/test_unrolled.py` compares them).
 
 A model with force elements, or whose element needs numba's reference counting, is
-stepped by `reduced_kernel._steps`; so is a shape beyond `MAX_COORDINATES`. The module
+stepped by `reduced_kernel._steps`; so is a shape beyond `MAX_COORDINATES` coordinates or
+`MAX_LOOPS` loops, and one whose kernel did not compile (`refuse`). The module
 of a shape is written next to its stage set's (`vtable_stages_<key>_q<n>a<m>_<hash of its
 text>.py`) and compiled once (numba's cache), like the stage set's.
 """
@@ -22,12 +23,16 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import inspect
 import os
 import sys
+import threading
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+
+from vtable.models.reduced_kernel import _blown
 
 #: the most coordinates (and auxiliary loops) a shape is unrolled for
 MAX_COORDINATES = 8
@@ -38,7 +43,9 @@ _KERNELS: dict[tuple[str, int, int], Callable] = {}
 
 def constants(model) -> tuple[float, ...]:
     """The numbers `_steps` of the model's shape reads (see `_source`): the actuator's
-    direction, its law's T, T⁺, g, k_p, k_v, then bF, K, C, Fw, c₂, M⁻¹, Aw, Wq, Wv."""
+    direction, its law's T⁺ and T (1 x 1), g, k_p, k_v, then bF, K, C, Fw, c₂, M⁻¹, Aw,
+    Wq, Wv. Kept on the model by its arrays' identity (`simulate`): an array replaced is
+    read anew, one changed in place would not be (nothing changes them in place)."""
     parts = [model.ax, [model.Tp[0, 0], model.T[0, 0], model.g[0], model.kp[0], model.kv[0]],
              model.bF, model.K.ravel(), model.C.ravel(), model.Fw.ravel(), model.c2,
              model.Minv.ravel(), model.Aw.ravel(), model.Wq.ravel(), model.Wv.ravel()]
@@ -56,8 +63,18 @@ def kernel(model) -> Callable | None:
         return None
     key = (comp.key, nq, na)
     if key not in _KERNELS:
-        _KERNELS[key] = _module(comp, nq, na)._steps
+        try:
+            _KERNELS[key] = _module(comp, nq, na)._steps
+        except (OSError, SyntaxError, ImportError):  # cannot be written or read: the
+            _KERNELS[key] = None  # generic loop steps this shape
     return _KERNELS[key]
+
+
+def refuse(model) -> None:
+    """`model`'s stage set and shape are stepped by the generic loop from now on (its
+    unrolled kernel did not compile: a law that allocates, which the generic loop then
+    compiles with numba's reference counting)."""
+    _KERNELS[(model.element.key, model.M.shape[0], model.Aw.shape[0])] = None
 
 
 def _module(comp, nq: int, na: int):
@@ -65,11 +82,14 @@ def _module(comp, nq: int, na: int):
     another version of this generator wrote is never read back."""
     stage = comp.module
     text = _source(stage.__name__, nq, na)
-    digest = hashlib.sha256(text.encode()).hexdigest()[:12]
+    # numba checks a cached kernel against its own file only: the `_blown` it inlines is
+    # in the name too
+    digest = hashlib.sha256((text + inspect.getsource(_blown.py_func)).encode()
+                            ).hexdigest()[:12]
     name = f"{stage.__name__}_q{nq}a{na}_{digest}"
     path = Path(stage.__file__).with_name(name + ".py")
     if not path.exists():
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
         tmp.write_text(text)
         os.replace(tmp, path)
     spec = importlib.util.spec_from_file_location(name, path)
