@@ -30,6 +30,7 @@ import inspect
 import os
 import sys
 import tempfile
+import threading
 import types
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -185,17 +186,12 @@ def _compiled(stages, templates, elements, key: str, held, ident, counting: bool
         laws += [s.law] + ([s.rate] if s.rate else [])
     laws += [e.law for e in elements]
     _LAWS[key] = laws
-    path = _directory() / f"vtable_stages_{key}.py"
-    if not path.exists():
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        text = _source(stages, templates, key, elements, switched)
-        tmp.write_text(text.replace(_UNCOUNTED, ")") if counting else text)
-        os.replace(tmp, path)
-    name = f"vtable_stages_{key}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
+
+    def text() -> str:
+        t = _source(stages, templates, key, elements, switched)
+        return t.replace(_UNCOUNTED, ")") if counting else t
+
+    module = generated_module(f"vtable_stages_{key}", text)
     comp = Composition(stages, module, 1 + sum(s.states for s in stages),
                        all(s.linear for s in stages), key,
                        (stages, templates, elements, switched), switched)
@@ -203,6 +199,22 @@ def _compiled(stages, templates, elements, key: str, held, ident, counting: bool
         _MODULES[key] = comp
         _SEEN[ident] = (held, comp)
     return comp
+
+
+def generated_module(name: str, text: Callable[[], str]) -> types.ModuleType:
+    """The generated module `name` (its file in `_directory()`, written from `text()` the
+    first time: a temporary file per process and thread, then renamed, so that no reader
+    meets half a file), imported under that name."""
+    path = _directory() / f"{name}.py"
+    if not path.exists():
+        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
+        tmp.write_text(text())
+        os.replace(tmp, path)
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
 
 
 def _key(stages: tuple[Stage, ...], templates: list[Callable],

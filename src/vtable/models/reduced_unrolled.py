@@ -13,25 +13,26 @@ servo states left in their array and stepped by the stage set's own `dof_drive`,
 `tests/models/test_unrolled.py` compares them).
 
 A model with force elements, or whose element needs numba's reference counting, is
-stepped by `reduced_kernel._steps`; so is a shape beyond `MAX_COORDINATES` coordinates or
-`MAX_LOOPS` loops, and one whose kernel did not compile (`refuse`). The module
-of a shape is written next to its stage set's (`vtable_stages_<key>_q<n>a<m>_<hash of its
-text>.py`) and compiled once (numba's cache), like the stage set's.
+stepped by `reduced_kernel._steps` (a law run as Python never reaches either:
+`ReducedModel.histories`); so is a shape beyond `MAX_COORDINATES` coordinates or
+`MAX_LOOPS` loops, and one whose kernel did not compile (`refuse`). The module of a shape
+is written where the stage sets' are (`compose.generated_module`:
+`vtable_stages_<key>_q<n>a<m>_<hash of its text>.py`) and compiled once (numba's cache).
+
+The mechanics' law (M q̈ = bF F + fe − K q − C q̇ + Fw w − c₂|q̇|q̇, the loops' ẇ) is
+written here as text and in `reduced_kernel._rates`: the tests hold the two to the same
+bits.
 """
 
 from __future__ import annotations
 
 import hashlib
-import importlib.util
 import inspect
-import os
-import sys
-import threading
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 
+from vtable.hydraulics.compose import generated_module
 from vtable.models.reduced_kernel import _blown
 
 #: the most coordinates (and auxiliary loops) a shape is unrolled for
@@ -58,8 +59,8 @@ def kernel(model) -> Callable | None:
     module docstring)."""
     comp = model.element
     nq, na = model.M.shape[0], model.Aw.shape[0]
-    if (model.elem is not None or getattr(model, "python", False) or not comp.key.endswith("u")
-            or nq > MAX_COORDINATES or na > MAX_LOOPS or model.T.shape != (1, 1)):
+    if (model.elem is not None or not comp.key.endswith("u") or nq > MAX_COORDINATES
+            or na > MAX_LOOPS or model.T.shape != (1, 1)):
         return None
     key = (comp.key, nq, na)
     if key not in _KERNELS:
@@ -78,25 +79,15 @@ def refuse(model) -> None:
 
 
 def _module(comp, nq: int, na: int):
-    """The shape's module, written once: its name carries a hash of its text, so a module
-    another version of this generator wrote is never read back."""
+    """The shape's module (`compose.generated_module`): its name carries a hash of its
+    text, so a module another version of this generator wrote is never read back."""
     stage = comp.module
     text = _source(stage.__name__, nq, na)
     # numba checks a cached kernel against its own file only: the `_blown` it inlines is
     # in the name too
     digest = hashlib.sha256((text + inspect.getsource(_blown.py_func)).encode()
                             ).hexdigest()[:12]
-    name = f"{stage.__name__}_q{nq}a{na}_{digest}"
-    path = Path(stage.__file__).with_name(name + ".py")
-    if not path.exists():
-        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
+    return generated_module(f"{stage.__name__}_q{nq}a{na}_{digest}", lambda: text)
 
 
 def _source(stage_module: str, nq: int, na: int) -> str:
