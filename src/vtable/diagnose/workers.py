@@ -276,6 +276,10 @@ def cluster(n: int, scheduler: str | None = None):
                                       # takes the interpreter lock from a fit
                                       "distributed.worker.profile.enabled": False,
                                       "distributed.admin.tick.interval": "500ms",
+                                      # each worker's and nanny's look at its process's
+                                      # memory (the limit kept), once a second, not ten
+                                      # times: the nannies' ran in this process
+                                      "distributed.worker.memory.monitor-interval": "1s",
                                       "distributed.admin.system-monitor.interval": "2s"}):
                     lc = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                       dashboard_address=":0", silence_logs=logging.CRITICAL)

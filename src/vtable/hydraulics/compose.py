@@ -24,6 +24,7 @@ and once asked for, `composition` returns it for that stage set in this process.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib.util
 import inspect
@@ -32,12 +33,17 @@ import sys
 import tempfile
 import threading
 import types
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numba
 import numpy as np
+
+try:
+    import fcntl
+except ImportError:  # not on Windows: no lock (`first_compile`)
+    fcntl = None
 
 from vtable.errors import VtableError
 from vtable.hydraulics import element
@@ -215,6 +221,33 @@ def generated_module(name: str, text: Callable[[], str]) -> types.ModuleType:
     sys.modules[name] = module
     spec.loader.exec_module(module)
     return module
+
+
+@contextlib.contextmanager
+def first_compile(kernel) -> Iterator[None]:
+    """Around a call of `kernel` (a numba dispatcher cached on disk, ``cache=True``): its
+    first call in this process holds a lock on its name in `_directory()`
+    (`fcntl.flock`) while numba compiles it or loads it from its cache. A diagnosis's
+    workers meet the same kernels at the same moments: one compiles while the others
+    wait, then load what it cached, where each compiled it (a second or more each, the
+    core another process needed meanwhile: a README campaign's first diagnosis compiled
+    five kernels twice). A kernel this process has compiled or loaded (or a plain
+    function: numba's JIT off), or a system without `flock`, takes no lock."""
+    if getattr(kernel, "signatures", True) or fcntl is None:
+        yield
+        return
+    f = getattr(kernel, "py_func", kernel)
+    try:
+        fh = open(_directory() / f"{f.__module__}.{f.__qualname__}.lock", "a")
+    except OSError:
+        yield
+        return
+    with fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
 
 
 def _key(stages: tuple[Stage, ...], templates: list[Callable],

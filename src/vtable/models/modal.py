@@ -20,6 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 import scipy.linalg
 
+from vtable.hydraulics.compose import first_compile
 from vtable.interpolate import upsampled
 from vtable.models.reduced_kernel import simulate_modal
 
@@ -62,7 +63,8 @@ class ModalOutputs:
         filters = self.assembly.filters
         every = 1 if filters else up * step
         phi, g0, g1, Cm, D = self._modal_step(h, tuple(names))
-        Y = simulate_modal(xc, phi, g0, g1, Cm, D, every)
+        with first_compile(simulate_modal):
+            Y = simulate_modal(xc, phi, g0, g1, Cm, D, every)
         out = {c: Y[i] for i, c in enumerate(names)}
         if filters:
             for fn, only in filters:

@@ -28,7 +28,7 @@ from vtable.controllers.force_law import law_params
 from vtable.effects.registry import stock_stages
 from vtable.errors import VtableError, interrupted
 from vtable.hydraulics import group_law
-from vtable.hydraulics.compose import ElementLaw, counted
+from vtable.hydraulics.compose import ElementLaw, counted, first_compile
 from vtable.hydraulics.element import PISTON_AREA
 from vtable.hydraulics.stage import Stage, add_stage
 from vtable.hydraulics.table_stages import table_stages
@@ -384,7 +384,8 @@ class ReducedModel(ModalOutputs):
                 self.T, self.Tp, self.g, self.kp, self.kv, self.Aw, self.Wq, self.Wv, self.Fw)
         if self.linear:
             Phi, G0, G1 = self._hold(h)
-            Q, Qd, Qdd, F, PL = simulate_linear(xc, nq, *self._linear, Phi, G0, G1)
+            with first_compile(simulate_linear):
+                Q, Qd, Qdd, F, PL = simulate_linear(xc, nq, *self._linear, Phi, G0, G1)
         elif self.python:
             Q, Qd, Qdd, F, PL = simulate_reduced_python(self.element.module, *args, self.elem,
                                                         self.ne, self.pe)

@@ -30,6 +30,7 @@ import numpy as np
 
 from vtable._numba import njit
 from vtable.controllers.force_law import named
+from vtable.hydraulics.compose import first_compile
 from vtable.hydraulics.element import NS, actuator_rates, dof_drive, fed_back
 
 
@@ -248,9 +249,10 @@ def simulate_reduced(module, xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, k
     ny = 2 * nq + module.NS + Aw.shape[0] + ne
     Q, Qd, Qdd = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq))
     F, PL = np.empty(n), np.empty(n)
-    module._steps(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, pe,
-                  ia, ib, ne, np.zeros(ny), np.empty(ny), np.empty((4, ny)), np.zeros(nq),
-                  np.zeros(nq), Q, Qd, Qdd, F, PL)
+    with first_compile(module._steps):
+        module._steps(xc, dt, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
+                      pe, ia, ib, ne, np.zeros(ny), np.empty(ny), np.empty((4, ny)),
+                      np.zeros(nq), np.zeros(nq), Q, Qd, Qdd, F, PL)
     return Q, Qd, Qdd, F, PL
 
 
@@ -307,7 +309,12 @@ def linear_system(module, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, 
     A, fy = np.empty((ny, ny)), np.empty(ny)
     dy, y = np.empty(ny), np.zeros(ny)
     ws = np.zeros(work_size(nq))
-    for j in range(ny):
+    with first_compile(_rates):
+        y[0] = 1.0
+        fy[0] = _rates(y, 0.0, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
+                       Fw, fe, dy, ws)
+        A[:, 0] = dy
+    for j in range(1, ny):
         y[:] = 0.0
         y[j] = 1.0
         fy[j] = _rates(y, 0.0, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,

@@ -32,7 +32,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from vtable.hydraulics.compose import generated_module
+from vtable.hydraulics.compose import first_compile, generated_module
 from vtable.models.reduced_kernel import _blown
 
 #: the most coordinates (and auxiliary loops) a shape is unrolled for
@@ -207,6 +207,7 @@ def simulate(steps: Callable, model, xc: np.ndarray, dt: float) -> tuple[np.ndar
     n, nq, ns = xc.shape[0], model.M.shape[0], model.element.module.NS
     Q, Qd, Qdd = np.empty((n, nq)), np.empty((n, nq)), np.empty((n, nq))
     F, PL = np.empty(n), np.empty(n)
-    steps(xc, dt, consts, model.sp, np.zeros(ns), np.empty(ns), np.empty((4, ns)), Q, Qd, Qdd,
-          F, PL)
+    with first_compile(steps):
+        steps(xc, dt, consts, model.sp, np.zeros(ns), np.empty(ns), np.empty((4, ns)), Q, Qd,
+              Qdd, F, PL)
     return Q, Qd, Qdd, F, PL
