@@ -8,6 +8,7 @@ import multiprocessing
 import sys
 import uuid
 
+import numba
 import pytest
 
 from vtable.hydraulics import compose
@@ -29,6 +30,8 @@ def kernel(x):
     return s
 '''
 
+needs_flock = pytest.mark.skipif(compose.fcntl is None, reason="no flock on this system")
+
 
 def _module(path):
     name = path.stem
@@ -41,29 +44,64 @@ def _module(path):
 
 
 def _call(path, barrier, out) -> None:
-    import numpy as np
+    try:
+        import numpy as np
 
-    kernel = _module(path).kernel
-    barrier.wait()
-    with compose.first_compile(kernel):
-        value = kernel(np.linspace(-1.0, 1.0, 101))
-    out.put((kernel.stats.cache_misses.total(), kernel.stats.cache_hits.total(), value))
+        kernel = _module(path).kernel
+        barrier.wait(timeout=60)
+        with compose.first_compile(kernel):
+            value = kernel(np.linspace(-1.0, 1.0, 101))
+        out.put((kernel.stats.cache_misses.total(), kernel.stats.cache_hits.total(), value))
+    except BaseException as e:  # said to the test, not left to hang it
+        out.put(repr(e))
 
 
-@pytest.mark.skipif(compose.fcntl is None, reason="no flock on this system")
-def test_two_processes_compile_a_kernel_once(tmp_path):
+@pytest.fixture
+def kernel_file(tmp_path, monkeypatch):
+    """A new kernel's module in `tmp_path`, numba's cache (and the locks) there too."""
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path / "cache"))
     path = tmp_path / f"vtable_first_compile_{uuid.uuid4().hex[:12]}.py"
     path.write_text(SOURCE)
+    return path
+
+
+@needs_flock
+def test_two_processes_compile_a_kernel_once(kernel_file):
     ctx = multiprocessing.get_context("fork")
     barrier, out = ctx.Barrier(2), ctx.Queue()
-    procs = [ctx.Process(target=_call, args=(path, barrier, out)) for _ in range(2)]
-    for p in procs:
-        p.start()
-    results = [out.get(timeout=120) for _ in procs]
-    for p in procs:
-        p.join(timeout=60)
-    misses = sorted(r[0] for r in results)
-    hits = sorted(r[1] for r in results)
-    assert misses == [0, 1]  # one compiled, the other loaded what it cached
-    assert hits == [0, 1]
+    procs = [ctx.Process(target=_call, args=(kernel_file, barrier, out), daemon=True)
+             for _ in range(2)]
+    try:
+        for p in procs:
+            p.start()
+        results = [out.get(timeout=120) for _ in procs]
+    finally:
+        for p in procs:
+            p.join(timeout=30)
+            if p.is_alive():
+                p.terminate()
+    assert all(isinstance(r, tuple) for r in results), results
+    # one compiled (a miss), the other waited and loaded what it cached (a hit)
+    assert sorted((r[0], r[1]) for r in results) == [(0, 1), (1, 0)]
     assert results[0][2] == results[1][2]
+    assert [p.exitcode for p in procs] == [0, 0]
+
+
+@needs_flock
+def test_the_lock_is_let_go_when_the_call_fails(kernel_file):
+    kernel = _module(kernel_file).kernel
+    with pytest.raises(numba.core.errors.TypingError), compose.first_compile(kernel):
+        kernel("not an array")
+    lock = compose._directory() / f"{kernel_file.stem}.kernel.lock"
+    with open(lock, "a") as fh:  # another file description: taken at once
+        compose.fcntl.flock(fh, compose.fcntl.LOCK_EX | compose.fcntl.LOCK_NB)
+        compose.fcntl.flock(fh, compose.fcntl.LOCK_UN)
+
+
+def test_a_plain_function_takes_no_lock(kernel_file):
+    def plain(x):  # numba's JIT off: njit gives the function itself
+        return 2 * x
+
+    with compose.first_compile(plain):
+        assert plain(3) == 6
+    assert not list(compose._directory().glob("*plain*.lock"))

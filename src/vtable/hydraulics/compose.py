@@ -42,7 +42,7 @@ import numpy as np
 
 try:
     import fcntl
-except ImportError:  # not on Windows: no lock (`first_compile`)
+except ImportError:  # Windows has no fcntl: no lock (`first_compile`)
     fcntl = None
 
 from vtable.errors import VtableError
@@ -212,10 +212,17 @@ def generated_module(name: str, text: Callable[[], str]) -> types.ModuleType:
     first time: a temporary file per process and thread, then renamed, so that no reader
     meets half a file), imported under that name."""
     path = _directory() / f"{name}.py"
-    if not path.exists():
-        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
-        tmp.write_text(text())
-        os.replace(tmp, path)
+    if not path.exists():  # linked, not replaced, should another process have written it
+        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")  # meanwhile:
+        tmp.write_text(text())  # numba before 0.68 stamps a source by its time, and a
+        try:  # module written again would make what the other compiled stale
+            os.link(tmp, path)
+        except FileExistsError:
+            pass
+        except OSError:  # no hard links here
+            os.replace(tmp, path)
+        finally:
+            tmp.unlink(missing_ok=True)
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
@@ -225,25 +232,36 @@ def generated_module(name: str, text: Callable[[], str]) -> types.ModuleType:
 
 @contextlib.contextmanager
 def first_compile(kernel) -> Iterator[None]:
-    """Around a call of `kernel` (a numba dispatcher cached on disk, ``cache=True``): its
-    first call in this process holds a lock on its name in `_directory()`
-    (`fcntl.flock`) while numba compiles it or loads it from its cache. A diagnosis's
-    workers meet the same kernels at the same moments: one compiles while the others
-    wait, then load what it cached, where each compiled it (a second or more each, the
-    core another process needed meanwhile: a README campaign's first diagnosis compiled
-    five kernels twice). A kernel this process has compiled or loaded (or a plain
-    function: numba's JIT off), or a system without `flock`, takes no lock."""
-    if getattr(kernel, "signatures", True) or fcntl is None:
-        yield
-        return
-    f = getattr(kernel, "py_func", kernel)
-    try:
-        fh = open(_directory() / f"{f.__module__}.{f.__qualname__}.lock", "a")
-    except OSError:
+    """Around a call of one of the integrators (a numba dispatcher cached on disk,
+    ``cache=True``): its first call in this process, should another process (or thread)
+    be compiling it, waits until that one's first call has returned and then loads what
+    it cached; the first to come holds a lock on the kernel's name in `_directory()`
+    (`fcntl.flock`) through its call, while numba compiles (or loads) it. A diagnosis's
+    workers meet the same kernels at the same moments and each compiled them, a second or
+    more each (a README campaign's first diagnosis compiled five twice). A kernel this
+    process has compiled or loaded (or a plain function: numba's JIT off), a system
+    without `flock` or a folder that refuses locks takes no lock. Not nested: a kernel
+    called inside another's block would wait for itself."""
+    fh = None
+    if fcntl is not None and not getattr(kernel, "signatures", True):
+        f = getattr(kernel, "py_func", kernel)
+        try:
+            fh = open(_directory() / f"{f.__module__}.{f.__qualname__}.lock", "a")
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:  # another is compiling it: wait, then load it
+                fcntl.flock(fh, fcntl.LOCK_SH)
+                fcntl.flock(fh, fcntl.LOCK_UN)
+                fh.close()
+                fh = None
+        except OSError:  # no lock here (a file system without locks): as without flock
+            if fh is not None:
+                fh.close()
+            fh = None
+    if fh is None:
         yield
         return
     with fh:
-        fcntl.flock(fh, fcntl.LOCK_EX)
         try:
             yield
         finally:

@@ -310,19 +310,15 @@ def linear_system(module, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, 
     dy, y = np.empty(ny), np.zeros(ny)
     ws = np.zeros(work_size(nq))
     with first_compile(_rates):
-        y[0] = 1.0
-        fy[0] = _rates(y, 0.0, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
-                       Fw, fe, dy, ws)
-        A[:, 0] = dy
-    for j in range(1, ny):
+        for j in range(ny):
+            y[:] = 0.0
+            y[j] = 1.0
+            fy[j] = _rates(y, 0.0, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv,
+                           Fw, fe, dy, ws)
+            A[:, j] = dy
         y[:] = 0.0
-        y[j] = 1.0
-        fy[j] = _rates(y, 0.0, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw,
-                       fe, dy, ws)
-        A[:, j] = dy
-    y[:] = 0.0
-    fu = _rates(y, 1.0, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, fe, dy,
-                ws)
+        fu = _rates(y, 1.0, nq, Minv, K, C, c2, bF, ax, sp, T, Tp, g, kp, kv, Aw, Wq, Wv, Fw, fe,
+                    dy, ws)
     return A, dy.copy(), fy, fu
 
 
