@@ -1,4 +1,4 @@
-"""Where numba keeps vtable's compiled kernels.
+"""Where numba keeps vtable's compiled kernels, and how processes share their compiling.
 
 Every module that compiles a kernel takes numba's ``njit`` from here
 (``from vtable._numba import njit``), so the cache folder is worked out once, when a
@@ -6,14 +6,25 @@ kernel module is first imported, and not by ``import vtable``.
 numba reads ``NUMBA_CACHE_DIR`` from the environment when it is first imported; when
 numba was imported earlier (by the user, or by another package) its ``config.CACHE_DIR``
 is set instead. A kernel decorated afterwards caches there.
+
+A kernel's first call in a process goes through `first_compile`: processes that meet it at
+the same moment (a diagnosis's workers) compile it once, the others waiting and then
+loading it from the cache.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import sys
 import tempfile
+from collections.abc import Iterator
+
+try:
+    import fcntl
+except ImportError:  # Windows has no fcntl: no lock (`first_compile`)
+    fcntl = None
 
 from vtable import __version__
 
@@ -65,6 +76,54 @@ if CACHE_DIR:
     if "numba" in sys.modules:  # numba read its configuration already
         sys.modules["numba"].config.CACHE_DIR = CACHE_DIR
 
-from numba import njit  # noqa: E402  (after NUMBA_CACHE_DIR is set)
+import numba  # noqa: E402  (after NUMBA_CACHE_DIR is set)
+from numba import njit  # noqa: E402
 
-__all__ = ["CACHE_DIR", "cache_dir", "njit", "sources_stamp"]
+
+def _lock_path(kernel) -> str:
+    """The lock file of `kernel` (a dispatcher): named after its module and function, in
+    numba's cache folder as it is now (or the temporary directory)."""
+    d = os.path.join(numba.config.CACHE_DIR or tempfile.gettempdir(), "locks")
+    os.makedirs(d, exist_ok=True)
+    f = getattr(kernel, "py_func", kernel)
+    return os.path.join(d, f"{f.__module__}.{f.__qualname__}.lock")
+
+
+@contextlib.contextmanager
+def first_compile(kernel) -> Iterator[None]:
+    """Around a call of `kernel` (a dispatcher cached on disk, ``cache=True``): its first
+    call in this process, should another process (or thread) be compiling it, waits until
+    that one's first call has returned and then loads what it cached; the first to come
+    holds a lock on the kernel's name (`fcntl.flock`) through its call, while numba
+    compiles (or loads) it. A diagnosis's workers meet the same kernels at the same
+    moments and each compiled them, a second or more each (a README campaign's first
+    diagnosis compiled five twice). A kernel this process has compiled or loaded (or a
+    plain function: numba's JIT off), a system without `flock` or a folder that refuses
+    locks takes no lock. Not nested: a kernel called inside another's block would wait
+    for itself."""
+    fh = None
+    if fcntl is not None and not getattr(kernel, "signatures", True):
+        try:
+            fh = open(_lock_path(kernel), "a")  # closed below
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:  # another is compiling it: wait, then load it
+                fcntl.flock(fh, fcntl.LOCK_SH)
+                fcntl.flock(fh, fcntl.LOCK_UN)
+                fh.close()
+                fh = None
+        except OSError:  # no lock here (a file system without locks): as without flock
+            if fh is not None:
+                fh.close()
+            fh = None
+    if fh is None:
+        yield
+        return
+    with fh:
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
+
+
+__all__ = ["CACHE_DIR", "cache_dir", "first_compile", "njit", "sources_stamp"]

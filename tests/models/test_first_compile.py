@@ -1,5 +1,5 @@
 """Processes that meet the same uncompiled kernel at the same moment compile it once
-(`compose.first_compile`): the others wait and load it from numba's cache."""
+(`vtable._numba.first_compile`): the others wait and load it from numba's cache."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import uuid
 import numba
 import pytest
 
-from vtable.hydraulics import compose
+from vtable import _numba
 
 # a kernel that takes numba a while to compile, so that two processes' calls overlap
 SOURCE = '''
@@ -30,7 +30,7 @@ def kernel(x):
     return s
 '''
 
-needs_flock = pytest.mark.skipif(compose.fcntl is None, reason="no flock on this system")
+needs_flock = pytest.mark.skipif(_numba.fcntl is None, reason="no flock on this system")
 
 
 def _module(path):
@@ -49,7 +49,7 @@ def _call(path, barrier, out) -> None:
 
         kernel = _module(path).kernel
         barrier.wait(timeout=60)
-        with compose.first_compile(kernel):
+        with _numba.first_compile(kernel):
             value = kernel(np.linspace(-1.0, 1.0, 101))
         out.put((kernel.stats.cache_misses.total(), kernel.stats.cache_hits.total(), value))
     except BaseException as e:  # said to the test, not left to hang it
@@ -90,18 +90,18 @@ def test_two_processes_compile_a_kernel_once(kernel_file):
 @needs_flock
 def test_the_lock_is_let_go_when_the_call_fails(kernel_file):
     kernel = _module(kernel_file).kernel
-    with pytest.raises(numba.core.errors.TypingError), compose.first_compile(kernel):
+    with pytest.raises(numba.core.errors.TypingError), _numba.first_compile(kernel):
         kernel("not an array")
-    lock = compose._directory() / f"{kernel_file.stem}.kernel.lock"
+    lock = _numba._lock_path(kernel)
     with open(lock, "a") as fh:  # another file description: taken at once
-        compose.fcntl.flock(fh, compose.fcntl.LOCK_EX | compose.fcntl.LOCK_NB)
-        compose.fcntl.flock(fh, compose.fcntl.LOCK_UN)
+        _numba.fcntl.flock(fh, _numba.fcntl.LOCK_EX | _numba.fcntl.LOCK_NB)
+        _numba.fcntl.flock(fh, _numba.fcntl.LOCK_UN)
 
 
 def test_a_plain_function_takes_no_lock(kernel_file):
     def plain(x):  # numba's JIT off: njit gives the function itself
         return 2 * x
 
-    with compose.first_compile(plain):
+    with _numba.first_compile(plain):
         assert plain(3) == 6
-    assert not list(compose._directory().glob("*plain*.lock"))
+    assert not list((kernel_file.parent / "cache" / "locks").glob("*plain*.lock"))

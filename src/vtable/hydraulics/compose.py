@@ -24,7 +24,6 @@ and once asked for, `composition` returns it for that stage set in this process.
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import importlib.util
 import inspect
@@ -33,17 +32,12 @@ import sys
 import tempfile
 import threading
 import types
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numba
 import numpy as np
-
-try:
-    import fcntl
-except ImportError:  # Windows has no fcntl: no lock (`first_compile`)
-    fcntl = None
 
 from vtable.errors import VtableError
 from vtable.hydraulics import element
@@ -212,10 +206,13 @@ def generated_module(name: str, text: Callable[[], str]) -> types.ModuleType:
     first time: a temporary file per process and thread, then renamed, so that no reader
     meets half a file), imported under that name."""
     path = _directory() / f"{name}.py"
-    if not path.exists():  # linked, not replaced, should another process have written it
-        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")  # meanwhile:
-        tmp.write_text(text())  # numba before 0.68 stamps a source by its time, and a
-        try:  # module written again would make what the other compiled stale
+    if not path.exists():
+        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
+        tmp.write_text(text())
+        # linked, not replaced, should another process have written it meanwhile: numba
+        # before 0.68 stamps a source by its time, and a module written again would make
+        # what the other compiled stale
+        try:
             os.link(tmp, path)
         except FileExistsError:
             pass
@@ -228,44 +225,6 @@ def generated_module(name: str, text: Callable[[], str]) -> types.ModuleType:
     sys.modules[name] = module
     spec.loader.exec_module(module)
     return module
-
-
-@contextlib.contextmanager
-def first_compile(kernel) -> Iterator[None]:
-    """Around a call of one of the integrators (a numba dispatcher cached on disk,
-    ``cache=True``): its first call in this process, should another process (or thread)
-    be compiling it, waits until that one's first call has returned and then loads what
-    it cached; the first to come holds a lock on the kernel's name in `_directory()`
-    (`fcntl.flock`) through its call, while numba compiles (or loads) it. A diagnosis's
-    workers meet the same kernels at the same moments and each compiled them, a second or
-    more each (a README campaign's first diagnosis compiled five twice). A kernel this
-    process has compiled or loaded (or a plain function: numba's JIT off), a system
-    without `flock` or a folder that refuses locks takes no lock. Not nested: a kernel
-    called inside another's block would wait for itself."""
-    fh = None
-    if fcntl is not None and not getattr(kernel, "signatures", True):
-        f = getattr(kernel, "py_func", kernel)
-        try:
-            fh = open(_directory() / f"{f.__module__}.{f.__qualname__}.lock", "a")
-            try:
-                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:  # another is compiling it: wait, then load it
-                fcntl.flock(fh, fcntl.LOCK_SH)
-                fcntl.flock(fh, fcntl.LOCK_UN)
-                fh.close()
-                fh = None
-        except OSError:  # no lock here (a file system without locks): as without flock
-            if fh is not None:
-                fh.close()
-            fh = None
-    if fh is None:
-        yield
-        return
-    with fh:
-        try:
-            yield
-        finally:
-            fcntl.flock(fh, fcntl.LOCK_UN)
 
 
 def _key(stages: tuple[Stage, ...], templates: list[Callable],

@@ -20,7 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 import scipy.linalg
 
-from vtable.hydraulics.compose import first_compile
+from vtable._numba import first_compile
 from vtable.interpolate import upsampled
 from vtable.models.reduced_kernel import simulate_modal
 

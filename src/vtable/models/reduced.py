@@ -22,13 +22,14 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from vtable._numba import first_compile
 from vtable.analytic.hold import first_order_hold
 from vtable.analytic.structure import storey_channels, storey_masses
 from vtable.controllers.force_law import law_params
 from vtable.effects.registry import stock_stages
 from vtable.errors import VtableError, interrupted
 from vtable.hydraulics import group_law
-from vtable.hydraulics.compose import ElementLaw, counted, first_compile
+from vtable.hydraulics.compose import ElementLaw, counted
 from vtable.hydraulics.element import PISTON_AREA
 from vtable.hydraulics.stage import Stage, add_stage
 from vtable.hydraulics.table_stages import table_stages

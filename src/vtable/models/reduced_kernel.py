@@ -28,9 +28,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from vtable._numba import njit
+from vtable._numba import first_compile, njit
 from vtable.controllers.force_law import named
-from vtable.hydraulics.compose import first_compile
 from vtable.hydraulics.element import NS, actuator_rates, dof_drive, fed_back
 
 

@@ -32,7 +32,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from vtable.hydraulics.compose import first_compile, generated_module
+from vtable._numba import first_compile
+from vtable.hydraulics.compose import generated_module
 from vtable.models.reduced_kernel import _blown
 
 #: the most coordinates (and auxiliary loops) a shape is unrolled for
