@@ -184,6 +184,27 @@ def test_ctrl_c_into_diagnose_is_one_line_and_exit_130(long_campaign):
     assert landed >= 5, landed
 
 
+def test_the_local_clusters_logs_stay_silent_after_it_closes():
+    """A scatter that Ctrl-C cut short failed in the scheduler as the workers left, and
+    distributed logged its traceback once the closing cluster had given its log handlers
+    their levels back (one run of the test above, under a full suite's load). The
+    scheduler's and workers' errors stay unprinted for the rest of the process."""
+    import subprocess
+    import sys
+
+    code = ("import logging\n"
+            "from vtable.diagnose import workers\n"
+            "workers.cluster(2)\n"
+            "workers.shutdown()\n"
+            "logging.getLogger('distributed.core').error('a late error')\n"
+            "logging.getLogger('distributed.scheduler').error('a late error')\n"
+            "print('done')\n")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=120)
+    assert p.returncode == 0 and p.stdout.strip() == "done", p.stderr
+    assert "a late error" not in p.stderr, p.stderr
+
+
 def test_the_command_starts_no_second_python_interpreter(tmp_path):
     """`vtable` does not look for MuJoCo's OpenGL back-end (it renders nothing with it): the
     search ran `python -c` to read GLFW's version, a second interpreter that Ctrl-C, sent to

@@ -253,6 +253,11 @@ def cluster(n: int, scheduler: str | None = None):
                                   f"({e})") from None
         else:
             _fork_safe()
+            # the local cluster's logs silenced for the rest of this process, not only
+            # while the cluster is up (`silence_logs`, which gives the handlers their
+            # levels back as the cluster closes): a scatter that Ctrl-C cut short then
+            # failed in the scheduler as the workers left, and its traceback was printed
+            logging.getLogger("distributed").setLevel(logging.CRITICAL)
             _FORKING.set()  # the children forked now are our workers: Ctrl-C is ours
             gc.freeze()  # what exists now is the workers' too: no collection touches it
             try:
