@@ -6,11 +6,14 @@ when it runs. Compiled that way, every state and matrix entry is read through a 
 that may alias the arrays written, so nothing stays in a register: on the README
 campaign's friction model (3 coordinates, 1 loop) it took 227–248 ns a step. This module
 writes, for one stage set and one shape (n coordinates, m auxiliary loops), the same
-arithmetic with q, q̇, w as local variables and the matrices as a tuple of numbers, the
-servo states left in their array and stepped by the stage set's own `dof_drive`,
-`fed_back` and `actuator_rates` (a stage law keeps taking its states as array slices):
-170 ns a step, the histories bit-identical (the same operations in the same order;
-`tests/models/test_unrolled.py` compares them).
+arithmetic with q, q̇, w as local variables and the matrices' numbers in one array, each
+read where it is used, the servo states left in their array and stepped by the stage set's
+own `dof_drive`, `fed_back` and `actuator_rates` (a stage law keeps taking its states as
+array slices): 170 ns a step with the numbers as a tuple, 125 ns with the array (a tuple is
+passed by value: its 50 numbers were copied into each of the four calls of `_rates` a
+step; unpacked from the array at the top of `_rates` they took 155 ns). The histories are
+bit-identical (the same operations in the same order; `tests/models/test_unrolled.py`
+compares them).
 
 A model with force elements, or whose element needs numba's reference counting, is
 stepped by `reduced_kernel._steps` (a law run as Python never reaches either:
@@ -43,15 +46,16 @@ MAX_LOOPS = 4
 _KERNELS: dict[tuple[str, int, int], Callable] = {}
 
 
-def constants(model) -> tuple[float, ...]:
-    """The numbers `_steps` of the model's shape reads (see `_source`): the actuator's
-    direction, its law's T⁺ and T (1 x 1), g, k_p, k_v, then bF, K, C, Fw, c₂, M⁻¹, Aw,
-    Wq, Wv. Kept on the model by its arrays' identity (`simulate`): an array replaced is
-    read anew, one changed in place would not be (nothing changes them in place)."""
+def constants(model) -> np.ndarray:
+    """The numbers `_steps` of the model's shape reads (see `_source`), in one array: the
+    actuator's direction, its law's T⁺ and T (1 x 1), g, k_p, k_v, then bF, K, C, Fw, c₂,
+    M⁻¹, Aw, Wq, Wv. Kept on the model by its arrays' identity (`simulate`): an array
+    replaced is read anew, one changed in place would not be (nothing changes them in
+    place)."""
     parts = [model.ax, [model.Tp[0, 0], model.T[0, 0], model.g[0], model.kp[0], model.kv[0]],
              model.bF, model.K.ravel(), model.C.ravel(), model.Fw.ravel(), model.c2,
              model.Minv.ravel(), model.Aw.ravel(), model.Wq.ravel(), model.Wv.ravel()]
-    return tuple(float(v) for p in parts for v in np.asarray(p, dtype=float).ravel())
+    return np.concatenate([np.asarray(p, dtype=float).ravel() for p in parts])
 
 
 def kernel(model) -> Callable | None:
@@ -109,25 +113,28 @@ def _source(stage_module: str, nq: int, na: int) -> str:
              + [f"Wq{a}_{j}" for a in range(na) for j in range(nq)]
              + [f"Wv{a}_{j}" for a in range(na) for j in range(nq)])
     state = q + v + w
-    body = [f"    ({', '.join(names)},) = c",
-            "    xa = 0.0", *[f"    xa += ax{i} * q{i}" for i in range(nq)],
-            "    va = 0.0", *[f"    va += ax{i} * v{i}" for i in range(nq)],
+    c = {name: f"c[{k}]" for k, name in enumerate(names)}  # each number where it is used
+    body = [f"    # c: {' '.join(names)}",
+            "    xa = 0.0", *[f"    xa += {c[f'ax{i}']} * q{i}" for i in range(nq)],
+            "    va = 0.0", *[f"    va += {c[f'ax{i}']} * v{i}" for i in range(nq)],
             "    p_fb = fed_back(z, 0, sp)",
-            "    drive = T00 * dof_drive(xc, t * xa, t * p_fb, t * va, g0, kp0, kv0, z, 0, sp,"
-            " dz, True)",
+            f"    drive = {c['T00']} * dof_drive(xc, {c['t']} * xa, {c['t']} * p_fb, "
+            f"{c['t']} * va, {c['g0']}, {c['kp0']}, {c['kv0']}, z, 0, sp, dz, True)",
             "    force = actuator_rates(z, 0, drive, va, sp, dz)"]
     for i in range(nq):
-        body.append(f"    r{i} = bF{i} * force + 0.0")
-        body += [f"    r{i} -= K{i}_{j} * q{j} + C{i}_{j} * v{j}" for j in range(nq)]
-        body += [f"    r{i} += Fw{i}_{a} * w{a}" for a in range(na)]
-        body.append(f"    r{i} -= c2{i} * abs(v{i}) * v{i}")
+        body.append(f"    r{i} = {c[f'bF{i}']} * force + 0.0")
+        body += [f"    r{i} -= {c[f'K{i}_{j}']} * q{j} + {c[f'C{i}_{j}']} * v{j}"
+                 for j in range(nq)]
+        body += [f"    r{i} += {c[f'Fw{i}_{a}']} * w{a}" for a in range(na)]
+        body.append(f"    r{i} -= {c[f'c2{i}']} * abs(v{i}) * v{i}")
     for i in range(nq):
         body.append(f"    a{i} = 0.0")
-        body += [f"    a{i} += M{i}_{j} * r{j}" for j in range(nq)]
+        body += [f"    a{i} += {c[f'M{i}_{j}']} * r{j}" for j in range(nq)]
     for a in range(na):
         body.append(f"    d{a} = 0.0")
-        body += [f"    d{a} += Aw{a}_{b} * w{b}" for b in range(na)]
-        body += [f"    d{a} += Wq{a}_{j} * q{j} + Wv{a}_{j} * v{j}" for j in range(nq)]
+        body += [f"    d{a} += {c[f'Aw{a}_{b}']} * w{b}" for b in range(na)]
+        body += [f"    d{a} += {c[f'Wq{a}_{j}']} * q{j} + {c[f'Wv{a}_{j}']} * v{j}"
+                 for j in range(nq)]
     rates = v + [f"a{i}" for i in range(nq)] + [f"d{a}" for a in range(na)]
     body.append(f"    return ({', '.join([*rates, 'force'])},)")
     n = len(state)
