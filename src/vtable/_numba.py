@@ -102,7 +102,9 @@ def first_compile(kernel) -> Iterator[None]:
     locks takes no lock. Not nested: a kernel called inside another's block would wait
     for itself."""
     fh = None
-    if fcntl is not None and not getattr(kernel, "signatures", True):
+    # whether it has compiled or loaded one: its `overloads`, not `signatures` (which lists
+    # them, hashing every type of every argument: 4 us, three times a simulation)
+    if fcntl is not None and not getattr(kernel, "overloads", True):
         try:
             fh = open(_lock_path(kernel), "a")  # closed below
             try:
