@@ -89,7 +89,8 @@ class ModalOutputs:
         the channels `names` (kept: the runs of a campaign share them): the first-order
         hold of each mode, γ₀ = (e^{λh} − 1)/λ and γ₁ = (e^{λh} − 1 − λh)/(λ²h) times
         V⁻¹B (their series where λh is tiny), the rows times V with each conjugate pair
-        once, doubled."""
+        once, doubled. The other of each pair (λ below the real axis) is left out: its
+        rows weigh nothing, and it was stepped for nothing (half of the modes)."""
         key = (h, names)
         cache = self.__dict__.setdefault("_steps", {})
         if key not in cache:
@@ -107,7 +108,9 @@ class ModalOutputs:
             Cm = (np.array([rows[c][0] for c in names]) @ V * weight if names
                   else np.zeros((0, len(lam)), dtype=complex))
             D = np.array([rows[c][1] for c in names]) if names else np.zeros(0)
-            cache[key] = (phi, g0 * bt, g1 * bt, np.ascontiguousarray(Cm), D)
+            kept = weight != 0.0  # every value as with the whole set, the pairs' others out
+            cache[key] = (phi[kept], (g0 * bt)[kept], (g1 * bt)[kept],
+                          np.ascontiguousarray(Cm[:, kept]), D)
         return cache[key]
 
     def _modal(self):
