@@ -50,6 +50,32 @@ def test_a_model_that_blows_up_ends_in_nan_from_there(effects):
     assert abs(x) > 10.0 or abs(h.q[first - 2, 0]) > 1e-3
 
 
+def test_the_channels_of_histories_that_reached_infinity_are_nan_without_a_warning():
+    """A fit's trial point whose coordinates overflowed before the table's left its range
+    (the blow-up check reads the table's): its table and pitch accelerations +inf and
+    -inf at a sample. Its channels there are NaN, without numpy's RuntimeWarning, which
+    reached a user's terminal from a worker's fit with reduced.py's line (a real-size
+    friction campaign, issue 31's figure 2)."""
+    import warnings
+
+    model = ReducedModel(Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
+                                 {"pitch_flexibility": {}}))
+    t = np.arange(400) / 200.0
+    h = model.histories(t, 0.001 * np.sin(2 * np.pi * t))
+    x, p = model.ix["x"], model.ix["pitch"]
+    Q, Qd, Qdd = h.q.copy(), h.qd.copy(), h.qdd.copy()
+    Qdd[-1, x], Qdd[-1, p] = np.inf, -np.inf / model.h_top
+    Q[-1, x], Q[-1, p] = -np.inf, np.inf
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = model._channels(Q, Qd, Qdd, h.force, h.p_l)
+    assert np.isnan(out["acc_n_ne"][-1]) and np.isnan(out["pot_n_sw"][-1])
+    assert np.all(np.isfinite(out["acc_n_ne"][:-1]))
+    np.testing.assert_array_equal(out["acc_n_ne"][:-1],
+                                  model._channels(h.q, h.qd, h.qdd, h.force,
+                                                  h.p_l)["acc_n_ne"][:-1])
+
+
 def test_a_structure_only_model_agrees_with_the_built_one_and_compiles_nothing(monkeypatch):
     """`ReducedModel(..., kernels=False)` (what a diagnosis asks of every candidate: can it
     be built, is it linear) says what the full build says, for every catalog effect alone

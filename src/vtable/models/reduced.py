@@ -454,7 +454,15 @@ class ReducedModel(ModalOutputs):
 
     def _channels(self, Q, Qd, Qdd, F, PL) -> dict[str, np.ndarray]:
         """The lumped model's channels from its histories (linear in them), before the
-        output filters and the aliases (`_aliased`)."""
+        output filters and the aliases (`_aliased`). A model that blew up (a fit's trial
+        point) has infinities in its histories before its NaN (`reduced_kernel._blown`):
+        its channels are NaN there, without numpy's warning (a fit reads them as the
+        failed point they are; the warning reached a user's terminal with this file's
+        line)."""
+        with np.errstate(invalid="ignore", over="ignore"):
+            return self._channels_of(Q, Qd, Qdd, F, PL)
+
+    def _channels_of(self, Q, Qd, Qdd, F, PL) -> dict[str, np.ndarray]:
         ix = self.ix
         n = len(F)
         x = ix["x"]
