@@ -103,7 +103,7 @@ def first_compile(kernel) -> Iterator[None]:
     for itself."""
     fh = None
     # whether it has compiled or loaded one: its `overloads`, not `signatures` (which lists
-    # them, hashing every type of every argument: 4 us, three times a simulation)
+    # them, hashing every type of every argument: 4 µs, three times a simulation)
     if fcntl is not None and not getattr(kernel, "overloads", True):
         try:
             fh = open(_lock_path(kernel), "a")  # closed below

@@ -6,6 +6,8 @@ from the step a model blows up."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -60,6 +62,12 @@ def test_unrolled_histories_are_the_generic_loops(effects, shape, monkeypatch):
     model = ReducedModel(Physics(nominal_open_loop(), presets.specimen("sdof_frame"),
                                  effects))
     assert not model.linear and (model.M.shape[0], model.Aw.shape[0]) == shape
+    # the array `_rates` reads by index holds every number it names, in their order
+    text = reduced_unrolled._source(model.element.module.__name__, *shape)
+    names = " ".join(ln.split("# c:", 1)[1] for ln in text.splitlines() if "# c:" in ln)
+    used = {int(k) for k in re.findall(r"\bc\[(\d+)\]", text)}
+    assert len(reduced_unrolled.constants(model)) == len(names.split()) == len(used) \
+        == max(used) + 1
     fast, slow = _both(model, monkeypatch)
     _same(fast, slow)
     assert np.ptp(fast.q[:, 0]) > 0.01  # it moved: the table follows the 20 mm command

@@ -253,11 +253,7 @@ def cluster(n: int, scheduler: str | None = None):
                                   f"({e})") from None
         else:
             _fork_safe()
-            # the local cluster's logs silenced for the rest of this process, not only
-            # while the cluster is up (`silence_logs`, which gives the handlers their
-            # levels back as the cluster closes): a scatter that Ctrl-C cut short then
-            # failed in the scheduler as the workers left, and its traceback was printed
-            logging.getLogger("distributed").setLevel(logging.CRITICAL)
+            _silence_distributed()
             _FORKING.set()  # the children forked now are our workers: Ctrl-C is ours
             gc.freeze()  # what exists now is the workers' too: no collection touches it
             try:
@@ -301,6 +297,21 @@ def cluster(n: int, scheduler: str | None = None):
 
 #: set while this process forks its local workers (`cluster`)
 _FORKING = threading.Event()
+
+#: distributed's own log level before a local cluster silenced it (`_silence_distributed`)
+_LEVEL: list[int] = []
+
+
+def _silence_distributed() -> None:
+    """distributed's loggers silenced from a local cluster's start until `shutdown` has
+    closed it, its closing included: `silence_logs` gives the handlers their levels back
+    as the cluster's close ends, and a scatter that Ctrl-C had cut short then failed in the
+    scheduler as the workers left, its traceback printed (once, under a full suite's
+    load). distributed's level is given back by `shutdown`."""
+    logger = logging.getLogger("distributed")
+    if not _LEVEL:
+        _LEVEL.append(logger.level)
+    logger.setLevel(logging.CRITICAL)
 
 
 @functools.cache
@@ -360,7 +371,8 @@ def running():
 def shutdown() -> None:
     """End every cluster this process made (a later diagnosis starts new workers); the
     objects frozen for the local workers' fork (`cluster`) are collected again (a freeze
-    of the program's own, without a local cluster of ours, is left alone)."""
+    of the program's own, without a local cluster of ours, is left alone), and
+    distributed's log level is given back once they are closed (`_silence_distributed`)."""
     with _LOCK:
         local = any(scheduler is None for _, scheduler in _CLIENTS)
         for client in _CLIENTS.values():
@@ -372,6 +384,8 @@ def shutdown() -> None:
         _CLIENTS.clear()
         if local:
             gc.unfreeze()
+        if _LEVEL:
+            logging.getLogger("distributed").setLevel(_LEVEL.pop())
 
 
 atexit.register(shutdown)

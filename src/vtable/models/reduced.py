@@ -401,7 +401,7 @@ class ReducedModel(ModalOutputs):
         allocates) gets the element compiled with it (`compose.counted`) and the same call
         again. Ctrl-C while numba compiles is an interrupt, not such a law."""
         steps = unrolled.kernel(self)  # its mechanics unrolled for its shape (the same
-        if steps is not None:  # histories, a quarter faster: `reduced_unrolled`)
+        if steps is not None:  # histories, faster: `reduced_unrolled`)
             try:
                 return unrolled.simulate(steps, self, args[0], args[1])
             except numba.core.errors.NumbaError as e:
@@ -463,6 +463,7 @@ class ReducedModel(ModalOutputs):
             return self._channels_of(Q, Qd, Qdd, F, PL)
 
     def _channels_of(self, Q, Qd, Qdd, F, PL) -> dict[str, np.ndarray]:
+        """`_channels`, its arithmetic."""
         ix = self.ix
         n = len(F)
         x = ix["x"]

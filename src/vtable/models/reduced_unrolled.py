@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import hashlib
 import inspect
+import textwrap
 from collections.abc import Callable
 
 import numpy as np
@@ -115,7 +116,7 @@ def _source(stage_module: str, nq: int, na: int) -> str:
              + [f"Wv{a}_{j}" for a in range(na) for j in range(nq)])
     state = q + v + w
     c = {name: f"c[{k}]" for k, name in enumerate(names)}  # each number where it is used
-    body = [f"    # c: {' '.join(names)}",
+    body = [*(f"    # c: {line}" for line in textwrap.wrap(" ".join(names), 80)),
             "    xa = 0.0", *[f"    xa += {c[f'ax{i}']} * q{i}" for i in range(nq)],
             "    va = 0.0", *[f"    va += {c[f'ax{i}']} * v{i}" for i in range(nq)],
             "    p_fb = fed_back(z, 0, sp)",
