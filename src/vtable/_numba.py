@@ -89,6 +89,16 @@ def _lock_path(kernel) -> str:
     return os.path.join(d, f"{f.__module__}.{f.__qualname__}.lock")
 
 
+def _cached(kernel) -> bool:
+    """Whether numba's cache holds an index for `kernel` (a process compiled it before):
+    a process loads it then, and needs no lock. Without that attribute (another numba),
+    as if not."""
+    try:
+        return os.path.exists(kernel._cache._cache_file._index_path)
+    except (AttributeError, TypeError):
+        return False
+
+
 @contextlib.contextmanager
 def first_compile(kernel) -> Iterator[None]:
     """Around a call of `kernel` (a dispatcher cached on disk, ``cache=True``): its first
@@ -99,12 +109,15 @@ def first_compile(kernel) -> Iterator[None]:
     moments and each compiled them, a second or more each (a README campaign's first
     diagnosis compiled five twice). A kernel this process has compiled or loaded (or a
     plain function: numba's JIT off), a system without `flock` or a folder that refuses
-    locks takes no lock. Not nested: a kernel called inside another's block would wait
-    for itself."""
+    locks takes no lock; nor does one numba's cache holds already (`_cached`): every
+    process loads it at once (a warm diagnosis's two workers loaded their first kernels
+    one after the other, the second waiting 0.2-0.3 s on the first's lock; one cached for
+    other argument types only is compiled without the lock, as before it). Not nested: a
+    kernel called inside another's block would wait for itself."""
     fh = None
     # whether it has compiled or loaded one: its `overloads`, not `signatures` (which lists
     # them, hashing every type of every argument: 4 µs, three times a simulation)
-    if fcntl is not None and not getattr(kernel, "overloads", True):
+    if fcntl is not None and not getattr(kernel, "overloads", True) and not _cached(kernel):
         try:
             fh = open(_lock_path(kernel), "a")  # closed below
             try:

@@ -88,6 +88,35 @@ def test_two_processes_compile_a_kernel_once(kernel_file):
 
 
 @needs_flock
+def test_a_kernel_numbas_cache_holds_is_loaded_without_the_lock(kernel_file):
+    """A warm diagnosis's workers loaded their first kernels one after the other, the
+    second waiting on the first's lock. A kernel in numba's cache takes no lock: here
+    another process holds the lock (as if compiling) and the call still loads at once."""
+    ctx = multiprocessing.get_context("fork")
+    out = ctx.Queue()
+    first = ctx.Process(target=_call, args=(kernel_file, ctx.Barrier(1), out), daemon=True)
+    first.start()
+    compiled = out.get(timeout=120)  # a process compiled it into the cache
+    first.join(timeout=30)
+    assert isinstance(compiled, tuple) and compiled[:2] == (1, 0), compiled
+    lock = _numba._lock_path(_module(kernel_file).kernel)
+    with open(lock, "a") as fh:
+        _numba.fcntl.flock(fh, _numba.fcntl.LOCK_EX)  # held through the second's call
+        second = ctx.Process(target=_call, args=(kernel_file, ctx.Barrier(1), out),
+                             daemon=True)
+        second.start()
+        try:
+            loaded = out.get(timeout=20)  # it would wait for the lock for ever
+        finally:
+            _numba.fcntl.flock(fh, _numba.fcntl.LOCK_UN)
+            second.join(timeout=30)
+            if second.is_alive():
+                second.terminate()
+    assert isinstance(loaded, tuple) and loaded[:2] == (0, 1), loaded
+    assert loaded[2] == compiled[2]
+
+
+@needs_flock
 def test_the_lock_is_let_go_when_the_call_fails(kernel_file):
     kernel = _module(kernel_file).kernel
     with pytest.raises(numba.core.errors.TypingError), _numba.first_compile(kernel):
