@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import importlib.util
 import os
 import sys
 import tempfile
@@ -53,12 +54,14 @@ def cache_dir() -> str:
 
 
 def sources_stamp() -> str:
-    """A stamp of the package's kernel sources (every module holding ``njit``): numba
-    checks a cached kernel against its own file only, not the kernels it calls from other
-    modules (the servo law of `vtable.hydraulics` inside the reduced model's kernel), so a
-    changed kernel source gets a fresh cache folder."""
+    """A stamp of the package's kernel sources (every module holding ``njit``) and of
+    numba's release: numba checks a cached kernel against its own file only, not the
+    kernels it calls from other modules (the servo law of `vtable.hydraulics` inside the
+    reduced model's kernel), so a changed kernel source gets a fresh cache folder; and a
+    new numba gets one too, where its index of an older numba's kernels would be stale
+    (`first_compile` takes no lock for a kernel whose index exists)."""
     root = os.path.dirname(os.path.abspath(__file__))
-    h = hashlib.sha256(__version__.encode())
+    h = hashlib.sha256(__version__.encode() + _numba_release())
     for dirpath, dirnames, files in os.walk(root):
         dirnames[:] = sorted(d for d in dirnames if d != "__pycache__")
         for f in sorted(files):
@@ -68,6 +71,17 @@ def sources_stamp() -> str:
                 if b"njit" in text:
                     h.update(f"{dirpath[len(root):]}/{f}".encode() + text)
     return h.hexdigest()[:12]
+
+
+def _numba_release() -> bytes:
+    """numba's version file, read, not imported (numba reads ``NUMBA_CACHE_DIR`` when it
+    is imported); empty where it cannot be read."""
+    try:
+        spec = importlib.util.find_spec("numba")
+        with open(os.path.join(os.path.dirname(spec.origin), "_version.py"), "rb") as fh:
+            return fh.read()
+    except (AttributeError, TypeError, ImportError, OSError):
+        return b""
 
 
 CACHE_DIR = cache_dir()
@@ -112,7 +126,8 @@ def first_compile(kernel) -> Iterator[None]:
     locks takes no lock; nor does one numba's cache holds already (`_cached`): every
     process loads it at once (a warm diagnosis's two workers loaded their first kernels
     one after the other, the second waiting 0.2-0.3 s on the first's lock; one cached for
-    other argument types only is compiled without the lock, as before it). Not nested: a
+    other argument types only is then compiled without the lock, by each process that
+    meets it; a new numba's cache is a folder of its own, `sources_stamp`). Not nested: a
     kernel called inside another's block would wait for itself."""
     fh = None
     # whether it has compiled or loaded one: its `overloads`, not `signatures` (which lists

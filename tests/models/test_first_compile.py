@@ -134,3 +134,12 @@ def test_a_plain_function_takes_no_lock(kernel_file):
     with _numba.first_compile(plain):
         assert plain(3) == 6
     assert not list((kernel_file.parent / "cache" / "locks").glob("*plain*.lock"))
+
+
+def test_a_new_numba_release_gets_a_cache_folder_of_its_own(monkeypatch):
+    """An older numba's index in the same folder would be stale, and a kernel whose index
+    exists takes no lock: the folder's stamp holds numba's release."""
+    stamp = _numba.sources_stamp()
+    assert _numba._numba_release()  # read from numba's installed version file
+    monkeypatch.setattr(_numba, "_numba_release", lambda: b'"version": "99.0.0"')
+    assert _numba.sources_stamp() != stamp
