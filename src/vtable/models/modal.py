@@ -90,7 +90,7 @@ class ModalOutputs:
         hold of each mode, γ₀ = (e^{λh} − 1)/λ and γ₁ = (e^{λh} − 1 − λh)/(λ²h) times
         V⁻¹B (their series where λh is tiny), the rows times V with each conjugate pair
         once, doubled. The other of each pair (λ below the real axis) is left out: its
-        rows weigh nothing, and it was stepped for nothing (one of each conjugate pair)."""
+        rows weigh nothing, and stepping it was work for nothing."""
         key = (h, names)
         cache = self.__dict__.setdefault("_steps", {})
         if key not in cache:

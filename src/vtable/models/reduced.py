@@ -460,39 +460,36 @@ class ReducedModel(ModalOutputs):
         failed point they are; the warning reached a user's terminal with this file's
         line)."""
         with np.errstate(invalid="ignore", over="ignore"):
-            return self._channels_of(Q, Qd, Qdd, F, PL)
-
-    def _channels_of(self, Q, Qd, Qdd, F, PL) -> dict[str, np.ndarray]:
-        """`_channels`, its arithmetic."""
-        ix = self.ix
-        n = len(F)
-        x = ix["x"]
-        slides = [ix[s] for s in self.storeys]
-        drift = Q[:, slides].sum(axis=1) if slides else np.zeros(n)
-        drift_a = Qdd[:, slides].sum(axis=1) if slides else np.zeros(n)
-        ip = ix.get("pitch")
-        th = Q[:, ip] if ip is not None else np.zeros(n)
-        th_a = Qdd[:, ip] if ip is not None else np.zeros(n)
-        na = self.assembly.n_actuators
-        out = {"avg_hdisp": Q @ self.ax, "h_vel": Qd @ self.ax, "avg_hacc": Qdd[:, x],
-               "pitch_disp": th, "pitch_acc": th_a, "h1_force": self._measured_force(F, PL) / na}
-        if slides:
-            out["acc_n_ne"] = Qdd[:, x] + self.h_top * th_a + drift_a
-            out["pot_n_sw"] = Q[:, x] + self.h_top * th + drift
-        # every floor K (an SDOF frame's floor 1 is its top mass): the slides chain
-        # (`tables.bodies.specimen_bodies`), so floor K moves by x + h_K θ + Σ_{i≤K} x_s,i
-        for k, h_k in enumerate(self.assembly.h_floors, 1):
-            below = slides[:k]
-            if k == len(slides):  # the top floor is the top-mass instruments' quantity
-                out[f"floor{k}_acc"], out[f"floor{k}_disp"] = out["acc_n_ne"], out["pot_n_sw"]
-                continue
-            out[f"floor{k}_acc"] = Qdd[:, x] + h_k * th_a + Qdd[:, below].sum(axis=1)
-            out[f"floor{k}_disp"] = Q[:, x] + h_k * th + Q[:, below].sum(axis=1)
-        if slides:
-            out.update(storey_channels([Q[:, i] for i in slides],
-                                       [out[f"floor{k}_acc"] for k in range(1, len(slides) + 1)],
-                                       storey_masses(self.specimen)))
-        return out
+            ix = self.ix
+            n = len(F)
+            x = ix["x"]
+            slides = [ix[s] for s in self.storeys]
+            drift = Q[:, slides].sum(axis=1) if slides else np.zeros(n)
+            drift_a = Qdd[:, slides].sum(axis=1) if slides else np.zeros(n)
+            ip = ix.get("pitch")
+            th = Q[:, ip] if ip is not None else np.zeros(n)
+            th_a = Qdd[:, ip] if ip is not None else np.zeros(n)
+            na = self.assembly.n_actuators
+            out = {"avg_hdisp": Q @ self.ax, "h_vel": Qd @ self.ax, "avg_hacc": Qdd[:, x],
+                   "pitch_disp": th, "pitch_acc": th_a,
+                   "h1_force": self._measured_force(F, PL) / na}
+            if slides:
+                out["acc_n_ne"] = Qdd[:, x] + self.h_top * th_a + drift_a
+                out["pot_n_sw"] = Q[:, x] + self.h_top * th + drift
+            # every floor K (an SDOF frame's floor 1 is its top mass): the slides chain
+            # (`tables.bodies.specimen_bodies`), so floor K moves by x + h_K θ + Σ_{i≤K} x_s,i
+            for k, h_k in enumerate(self.assembly.h_floors, 1):
+                below = slides[:k]
+                if k == len(slides):  # the top floor is the top-mass instruments' quantity
+                    out[f"floor{k}_acc"], out[f"floor{k}_disp"] = out["acc_n_ne"], out["pot_n_sw"]
+                    continue
+                out[f"floor{k}_acc"] = Qdd[:, x] + h_k * th_a + Qdd[:, below].sum(axis=1)
+                out[f"floor{k}_disp"] = Q[:, x] + h_k * th + Q[:, below].sum(axis=1)
+            if slides:
+                floors = [out[f"floor{k}_acc"] for k in range(1, len(slides) + 1)]
+                out.update(storey_channels([Q[:, i] for i in slides], floors,
+                                           storey_masses(self.specimen)))
+            return out
 
     def predict(self, run: Run) -> Channels:
         """The run's predictable channels, from its command (h_span)."""
