@@ -129,9 +129,40 @@ def identification_runs(tmpdir: str):
     return out
 
 
+def made_once(tmp_path_factory, name: str, make):
+    """What `make(folder)` returns, made once per test session by whichever pytest-xdist
+    worker asks first, in a folder the workers share (their base folder's parent); the
+    others wait for it (a file lock) and read it back (pickled), with any file it wrote
+    in `folder`. A module or session fixture is otherwise made by each worker that runs
+    one of its tests: LNEC's diagnosis (17-19 s) and the identification campaign (13-14
+    s) were each made twice in a suite split across both cores."""
+    import fcntl
+    import os
+    import pickle
+
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent
+    folder, lock = root / f"made-once-{name}", root / f"made-once-{name}.lock"
+    value_file = folder / "value.pickle"
+    with open(lock, "w") as held:
+        fcntl.flock(held, fcntl.LOCK_EX)  # released when the file closes
+        if value_file.is_file():
+            with open(value_file, "rb") as f:
+                return pickle.load(f)
+        shutil.rmtree(folder, ignore_errors=True)  # a make that failed part-way
+        folder.mkdir()
+        value = make(folder)
+        part = value_file.with_suffix(".part")
+        with open(part, "wb") as f:
+            pickle.dump(value, f)
+        part.replace(value_file)
+        return value
+
+
 @pytest.fixture(scope="session")
 def ident_runs(tmp_path_factory):
-    return identification_runs(str(tmp_path_factory.mktemp("ident")))
+    return made_once(tmp_path_factory, "ident", lambda folder: identification_runs(str(folder)))
 
 
 #: a visible dose of each catalog effect for the hidden-effect campaigns

@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 import real_data
 import scipy.signal as sg
+from conftest import made_once
 
 from vtable.diagnose.engine import Diagnoser
 from vtable.diagnose.model import TableModel
@@ -51,8 +52,11 @@ def _reference(run) -> float:
 
 @pytest.fixture(scope="module")
 def diagnosis(tmp_path_factory):
-    run = read_run(real_data.copy_run(tmp_path_factory.mktemp("lnec_diag")))
-    return run, Diagnoser([run]).diagnose()
+    def make(folder):
+        run = read_run(real_data.copy_run(folder))
+        return run, Diagnoser([run]).diagnose()
+
+    return made_once(tmp_path_factory, "lnec_diagnosis", make)
 
 
 def test_the_catalog_reaches_the_black_box(diagnosis):
