@@ -129,6 +129,15 @@ def identification_runs(tmpdir: str):
     return out
 
 
+def shared_temp(tmp_path_factory) -> Path:
+    """The temporary folder every pytest-xdist worker of this run shares (their base
+    folders' parent), or the run's base folder without xdist."""
+    import os
+
+    root = tmp_path_factory.getbasetemp()
+    return root.parent if os.environ.get("PYTEST_XDIST_WORKER") else root
+
+
 def made_once(tmp_path_factory, name: str, make):
     """What `make(folder)` returns, made once per test session by whichever pytest-xdist
     worker asks first, in a folder the workers share (their base folder's parent); the
@@ -137,27 +146,28 @@ def made_once(tmp_path_factory, name: str, make):
     one of its tests: LNEC's diagnosis (17-19 s) and the identification campaign (13-14
     s) were each made twice in a suite split across both cores."""
     import fcntl
-    import os
     import pickle
 
-    root = tmp_path_factory.getbasetemp()
-    if os.environ.get("PYTEST_XDIST_WORKER"):
-        root = root.parent
+    root = shared_temp(tmp_path_factory)
     folder, lock = root / f"made-once-{name}", root / f"made-once-{name}.lock"
     value_file = folder / "value.pickle"
     with open(lock, "w") as held:
-        fcntl.flock(held, fcntl.LOCK_EX)  # released when the file closes
-        if value_file.is_file():
-            with open(value_file, "rb") as f:
-                return pickle.load(f)
-        shutil.rmtree(folder, ignore_errors=True)  # a make that failed part-way
-        folder.mkdir()
-        value = make(folder)
-        part = value_file.with_suffix(".part")
-        with open(part, "wb") as f:
-            pickle.dump(value, f)
-        part.replace(value_file)
-        return value
+        fcntl.flock(held, fcntl.LOCK_EX)
+        try:
+            if value_file.is_file():
+                with open(value_file, "rb") as f:
+                    return pickle.load(f)
+            shutil.rmtree(folder, ignore_errors=True)  # a make that failed part-way
+            folder.mkdir()
+            value = make(folder)
+            part = value_file.with_suffix(".part")
+            with open(part, "wb") as f:
+                pickle.dump(value, f)
+            part.replace(value_file)
+            return value
+        finally:  # released here, not when the file closes: a process `make` forked (a
+            # diagnosis's Dask workers, alive till the session ends) holds the file too
+            fcntl.flock(held, fcntl.LOCK_UN)
 
 
 @pytest.fixture(scope="session")
