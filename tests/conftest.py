@@ -144,7 +144,8 @@ def made_once(tmp_path_factory, name: str, make):
     others wait for it (a file lock) and read it back (pickled), with any file it wrote
     in `folder`. A module or session fixture is otherwise made by each worker that runs
     one of its tests: LNEC's diagnosis (17-19 s) and the identification campaign (13-14
-    s) were each made twice in a suite split across both cores."""
+    s) were each made twice in a suite split across both cores. `make` must not ask for
+    the same `name` (it would wait for itself)."""
     import fcntl
     import pickle
 
@@ -164,7 +165,9 @@ def made_once(tmp_path_factory, name: str, make):
             with open(part, "wb") as f:
                 pickle.dump(value, f)
             part.replace(value_file)
-            return value
+            # read back here too: every worker gets the same, whatever the schedule
+            with open(value_file, "rb") as f:
+                return pickle.load(f)
         finally:  # released here, not when the file closes: a process `make` forked (a
             # diagnosis's Dask workers, alive till the session ends) holds the file too
             fcntl.flock(held, fcntl.LOCK_UN)
