@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import os
 import shutil
 import tempfile
 from pathlib import Path
@@ -15,6 +16,10 @@ import pytest
 #: folder, removed when the session ends: a run leaves nothing in the system's /tmp
 SESSION_TMP = tempfile.mkdtemp(prefix="vtable-tests-")
 tempfile.tempdir = SESSION_TMP
+
+#: every `vtable` command a test starts runs in its own process (`vtable.warm`): no warm
+#: process outlives the session; tests/unit/test_warm.py starts its own, and stops them
+os.environ["VTABLE_WARM"] = "0"
 
 
 def pytest_sessionfinish(session, exitstatus):

@@ -28,8 +28,10 @@ import os
 import signal
 import sys
 import threading
+from collections.abc import Callable
 
 from vtable.errors import interrupted, on_sigint, sigint_seen
+from vtable.warm.client import served
 
 
 def _quiet_interrupts(u) -> None:
@@ -39,11 +41,29 @@ def _quiet_interrupts(u) -> None:
         sys.__unraisablehook__(u)
 
 
+def start() -> None:
+    """The command's process settings (module docstring): Ctrl-C raised and remembered,
+    MuJoCo's OpenGL back-end not looked for, an interrupt in a callback not printed."""
+    signal.signal(signal.SIGINT, on_sigint)
+    for s in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(s, signal.SIG_DFL)
+    os.environ.setdefault("MUJOCO_GL", "disable")
+    sys.unraisablehook = _quiet_interrupts
+
+
 def run() -> None:
     signal.signal(signal.SIGINT, on_sigint)  # first: an interrupt while loading is seen
+    try:
+        code = served(sys.argv[1:])  # in the warm process (`vtable.warm`), if it is for it
+    except KeyboardInterrupt:
+        print("vtable: interrupted", file=sys.stderr)
+        sys.exit(130)
+    if code is not None:
+        with contextlib.suppress(OSError, ValueError):
+            sys.stderr.flush()
+        os._exit(code)
     gc.disable()  # while the libraries load (module docstring)
-    os.environ.setdefault("MUJOCO_GL", "disable")  # module docstring
-    sys.unraisablehook = _quiet_interrupts
+    start()
     try:
         from vtable.cli import main  # in the try: Ctrl-C while the libraries load
     except Exception as e:  # a library's own error once Ctrl-C came: the interrupt (`main`)
@@ -64,11 +84,12 @@ def _collect() -> None:
     gc.enable()
 
 
-def _end(code: int) -> None:
+def _end(code: int, then: Callable[[int], None] | None = None) -> None:
     """Exit with `code` without the interpreter's teardown (module docstring): first what
     Python's exit does (threads' exit hooks and joins, then the exit handlers), the
     streams flushed, Python's and C's. A closed pipe then is 141, a Ctrl-C meanwhile 130
-    (said in one line), another failed flush of stdout 120 (Python's own)."""
+    (said in one line), another failed flush of stdout 120 (Python's own). `then` is
+    called with the code last (the warm process's child: `vtable.warm.server`)."""
     interrupted = False
     for step in (threading._shutdown, atexit._run_exitfuncs):
         try:
@@ -91,6 +112,8 @@ def _end(code: int) -> None:
         sys.stderr.flush()
     with contextlib.suppress(OSError, AttributeError):
         ctypes.CDLL(None).fflush(None)  # what C libraries (OpenSees, MuJoCo) left buffered
+    if then is not None:
+        then(code)
     os._exit(code)
 
 

@@ -165,11 +165,13 @@ def _emit(a: argparse.Namespace, result: Result) -> None:
     sys.stdout.flush()
 
 
-def main(argv: list[str] | None = None, loaded: Callable[[], None] | None = None) -> int:
+def main(argv: list[str] | None = None, loaded: Callable[[], None] | None = None,
+         done: Callable[[Result], None] | None = None) -> int:
     """Run one command; exit codes: 0 ok, 2 bad input (one line on stderr), 3 unstable
     configuration, 130 interrupted (Ctrl-C, and whatever the command fails with once it has
     been interrupted), 141 output pipe closed (quietly). `loaded` is called once the
-    command's modules are imported, before it runs."""
+    command's modules are imported, before it runs; `done` with its result, once printed
+    (the warm process learns from it: `vtable.warm.server`)."""
     try:
         a = parser().parse_args(argv)
         if (verb := a.command.replace("-", "_")) in verbs.VERBS:
@@ -180,6 +182,8 @@ def main(argv: list[str] | None = None, loaded: Callable[[], None] | None = None
         if sigint_seen():  # swallowed on the way (an import's callback): still interrupted
             raise KeyboardInterrupt
         _emit(a, result)
+        if done is not None:
+            done(result)
         return 0
     except BrokenPipeError:
         quiet_stdout()

@@ -1,0 +1,81 @@
+"""The warm process: `vtable diagnose` without the libraries' start-up each time.
+
+A diagnosis's own work on the README campaign is ~4 s on this project's 2-core machine; a
+fresh `vtable diagnose` spent ~1.2 s more before it began (importing SciPy, Dask, numba
+and vtable), every time. The first `vtable diagnose` in an environment therefore starts a
+warm process (`vtable.warm.server`): a Python with those libraries imported, listening on
+a socket private to the user. This and every later `vtable diagnose` (`vtable.warm.client`)
+hands it the command line, the working folder, the environment and its own standard
+streams; the warm process forks a child that runs the command exactly as the `vtable`
+command would, writing straight to the caller's terminal or pipes, and the caller exits
+with the child's exit code. Ctrl-C in the caller reaches the child (one line, 130); a
+caller killed outright stops its child.
+
+One warm process per environment (`place`: the interpreter, vtable's location and every
+environment variable but the shell's own bookkeeping, hashed), so a command never runs
+with another environment's settings (``NUMBA_CACHE_DIR``, Dask's configuration, thread
+counts). It answers a command only while no module it has loaded has changed on disk
+(vtable upgraded or edited, a library upgraded): otherwise it hands the command back,
+stops, and a new one starts. It ends after `IDLE_S` seconds without a command.
+
+``VTABLE_WARM=0`` runs every command in its own process, as before (the test suite does);
+``VTABLE_WARM=1`` (or unset) uses the warm process. Only ``vtable diagnose`` goes through it:
+the verb a lab runs again and again as it adds effects and refits.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+#: seconds a warm process waits for a command before it ends
+IDLE_S = 600.0
+
+#: the verbs handed to the warm process
+VERBS = ("diagnose",)
+
+#: environment variables that differ between two shells of one environment, left out of
+#: its key (`place`)
+_SHELL_VARS = ("PWD", "OLDPWD", "_", "SHLVL")
+
+#: the longest socket path AF_UNIX takes (108 bytes on Linux, less elsewhere)
+_SOCKET_PATH_MAX = 100
+
+
+class WarmSettingError(ValueError):
+    """``VTABLE_WARM`` holds something other than 0 or 1."""
+
+
+def wanted(argv: list[str], environ: dict[str, str] | os._Environ = os.environ) -> bool:
+    """Whether the command `argv` (without the program's name) goes through the warm
+    process: its verb is one of `VERBS`, ``VTABLE_WARM`` is 1 or unset, and this platform
+    can hand a process's streams to another (POSIX sockets with descriptor passing)."""
+    setting = environ.get("VTABLE_WARM", "1")
+    if setting not in ("0", "1"):
+        raise WarmSettingError(f"VTABLE_WARM must be 0 or 1, not {setting!r}")
+    return (setting == "1" and bool(argv) and argv[0] in VERBS and os.name == "posix"
+            and hasattr(os, "fork") and hasattr(__import__("socket"), "send_fds"))
+
+
+def place(environ: dict[str, str] | os._Environ = os.environ) -> Path | None:
+    """The socket of this environment's warm process (`<tmp>/vtable-<uid>/<key>.sock`, the
+    folder the user's alone), or None when no such folder can be made safely or its path
+    is too long for a socket."""
+    env = {k: v for k, v in environ.items() if k not in _SHELL_VARS}
+    here = str(Path(__file__).resolve().parents[1])
+    key = hashlib.sha256(json.dumps([sys.executable, sys.version, here, sorted(env.items())]
+                                    ).encode()).hexdigest()[:16]
+    folder = Path(tempfile.gettempdir()) / f"vtable-{os.getuid()}"
+    try:
+        folder.mkdir(mode=0o700, exist_ok=True)
+        st = folder.lstat()
+    except OSError:
+        return None
+    if st.st_uid != os.getuid() or st.st_mode & 0o077 or not folder.is_dir():
+        return None
+    path = folder / f"{key}.sock"
+    return path if len(os.fsencode(path)) <= _SOCKET_PATH_MAX else None

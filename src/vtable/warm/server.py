@@ -1,0 +1,368 @@
+"""The warm process (`vtable.warm`): ``python -m vtable.warm.server SOCKET``.
+
+It takes the lock next to its socket (one warm process per socket: a second one started
+meanwhile ends at once), imports what a diagnosis needs, then listens. Each connection
+brings one command: a header (its length in 4 bytes, then JSON: argv, cwd, env) with the
+caller's standard streams attached (SCM_RIGHTS). The process answers ``pid N`` after forking
+the command's child and ``exit N`` when the child ends (128 + the signal, a shell's
+convention, if a signal ended it), or ``stale`` when a module it loaded has changed on disk
+since (then it stops taking commands, lets its children finish and ends). It is
+single-threaded (a fork copies only the forking thread): one `select` on the socket and on
+the wake-up pipe SIGCHLD writes to.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import gc
+import io
+import json
+import os
+import pickle
+import select
+import signal
+import socket
+import struct
+import sys
+import threading
+import time
+import traceback
+from pathlib import Path
+
+from vtable.warm import IDLE_S
+
+#: the longest header a command may bring (its environment included)
+_HEADER_MAX = 1 << 20
+
+#: the most kernel sets a warm process loads from what its commands built (`_lessons`)
+_BUILT_MAX = 500
+
+
+class _Modules:
+    """The files of the modules this process has loaded, with their sizes and times:
+    `changed` tells whether any is no longer as it was."""
+
+    def __init__(self) -> None:
+        self.files = {f: self._stamp(f) for f in self._paths()}
+
+    @staticmethod
+    def _paths() -> set[str]:
+        return {f for m in list(sys.modules.values())
+                if isinstance(f := getattr(m, "__file__", None), str)}
+
+    @staticmethod
+    def _stamp(path: str) -> tuple[int, int] | None:
+        try:
+            st = os.stat(path)
+        except OSError:
+            return None
+        return st.st_mtime_ns, st.st_size
+
+    def changed(self) -> str | None:
+        """The first file found changed, or None."""
+        return next((f for f, s in self.files.items() if self._stamp(f) != s), None)
+
+
+def _load() -> None:
+    """What a diagnosis imports, imported once here (as `vtable.__main__.run` would), then
+    out of the garbage collector's sight."""
+    gc.disable()
+    import vtable.cli  # noqa: F401
+    from vtable import verbs
+
+    for verb in ("diagnose",):
+        getattr(verbs, verb)
+    gc.freeze()
+    gc.enable()
+
+
+def _receive(conn: socket.socket) -> tuple[dict, list[int]]:
+    """A command's header and the caller's three stream descriptors."""
+    data, fds, _, _ = socket.recv_fds(conn, 65536, 3)
+    if len(fds) != 3 or len(data) < 4:
+        raise ValueError("no header or no streams")
+    n = struct.unpack("!I", data[:4])[0]
+    if n > _HEADER_MAX:
+        raise ValueError("header too long")
+    data = data[4:]
+    while len(data) < n:
+        more = conn.recv(n - len(data))
+        if not more:
+            raise ValueError("header cut short")
+        data += more
+    return json.loads(data), fds
+
+
+def _peer_uid(conn: socket.socket) -> int | None:
+    """The connecting process's user (Linux's SO_PEERCRED), None where it cannot be read:
+    the socket's folder is the user's alone (`vtable.warm.place`) either way."""
+    if not hasattr(socket, "SO_PEERCRED"):
+        return None
+    creds = conn.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, struct.calcsize("3i"))
+    return struct.unpack("3i", creds)[1]
+
+
+def _streams() -> None:
+    """sys.stdin, stdout, stderr anew on descriptors 0-2 (now the caller's): line-buffered
+    where the caller's are terminals, as Python makes them at start-up."""
+    for name, fd, mode in (("stdin", 0, "rb"), ("stdout", 1, "wb"), ("stderr", 2, "wb")):
+        old = getattr(sys, name)
+        raw = open(fd, mode, closefd=False)
+        stream = io.TextIOWrapper(raw, encoding=old.encoding, errors=old.errors,
+                                  line_buffering=fd == 2 or (fd == 1 and os.isatty(fd)))
+        setattr(sys, name, stream)
+        setattr(sys, f"__{name}__", stream)
+
+
+def _lessons(result) -> list[tuple]:
+    """What a diagnosis built, for the warm process to build too (`_Server.learn`): each
+    model it went through or tried, once per set of effects, with the runs' table and a
+    few samples of the first run. Its compiled kernels are then loaded in the warm process,
+    and the next command's child and its workers start with them (fork), not loading
+    them each (~0.45 s of a README diagnosis's 4.9 s)."""
+    rounds, runs = getattr(result, "rounds", None), getattr(result, "runs", None)
+    if not rounds or not runs:
+        return []
+    from vtable.runs.lab import run_table
+
+    models = {}
+    for ph in [s.physics for s in result.stages] + [c.physics for r in rounds
+                                                     for c in r.ranking]:
+        models.setdefault(tuple(sorted(ph.effects)), ph)
+    run = runs[0]
+    try:
+        table, x = run_table(run), run.channel("h_span")[:4].copy()
+    except Exception:  # nothing to learn from a run the table cannot read
+        return []
+    return [(ph, table, run.time[:4].copy(), x) for ph in models.values()]
+
+
+def _child(conn: socket.socket, head: dict, fds: list[int]) -> None:
+    """Run the command in this forked child, as `vtable.__main__.run` would, and end."""
+    from vtable.__main__ import _collect, _end, start
+    from vtable.cli import main
+
+    for i, fd in enumerate(fds):
+        os.dup2(fd, i)
+        os.close(fd)
+    os.environ.clear()
+    os.environ.update(head["env"])
+    os.umask(head["umask"])
+    with contextlib.suppress(OSError):  # a caller nicer than the warm process
+        os.setpriority(os.PRIO_PROCESS, 0, head["nice"])
+    _streams()
+    try:
+        os.chdir(head["cwd"])
+    except OSError as e:
+        print(f"vtable: error: cannot enter {head['cwd']}: {e.strerror}", file=sys.stderr)
+        _end(2)
+    sys.argv = ["vtable", *head["argv"]]
+    start()
+
+    def watch() -> None:  # the caller gone (killed outright): the command stops
+        with contextlib.suppress(OSError):
+            while conn.recv(64):
+                pass
+        os.kill(os.getpid(), signal.SIGINT)
+
+    threading.Thread(target=watch, daemon=True, name="vtable-warm-caller").start()
+    lessons: list = []
+
+    def finish(code: int) -> None:
+        """The caller's streams let go (a pipe it reads ends now), its exit code told, and
+        what this command's models were left for the warm process (`_lessons`)."""
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # the caller ends once told (`watch`)
+        null = os.open(os.devnull, os.O_RDWR)
+        for fd in (0, 1, 2):
+            os.dup2(null, fd)
+        _say(conn, f"exit {code}")
+        if lessons:
+            tmp = Path(f"{head['lessons']}.tmp")
+            with contextlib.suppress(OSError, pickle.PicklingError, TypeError):
+                tmp.write_bytes(pickle.dumps(lessons))
+                tmp.rename(head["lessons"])
+
+    try:
+        code = main(head["argv"], loaded=_collect,
+                    done=lambda result: lessons.extend(_lessons(result)))
+    except SystemExit as e:  # argparse's --help and its errors
+        if isinstance(e.code, str):
+            print(e.code, file=sys.stderr)
+        code = e.code if isinstance(e.code, int) else int(e.code is not None)
+    except BaseException:  # what `python -m vtable` would print
+        traceback.print_exc()
+        code = 1
+    _end(code, then=finish)
+
+
+class _Server:
+    """The listening socket, its lock, the wake-up pipe and the running children."""
+
+    def __init__(self, path: Path, lock) -> None:
+        self.path, self.lock = path, lock
+        with contextlib.suppress(FileNotFoundError):
+            path.unlink()
+        self.listener: socket.socket | None = socket.socket(socket.AF_UNIX,
+                                                            socket.SOCK_STREAM)
+        self.listener.bind(str(path))
+        self.listener.listen(16)
+        self.inode = os.stat(path).st_ino
+        self.wake_r, wake_w = os.pipe()
+        os.set_blocking(wake_w, False)
+        self.wake_w = wake_w
+        signal.set_wakeup_fd(wake_w)
+        signal.signal(signal.SIGCHLD, lambda *_: None)
+        self.children: dict[int, socket.socket] = {}
+        self.todo: list[tuple] = []  # models to build (`learn`)
+        self.built: set = set()  # the kernels' keys built so
+        self.log = open(f"{path}.log", "a", buffering=1)  # the process's
+        self.say("listening")
+
+    def say(self, line: str) -> None:
+        """A line in the log beside the socket (`<socket>.log`, where a warm process's
+        start-up errors go too): what it ran, what it learnt, why it ended."""
+        with contextlib.suppress(OSError):
+            self.log.write(f"{time.strftime('%H:%M:%S')} [{os.getpid()}] {line}\n")
+
+    def learn(self, pid: int) -> None:
+        """Queue what the ended child `pid` left (`_lessons`)."""
+        path = self.lessons(pid)
+        with contextlib.suppress(OSError, pickle.UnpicklingError, EOFError, AttributeError,
+                                 ImportError, TypeError, ValueError):
+            self.todo += pickle.loads(path.read_bytes())
+        path.unlink(missing_ok=True)
+        Path(f"{path}.tmp").unlink(missing_ok=True)  # `finish` cut short
+
+    def lessons(self, pid: int) -> Path:
+        return self.path.with_name(f"{self.path.name}.{pid}.lessons")
+
+    def build_one(self) -> None:
+        """Build one queued model and simulate its few samples, its kernels loaded (or
+        compiled) here, if no model built before had them; a model that cannot be built
+        here (a user's effect) is passed over."""
+        from vtable.models.reduced import ReducedModel
+
+        ph, table, t, x = self.todo.pop(0)
+        try:
+            m = ReducedModel(ph, table)
+            key = (m.element.key, m.M.shape, m.Aw.shape, m.elem is None)
+            if key not in self.built and len(self.built) < _BUILT_MAX:
+                self.built.add(key)
+                m.simulate(t, x)
+        except Exception:  # the child reported what it could not do
+            pass
+        if not self.todo:
+            self.say(f"{len(self.built)} kernel sets loaded")
+            gc.freeze()  # what was built is the children's: out of the collector's sight
+
+    def run(self, modules: _Modules) -> None:
+        last = time.monotonic()
+        while self.listener is not None or self.children:
+            waiting = [self.wake_r] + ([self.listener] if self.listener is not None else [])
+            busy = bool(self.todo) and self.listener is not None
+            ready, _, _ = select.select(waiting, [], [], 0.0 if busy else 1.0)
+            if self.wake_r in ready:
+                with contextlib.suppress(BlockingIOError):
+                    os.read(self.wake_r, 512)
+            self.reap()
+            if self.children:
+                last = time.monotonic()
+            if self.listener is not None and self.listener in ready:
+                conn, _ = self.listener.accept()
+                last = time.monotonic()
+                if (changed := modules.changed()) is not None:
+                    self.say(f"{changed} changed: no more commands")
+                    self.close()  # first: the caller's next try starts a new one
+                    _say(conn, "stale")
+                    conn.close()
+                else:
+                    self.start(conn)
+            elif busy:
+                self.build_one()
+            elif self.listener is not None and time.monotonic() - last > IDLE_S:
+                self.say(f"no command for {IDLE_S:.0f} s")
+                self.close()
+
+    def start(self, conn: socket.socket) -> None:
+        """Fork one command's child (`_child`) and tell the caller its pid."""
+        try:
+            if _peer_uid(conn) not in (None, os.getuid()):
+                raise ValueError("another user's command")
+            conn.settimeout(5.0)
+            head, fds = _receive(conn)
+            conn.settimeout(None)
+        except (OSError, ValueError):
+            conn.close()
+            return
+        pid = os.fork()
+        if pid == 0:
+            try:
+                self.listener.close()
+                for other in self.children.values():
+                    other.close()
+                self.lock.close()
+                self.log.close()
+                signal.set_wakeup_fd(-1)
+                signal.signal(signal.SIGCHLD, signal.SIG_DFL)
+                os.close(self.wake_r)
+                os.close(self.wake_w)
+                _child(conn, {**head, "lessons": str(self.lessons(os.getpid()))}, fds)
+            finally:
+                os._exit(1)
+        for fd in fds:
+            os.close(fd)
+        _say(conn, f"pid {pid}")
+        self.children[pid] = conn
+        self.say(f"pid {pid}: vtable {' '.join(head['argv'])} (in {head['cwd']})")
+
+    def reap(self) -> None:
+        """Tell each caller whose child has ended its exit code (128 + the signal that
+        ended it, if one did)."""
+        for pid in list(self.children):
+            done, status = os.waitpid(pid, os.WNOHANG)
+            if done:
+                code = (os.WEXITSTATUS(status) if os.WIFEXITED(status)
+                        else 128 + os.WTERMSIG(status))
+                conn = self.children.pop(pid)
+                _say(conn, f"exit {code}")  # told already, unless a signal ended it
+                conn.close()
+                self.say(f"pid {pid}: exit {code}")
+                self.learn(pid)
+
+    def close(self) -> None:
+        """Stop taking commands: the socket removed (if still this process's) and the lock
+        released, so that a new warm process may start while the children finish."""
+        with contextlib.suppress(OSError):
+            if os.stat(self.path).st_ino == self.inode:
+                self.path.unlink()
+        self.listener.close()
+        self.listener = None
+        fcntl.flock(self.lock, fcntl.LOCK_UN)
+
+
+def _say(conn: socket.socket, line: str) -> None:
+    with contextlib.suppress(OSError):  # the caller gone: nobody to tell
+        conn.sendall(f"{line}\n".encode())
+
+
+def serve(path: Path) -> None:
+    """Take `path`'s lock, load, listen on `path` and answer commands until `IDLE_S`
+    seconds pass with no command and no child, or a loaded module changes."""
+    lock = open(f"{path}.lock", "a+")  # held for the process's life
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        return  # another warm process has this socket
+    lock.truncate(0)
+    lock.write(f"{os.getpid()}\n")
+    lock.flush()
+    _load()
+    server = _Server(path, lock)
+    server.run(_Modules())
+    server.say("ended")
+
+
+if __name__ == "__main__":
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the children set their own
+    serve(Path(sys.argv[1]))

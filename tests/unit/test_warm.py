@@ -1,0 +1,197 @@
+"""The warm process (`vtable.warm`): `vtable diagnose` answered by a process that has
+its libraries loaded, with what the command prints, writes and exits with unchanged;
+Ctrl-C, a caller killed outright, a module changed on disk, a bad setting."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import pytest
+from conftest import run_cli
+
+DIAGNOSE = [sys.executable, "-m", "vtable", "diagnose"]
+
+
+@pytest.fixture
+def warm(request):
+    """The environment of a caller whose warm processes live in a folder of this test's
+    (short: a socket's path is at most ~100 bytes), and that folder; every warm process
+    started there is stopped after the test."""
+    tmp = Path(tempfile.mkdtemp(prefix="vw", dir="/tmp"))
+    env = {**os.environ, "VTABLE_WARM": "1", "TMPDIR": str(tmp)}
+    env.pop("PYTEST_CURRENT_TEST", None)  # changes between a test's phases
+    yield env, tmp
+    for lock in tmp.glob("vtable-*/*.lock"):
+        with contextlib.suppress(ValueError, ProcessLookupError):
+            os.kill(int(lock.read_text() or "x"), signal.SIGTERM)
+    shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _log(tmp: Path) -> str:
+    logs = list(tmp.glob("vtable-*/*.log"))
+    return "".join(p.read_text() for p in logs)
+
+
+def _logged(tmp: Path, text: str, times: int = 1, within: float = 20.0) -> bool:
+    """Whether `text` is in the log `times` times within `within` seconds (a child's end is
+    logged once the warm process has reaped it, after its caller has exited)."""
+    end = time.monotonic() + within
+    while _log(tmp).count(text) < times:
+        if time.monotonic() > end:
+            return False
+        time.sleep(0.05)
+    return True
+
+
+def _servers(tmp: Path) -> list[str]:
+    """The pids of the warm processes that have listened, in order."""
+    return re.findall(r"\[(\d+)\] listening", _log(tmp))
+
+
+def _children(tmp: Path) -> list[int]:
+    return [int(p) for p in re.findall(r"\] pid (\d+): vtable", _log(tmp))]
+
+
+def _gone(pid: int, within: float) -> bool:
+    end = time.monotonic() + within
+    while time.monotonic() < end:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        time.sleep(0.05)
+    return False
+
+
+@pytest.fixture(scope="module")
+def campaign(tmp_path_factory):
+    """Three runs of the SDOF frame on the virtual table with 3 kip of friction, 1 % noise,
+    as the README makes them (shorter)."""
+    folder = tmp_path_factory.mktemp("warm_campaign")
+    runs = [("small", ["--command", "random", "--band", "0", "20", "--peak", "0.1",
+                       "--duration", "8", "--seed", "1"]),
+            ("large", ["--command", "random", "--band", "0", "20", "--peak", "0.25",
+                       "--duration", "8", "--seed", "2"])]
+    for name, args in runs:
+        code, _, err = run_cli(["simulate", "--specimen", "sdof_frame", *args, "--effect",
+                                "actuator_friction:friction=3", "--noise", "0.01",
+                                "--out", str(folder / name)])
+        assert code == 0, err
+    return folder, [str(folder / f"{name}.toml") for name, _ in runs]
+
+
+def test_a_command_is_answered_by_one_warm_process_as_it_would_be_alone(warm, tmp_path):
+    env, tmp = warm
+    alone = {**env, "VTABLE_WARM": "0"}
+    for argv in (["nothere.toml"], ["--help"]):
+        want = subprocess.run([*DIAGNOSE, *argv], env=alone, cwd=tmp_path, capture_output=True,
+                              text=True, timeout=120)
+        for _ in range(2):
+            got = subprocess.run([*DIAGNOSE, *argv], env=env, cwd=tmp_path,
+                                 capture_output=True, text=True, timeout=120)
+            assert (got.returncode, got.stdout, got.stderr) == \
+                (want.returncode, want.stdout, want.stderr)
+    assert want.returncode == 0 and "usage: vtable diagnose" in want.stdout
+    assert len(_servers(tmp)) == 1  # started by the first, used by the other three
+    log = _log(tmp)
+    assert f"vtable diagnose nothere.toml (in {tmp_path})" in log
+    assert _logged(tmp, ": exit 2", 2) and _logged(tmp, ": exit 0", 2)
+
+
+def test_a_diagnosis_through_the_warm_process_is_the_same(warm, campaign):
+    """Byte for byte the JSON of one in a process of its own, the first time and after the
+    warm process has loaded the kernels the first one built."""
+    env, tmp = warm
+    folder, files = campaign
+    out = {}
+    for k, how in enumerate(("0", "1", "1")):
+        path = folder / f"d{k}.json"
+        r = subprocess.run([*DIAGNOSE, *files, "--json", str(path)],
+                           env={**env, "VTABLE_WARM": how}, capture_output=True, text=True,
+                           timeout=300)
+        assert r.returncode == 0, r.stderr[-2000:]
+        out[k] = path.read_bytes()
+        if k == 1:  # the kernel sets the first diagnosis built, loaded before the next
+            assert _logged(tmp, "kernel sets loaded", within=60)
+    assert out[1] == out[0] and out[2] == out[0]
+    assert len(_servers(tmp)) == 1 and len(_children(tmp)) == 2
+    n = int(re.search(r"(\d+) kernel sets loaded", _log(tmp)).group(1))
+    assert n >= 3  # the start, pitch and friction at least
+
+
+def _started(env: dict, files: list[str]) -> subprocess.Popen:
+    """A warm diagnosis, once its first round has begun."""
+    p = subprocess.Popen([*DIAGNOSE, *files], env=env, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    seen = []
+    for line in p.stderr:
+        seen.append(line)
+        if "round 1" in line:
+            return p, seen
+    raise AssertionError("".join(seen)[-2000:])
+
+
+def test_ctrl_c_in_the_caller_interrupts_the_command(warm, campaign):
+    env, tmp = warm
+    p, seen = _started(env, campaign[1])
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    lines = (("".join(seen) + err).strip().splitlines())
+    assert p.returncode == 130, err
+    assert lines[-1].startswith("vtable: interrupted") and "Traceback" not in err
+    child = _children(tmp)[-1]
+    assert _gone(child, 10) and _logged(tmp, f"pid {child}: exit 130")
+
+
+def test_a_caller_killed_outright_stops_its_command(warm, campaign):
+    env, tmp = warm
+    p, _ = _started(env, campaign[1])
+    p.kill()  # its streams kept open, as a terminal would keep them
+    p.wait(timeout=10)
+    child = _children(tmp)[-1]
+    assert _gone(child, 20), _log(tmp)
+    assert _logged(tmp, f"pid {child}: exit 130")
+    p.stdout.close()
+    p.stderr.close()
+
+
+def test_a_module_changed_on_disk_is_a_new_warm_process(warm, tmp_path):
+    """A module the warm process has loaded (here the caller's sitecustomize) changed: the
+    next command is answered by a new one, which loads the new text."""
+    env, tmp = warm
+    site = tmp_path / "site"
+    site.mkdir()
+    (site / "sitecustomize.py").write_text("")
+    env = {**env, "PYTHONPATH": os.pathsep.join(filter(None, [str(site),
+                                                             env.get("PYTHONPATH")]))}
+
+    def diagnose_help() -> None:
+        r = subprocess.run([*DIAGNOSE, "--help"], env=env, capture_output=True, text=True,
+                           timeout=120)
+        assert r.returncode == 0 and "usage: vtable diagnose" in r.stdout, r.stderr
+
+    diagnose_help()
+    diagnose_help()
+    assert len(_servers(tmp)) == 1
+    (site / "sitecustomize.py").write_text("import os  # changed\n")
+    diagnose_help()
+    assert len(_servers(tmp)) == 2
+    assert f"{site / 'sitecustomize.py'} changed: no more commands" in _log(tmp)
+    assert len(_children(tmp)) == 3
+
+
+def test_a_bad_setting_is_one_line():
+    r = subprocess.run([*DIAGNOSE, "x.toml"], env={**os.environ, "VTABLE_WARM": "yes"},
+                       capture_output=True, text=True, timeout=60)
+    assert (r.returncode, r.stdout, r.stderr) == (
+        2, "", "vtable: error: VTABLE_WARM must be 0 or 1, not 'yes'\n")
