@@ -31,6 +31,7 @@ import threading
 from collections.abc import Callable
 
 from vtable.errors import interrupted, on_sigint, sigint_seen
+from vtable.warm import CLI_DEFAULTS
 from vtable.warm.client import served
 
 
@@ -47,7 +48,8 @@ def start() -> None:
     signal.signal(signal.SIGINT, on_sigint)
     for s in (signal.SIGTERM, signal.SIGHUP):
         signal.signal(s, signal.SIG_DFL)
-    os.environ.setdefault("MUJOCO_GL", "disable")
+    for name, value in CLI_DEFAULTS.items():
+        os.environ.setdefault(name, value)
     sys.unraisablehook = _quiet_interrupts
 
 

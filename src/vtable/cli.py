@@ -59,6 +59,10 @@ def cmd_presets(a: argparse.Namespace) -> Result:
     return verbs.presets()
 
 
+def cmd_warm(a: argparse.Namespace) -> Result:
+    return verbs.warm(a.stop)
+
+
 def cmd_identify(a: argparse.Namespace) -> Result:
     verbs.load_controllers(a.controller_from)
     return verbs.identify(a.runs)
@@ -133,7 +137,7 @@ def cmd_study(a: argparse.Namespace) -> Result:
 _COMMANDS = {"demo": cmd_demo, "modes": cmd_modes, "margins": cmd_margins, "tf": cmd_tf,
              "presets": cmd_presets, "simulate": cmd_simulate, "export-mjcf": cmd_export,
              "identify": cmd_identify, "diagnose": cmd_diagnose, "compare": cmd_compare,
-             "assess": cmd_assess, "study": cmd_study, "drive": cmd_drive}
+             "assess": cmd_assess, "study": cmd_study, "drive": cmd_drive, "warm": cmd_warm}
 
 
 def quiet_stdout() -> None:

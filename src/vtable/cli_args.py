@@ -283,5 +283,9 @@ def parser() -> argparse.ArgumentParser:
     _add_json(sd)
     pr = sub.add_parser("presets", help="list the named configurations")
     _add_json(pr)
+    wm = sub.add_parser("warm", help="the warm process that answers vtable diagnose in this "
+                        "environment: whether one runs, its log; --stop ends it")
+    wm.add_argument("--stop", action="store_true", help="end it (once its commands have)")
+    _add_json(wm)
     return p
 

@@ -5,6 +5,7 @@ Ctrl-C, a caller killed outright, a module changed on disk, a bad setting."""
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import re
 import shutil
@@ -195,3 +196,24 @@ def test_a_bad_setting_is_one_line():
                        capture_output=True, text=True, timeout=60)
     assert (r.returncode, r.stdout, r.stderr) == (
         2, "", "vtable: error: VTABLE_WARM must be 0 or 1, not 'yes'\n")
+
+
+def test_vtable_warm_tells_and_stops_the_warm_process(warm):
+    env, tmp = warm
+
+    def vtable_warm(*args: str) -> dict:
+        r = subprocess.run([sys.executable, "-m", "vtable", "warm", "--json", *args], env=env,
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0, r.stderr
+        return json.loads(r.stdout)
+
+    assert vtable_warm()["running"] is False
+    r = subprocess.run([*DIAGNOSE, "--help"], env=env, capture_output=True, timeout=120)
+    assert r.returncode == 0
+    now = vtable_warm()
+    pid = int(_servers(tmp)[0])
+    assert (now["running"], now["pid"], now["enabled"]) == (True, pid, True)
+    assert Path(now["log"]).read_text().count("listening") == 1
+    assert vtable_warm("--stop") == {**now, "stopped": True}
+    assert _gone(pid, 10) and _logged(tmp, "asked to stop")
+    assert vtable_warm()["running"] is False

@@ -11,12 +11,12 @@ command would, writing straight to the caller's terminal or pipes, and the calle
 with the child's exit code. Ctrl-C in the caller reaches the child (one line, 130); a
 caller killed outright stops its child.
 
-One warm process per environment (`place`: the interpreter, vtable's location and every
-environment variable but the shell's own bookkeeping, hashed), so a command never runs
-with another environment's settings (``NUMBA_CACHE_DIR``, Dask's configuration, thread
-counts). It answers a command only while no module it has loaded has changed on disk
-(vtable upgraded or edited, a library upgraded): otherwise it hands the command back,
-stops, and a new one starts. It ends after `IDLE_S` seconds without a command.
+One warm process per environment (`place`: the interpreter and its prefix, vtable's
+location and every environment variable but the shell's own bookkeeping, hashed), so a
+command never runs with another environment's settings (``NUMBA_CACHE_DIR``, Dask's
+configuration, thread counts). It answers a command only while no module it has loaded
+has changed on disk (vtable upgraded or edited, a library upgraded): otherwise it hands
+the command back, stops, and a new one starts. It ends after `IDLE_S` seconds without a command.
 
 ``VTABLE_WARM=0`` runs every command in its own process, as before (the test suite does);
 ``VTABLE_WARM=1`` (or unset) uses the warm process. Only ``vtable diagnose`` goes through it:
@@ -30,13 +30,19 @@ import json
 import os
 import sys
 import tempfile
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 #: seconds a warm process waits for a command before it ends
 IDLE_S = 600.0
 
 #: the verbs handed to the warm process
 VERBS = ("diagnose",)
+
+#: what the `vtable` command sets in its environment unless the user has
+#: (`vtable.__main__`): part of every command's environment, so of its key (`place`)
+CLI_DEFAULTS = {"MUJOCO_GL": "disable"}
 
 #: environment variables that differ between two shells of one environment, left out of
 #: its key (`place`)
@@ -65,11 +71,13 @@ def place(environ: dict[str, str] | os._Environ = os.environ) -> Path | None:
     """The socket of this environment's warm process (`<tmp>/vtable-<uid>/<key>.sock`, the
     folder the user's alone), or None when no such folder can be made safely or its path
     is too long for a socket."""
-    env = {k: v for k, v in environ.items() if k not in _SHELL_VARS}
+    env = {**CLI_DEFAULTS, **{k: v for k, v in environ.items() if k not in _SHELL_VARS}}
     here = str(Path(__file__).resolve().parents[1])
-    key = hashlib.sha256(json.dumps([sys.executable, sys.version, here, sorted(env.items())]
-                                    ).encode()).hexdigest()[:16]
-    folder = Path(tempfile.gettempdir()) / f"vtable-{os.getuid()}"
+    python = [os.path.realpath(sys.executable), sys.prefix, sys.version]  # python, python3
+    key = hashlib.sha256(json.dumps([*python, here, sorted(env.items())]).encode()
+                         ).hexdigest()[:16]
+    tmp = environ.get("TMPDIR") or tempfile.gettempdir()
+    folder = Path(tmp) / f"vtable-{os.getuid()}"
     try:
         folder.mkdir(mode=0o700, exist_ok=True)
         st = folder.lstat()
@@ -79,3 +87,78 @@ def place(environ: dict[str, str] | os._Environ = os.environ) -> Path | None:
         return None
     path = folder / f"{key}.sock"
     return path if len(os.fsencode(path)) <= _SOCKET_PATH_MAX else None
+
+
+def _holder(path: Path) -> int | None:
+    """The pid of the warm process that holds `path`'s lock (its pid is written there), or
+    None when nobody does."""
+    import fcntl
+
+    try:
+        with open(f"{path}.lock") as lock:
+            try:  # free: no warm process
+                fcntl.flock(lock, fcntl.LOCK_SH | fcntl.LOCK_NB)
+                return None
+            except OSError:
+                return int(lock.read().strip() or 0) or None
+    except (OSError, ValueError):
+        return None
+
+
+def stop(environ: dict[str, str] | os._Environ = os.environ) -> int | None:
+    """Ask the warm process of the environment `environ` to end (it takes no more commands
+    and ends once those it is running have): its pid, or None when there is none."""
+    import signal
+
+    path = place(environ)
+    pid = None if path is None else _holder(path)
+    if pid is None:
+        return None
+    try:
+        os.kill(pid, signal.SIGTERM)
+    except (ProcessLookupError, PermissionError):
+        return None
+    return pid
+
+
+@dataclass
+class WarmProcess:
+    """This environment's warm process (`vtable warm`): its pid (None: none runs), its
+    socket and log, whether it was just asked to stop, whether commands use it."""
+
+    pid: int | None
+    socket: Path | None
+    stopped: bool = False
+    enabled: bool = True
+    files: list[Path] = field(default_factory=list)
+
+    @classmethod
+    def of(cls, stop_it: bool = False,
+           environ: dict[str, str] | os._Environ = os.environ) -> WarmProcess:
+        enabled = environ.get("VTABLE_WARM", "1") != "0"
+        path = place(environ)
+        if stop_it:
+            return cls(stop(environ), path, True, enabled)
+        return cls(None if path is None else _holder(path), path, False, enabled)
+
+    @property
+    def log(self) -> Path | None:
+        return None if self.socket is None else Path(f"{self.socket}.log")
+
+    def to_json(self) -> dict[str, Any]:
+        return {"running": self.pid is not None, "pid": self.pid,
+                "socket": None if self.socket is None else str(self.socket),
+                "log": None if self.log is None else str(self.log),
+                "stopped": self.stopped, "enabled": self.enabled}
+
+    def report(self) -> str:
+        off = "" if self.enabled else " (VTABLE_WARM=0: commands run without it)"
+        if self.pid is None:
+            return ("no warm process for this environment: the next vtable diagnose starts "
+                    f"one{off}")
+        if self.stopped:
+            return (f"asked the warm process (pid {self.pid}) to end: it takes no more "
+                    "commands and ends once those it runs have")
+        return (f"warm process pid {self.pid} answers vtable diagnose in this environment"
+                f"{off}; it ends after {IDLE_S / 60:.0f} min without a command (vtable warm "
+                f"--stop ends it now)\n  socket {self.socket}\n  log    {self.log}")

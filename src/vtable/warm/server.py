@@ -213,6 +213,8 @@ class _Server:
         self.wake_w = wake_w
         signal.set_wakeup_fd(wake_w)
         signal.signal(signal.SIGCHLD, lambda *_: None)
+        self.stopped = False  # SIGTERM (`vtable.warm.stop`): no more commands
+        signal.signal(signal.SIGTERM, self._stop)
         self.children: dict[int, socket.socket] = {}
         self.todo: list[tuple] = []  # models to build (`learn`)
         self.built: set = set()  # the kernels' keys built so
@@ -256,9 +258,16 @@ class _Server:
             self.say(f"{len(self.built)} kernel sets loaded")
             gc.freeze()  # what was built is the children's: out of the collector's sight
 
+    def _stop(self, signum, frame) -> None:
+        self.stopped = True
+
     def run(self, modules: _Modules) -> None:
         last = time.monotonic()
         while self.listener is not None or self.children:
+            if self.stopped and self.listener is not None:
+                self.say("asked to stop")
+                self.close()
+                continue
             waiting = [self.wake_r] + ([self.listener] if self.listener is not None else [])
             busy = bool(self.todo) and self.listener is not None
             ready, _, _ = select.select(waiting, [], [], 0.0 if busy else 1.0)
@@ -305,6 +314,7 @@ class _Server:
                 self.log.close()
                 signal.set_wakeup_fd(-1)
                 signal.signal(signal.SIGCHLD, signal.SIG_DFL)
+                signal.signal(signal.SIGTERM, signal.SIG_DFL)
                 os.close(self.wake_r)
                 os.close(self.wake_w)
                 _child(conn, {**head, "lessons": str(self.lessons(os.getpid()))}, fds)
