@@ -46,8 +46,6 @@ def start() -> None:
     """The command's process settings (module docstring): Ctrl-C raised and remembered,
     MuJoCo's OpenGL back-end not looked for, an interrupt in a callback not printed."""
     signal.signal(signal.SIGINT, on_sigint)
-    for s in (signal.SIGTERM, signal.SIGHUP):
-        signal.signal(s, signal.SIG_DFL)
     for name, value in CLI_DEFAULTS.items():
         os.environ.setdefault(name, value)
     sys.unraisablehook = _quiet_interrupts

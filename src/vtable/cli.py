@@ -17,6 +17,7 @@ from vtable.cli_args import parser
 from vtable.errors import UnstableError, VtableError, interrupted, sigint_seen
 from vtable.fileio import write_text
 from vtable.results import Result
+from vtable.warm import WarmProcess
 
 
 class _Progress:
@@ -60,7 +61,7 @@ def cmd_presets(a: argparse.Namespace) -> Result:
 
 
 def cmd_warm(a: argparse.Namespace) -> Result:
-    return verbs.warm(a.stop)
+    return WarmProcess.of(a.stop)  # the command line's own (`vtable.warm`), not a library's
 
 
 def cmd_identify(a: argparse.Namespace) -> Result:

@@ -244,7 +244,7 @@ LAYERS = (("vtable", "errors", "units", "fileio", "userfile", "jsonable", "inter
           ("params",), ("hydraulics",), ("analytic",), ("tables",), ("opensees",), ("controllers",),
           ("runs",), ("signals",), ("ident",), ("effects",), ("mjcf",), ("models",), ("sim",),
           ("studies",), ("diagnose",), ("drive",), ("viz",), ("results",), ("verbs",),
-          ("cli_args", "cli", "__main__"))
+          ("cli_args", "cli", "__main__", "warm"))
 #: the arrows that still point up, each with why (docs/architecture.md): the list may
 #: only shrink (an arrow fixed must leave it: `test_every_listed_upward_arrow_exists`)
 UPWARD = {

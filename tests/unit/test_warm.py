@@ -129,11 +129,17 @@ def test_a_diagnosis_through_the_warm_process_is_the_same(warm, campaign):
     assert n >= 3  # the start, pitch and friction at least
 
 
-def _started(env: dict, files: list[str]) -> subprocess.Popen:
-    """A warm diagnosis, once its first round has begun."""
+def _started(env: dict, files: list[str], ignore: tuple = ()
+             ) -> tuple[subprocess.Popen, list[str]]:
+    """A warm diagnosis once its first round has begun, and what it has said so far; its
+    caller ignores the signals `ignore` (as `nohup` does SIGHUP)."""
+    def dispositions() -> None:
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        for s in ignore:
+            signal.signal(s, signal.SIG_IGN)
+
     p = subprocess.Popen([*DIAGNOSE, *files], env=env, stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True,
-                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+                         stderr=subprocess.PIPE, text=True, preexec_fn=dispositions)
     seen = []
     for line in p.stderr:
         seen.append(line)
@@ -188,7 +194,7 @@ def test_a_module_changed_on_disk_is_a_new_warm_process(warm, tmp_path):
     diagnose_help()
     assert len(_servers(tmp)) == 2
     assert f"{site / 'sitecustomize.py'} changed: no more commands" in _log(tmp)
-    assert len(_children(tmp)) == 3
+    assert _logged(tmp, ": exit 0", 3)
 
 
 def test_a_bad_setting_is_one_line():
@@ -217,3 +223,45 @@ def test_vtable_warm_tells_and_stops_the_warm_process(warm):
     assert vtable_warm("--stop") == {**now, "stopped": True}
     assert _gone(pid, 10) and _logged(tmp, "asked to stop")
     assert vtable_warm()["running"] is False
+
+
+def test_a_signal_that_ends_the_command_ends_its_caller(warm, campaign):
+    """SIGTERM to the caller reaches its command, which it ends; the caller then ends by
+    SIGTERM too, as a process of its own would (-15 to its parent)."""
+    env, tmp = warm
+    p, _ = _started(env, campaign[1])
+    p.send_signal(signal.SIGTERM)
+    p.communicate(timeout=60)
+    assert p.returncode == -signal.SIGTERM
+    child = _children(tmp)[-1]
+    assert _gone(child, 10) and _logged(tmp, f"pid {child}: signal {int(signal.SIGTERM)}")
+
+
+def test_a_signal_the_caller_ignores_its_command_ignores(warm, campaign):
+    """`nohup vtable diagnose ...`: the hangup ignored by the caller is ignored by its
+    command, which runs to its end."""
+    env, _ = warm
+    p, _ = _started(env, campaign[1], ignore=(signal.SIGHUP,))
+    p.send_signal(signal.SIGHUP)
+    out, err = p.communicate(timeout=300)
+    assert p.returncode == 0, err[-2000:]
+    assert "error history" in out
+
+
+def test_the_command_has_the_environment_its_libraries_set_on_loading(warm, tmp_path):
+    """What loading vtable puts in the environment (numba's cache folder, when the user
+    gave none) is in a warm command's too: a user's effect file reads it there."""
+    env, tmp = warm
+    env = {k: v for k, v in env.items() if k != "NUMBA_CACHE_DIR"}
+    env["XDG_CACHE_HOME"] = str(tmp_path / "cache")
+    probe = tmp_path / "probe.py"
+    probe.write_text("import os\nprint('cache:', os.environ.get('NUMBA_CACHE_DIR'))\n")
+    said = []
+    for how in ("0", "1", "1"):
+        r = subprocess.run([*DIAGNOSE, "--effects-from", str(probe), "nothere.toml"],
+                           env={**env, "VTABLE_WARM": how}, capture_output=True, text=True,
+                           timeout=120)
+        said.append((r.returncode, r.stdout, r.stderr))
+    assert said[1] == said[0] and said[2] == said[0]
+    assert f"cache: {tmp_path / 'cache'}" in said[0][1]
+    assert len(_servers(tmp)) == 1

@@ -7,8 +7,7 @@ calling them (``from vtable.verbs import modes`` or ``vtable.verbs.modes``).
 The verbs live in one module per family, each importing what it needs at its top:
 `analytic` (modes, margins, presets, a model's tf), `runs` (tf, a run's tf, identify),
 `effects` (the user's effect files and names), `diagnosis` (compare, diagnose),
-`simulation` (simulate, export_mjcf, demo), `studies` (assess, study), `compensation`
-(drive) and `warm` (the warm process of `vtable diagnose`).
+`simulation` (simulate, export_mjcf, demo), `studies` (assess, study) and `compensation` (drive).
 
 This package imports none of them itself: `__getattr__` (PEP 562) imports a verb's module
 the first time the verb is asked for. It is the one deliberately lazy import of the
@@ -31,7 +30,6 @@ if TYPE_CHECKING:  # what `__getattr__` gives, for type checkers and editors
     from vtable.verbs.runs import identify, is_run, run_tf, tf
     from vtable.verbs.simulation import demo, export_mjcf, simulate, simulation_summary
     from vtable.verbs.studies import assess, study
-    from vtable.verbs.warm import warm
 
 #: public name -> the module of this package that defines it
 VERBS: dict[str, str] = {
@@ -41,14 +39,13 @@ VERBS: dict[str, str] = {
     "compare": "diagnosis", "diagnose": "diagnosis", "DiagnosisInterrupted": "diagnosis",
     "simulate": "simulation", "simulation_summary": "simulation", "export_mjcf": "simulation",
     "demo": "simulation",
-    "assess": "studies", "study": "studies", "drive": "compensation", "warm": "warm",
+    "assess": "studies", "study": "studies", "drive": "compensation",
 }
 
 __all__ = [  # = sorted(VERBS), spelled out for linters
     "DiagnosisInterrupted", "assess", "compare", "config_tf", "demo", "diagnose", "drive",
     "effect_names", "export_mjcf", "identify", "is_run", "load_controllers", "load_effects",
     "margins", "modes", "presets", "run_tf", "simulate", "simulation_summary", "study", "tf",
-    "warm",
 ]
 
 

@@ -8,15 +8,18 @@ a socket private to the user. This and every later `vtable diagnose` (`vtable.wa
 hands it the command line, the working folder, the environment and its own standard
 streams; the warm process forks a child that runs the command exactly as the `vtable`
 command would, writing straight to the caller's terminal or pipes, and the caller exits
-with the child's exit code. Ctrl-C in the caller reaches the child (one line, 130); a
+with the child's exit code (or by the signal that ended it). Ctrl-C, Ctrl-Z and the
+signals that end a process reach the child's process group (it and its Dask workers); a
 caller killed outright stops its child.
 
 One warm process per environment (`place`: the interpreter and its prefix, vtable's
-location and every environment variable but the shell's own bookkeeping, hashed), so a
+location, the module search path, the process's priority, CPU affinity and resource
+limits, and every environment variable but the shell's own bookkeeping, hashed), so a
 command never runs with another environment's settings (``NUMBA_CACHE_DIR``, Dask's
-configuration, thread counts). It answers a command only while no module it has loaded
-has changed on disk (vtable upgraded or edited, a library upgraded): otherwise it hands
-the command back, stops, and a new one starts. It ends after `IDLE_S` seconds without a command.
+configuration, thread counts, ``nice``); at most `MAX_PROCESSES` live at once. It answers
+a command only while no module it has loaded has changed on disk (vtable upgraded or
+edited, a library upgraded): otherwise it hands the command back, stops, and a new one
+starts. It ends after `IDLE_S` seconds without a command.
 
 ``VTABLE_WARM=0`` runs every command in its own process, as before (the test suite does);
 ``VTABLE_WARM=1`` (or unset) uses the warm process. Only ``vtable diagnose`` goes through it:
@@ -28,14 +31,24 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import signal
 import sys
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+try:
+    import fcntl
+    import resource
+except ImportError:  # not POSIX: no warm process (`wanted`)
+    fcntl = resource = None
+
 #: seconds a warm process waits for a command before it ends
 IDLE_S = 600.0
+
+#: the most warm processes (environments) of one user alive at once
+MAX_PROCESSES = 3
 
 #: the verbs handed to the warm process
 VERBS = ("diagnose",)
@@ -58,13 +71,35 @@ class WarmSettingError(ValueError):
 
 def wanted(argv: list[str], environ: dict[str, str] | os._Environ = os.environ) -> bool:
     """Whether the command `argv` (without the program's name) goes through the warm
-    process: its verb is one of `VERBS`, ``VTABLE_WARM`` is 1 or unset, and this platform
-    can hand a process's streams to another (POSIX sockets with descriptor passing)."""
+    process: its verb is one of `VERBS`, ``VTABLE_WARM`` is 1 or unset (another value is
+    a `WarmSettingError` then), and this platform can hand a process's streams to another
+    (POSIX sockets with descriptor passing)."""
+    if not argv or argv[0] not in VERBS:
+        return False
     setting = environ.get("VTABLE_WARM", "1")
     if setting not in ("0", "1"):
         raise WarmSettingError(f"VTABLE_WARM must be 0 or 1, not {setting!r}")
-    return (setting == "1" and bool(argv) and argv[0] in VERBS and os.name == "posix"
-            and hasattr(os, "fork") and hasattr(__import__("socket"), "send_fds"))
+    return (setting == "1" and fcntl is not None and hasattr(os, "fork")
+            and hasattr(__import__("socket"), "send_fds"))
+
+
+def here() -> str:
+    """The folder of the vtable package this process runs."""
+    return str(Path(__file__).resolve().parents[1])
+
+
+def search_path() -> list[str]:
+    """This process's module search path, each entry absolute ('' is the working folder)."""
+    return [os.path.abspath(p) for p in sys.path]
+
+
+def _process() -> list:
+    """What a process inherits from its parent besides the environment and that a command
+    reads: its priority, CPU affinity and resource limits."""
+    cpus = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
+    limits = sorted((name, resource.getrlimit(getattr(resource, name)))
+                    for name in dir(resource) if name.startswith("RLIMIT_"))
+    return [os.getpriority(os.PRIO_PROCESS, 0), cpus, limits]
 
 
 def place(environ: dict[str, str] | os._Environ = os.environ) -> Path | None:
@@ -72,12 +107,10 @@ def place(environ: dict[str, str] | os._Environ = os.environ) -> Path | None:
     folder the user's alone), or None when no such folder can be made safely or its path
     is too long for a socket."""
     env = {**CLI_DEFAULTS, **{k: v for k, v in environ.items() if k not in _SHELL_VARS}}
-    here = str(Path(__file__).resolve().parents[1])
     python = [os.path.realpath(sys.executable), sys.prefix, sys.version]  # python, python3
-    key = hashlib.sha256(json.dumps([*python, here, sorted(env.items())]).encode()
-                         ).hexdigest()[:16]
-    tmp = environ.get("TMPDIR") or tempfile.gettempdir()
-    folder = Path(tmp) / f"vtable-{os.getuid()}"
+    key = hashlib.sha256(json.dumps([*python, here(), search_path(), _process(),
+                                     sorted(env.items())]).encode()).hexdigest()[:16]
+    folder = Path(environ.get("TMPDIR") or tempfile.gettempdir()) / f"vtable-{os.getuid()}"
     try:
         folder.mkdir(mode=0o700, exist_ok=True)
         st = folder.lstat()
@@ -89,11 +122,9 @@ def place(environ: dict[str, str] | os._Environ = os.environ) -> Path | None:
     return path if len(os.fsencode(path)) <= _SOCKET_PATH_MAX else None
 
 
-def _holder(path: Path) -> int | None:
+def holder(path: Path) -> int | None:
     """The pid of the warm process that holds `path`'s lock (its pid is written there), or
-    None when nobody does."""
-    import fcntl
-
+    None when none does."""
     try:
         with open(f"{path}.lock") as lock:
             try:  # free: no warm process
@@ -105,13 +136,17 @@ def _holder(path: Path) -> int | None:
         return None
 
 
+def alive(folder: Path) -> int:
+    """How many warm processes of this user live in `folder`."""
+    return sum(holder(Path(str(p)[:-len(".lock")])) is not None
+               for p in folder.glob("*.sock.lock"))
+
+
 def stop(environ: dict[str, str] | os._Environ = os.environ) -> int | None:
     """Ask the warm process of the environment `environ` to end (it takes no more commands
     and ends once those it is running have): its pid, or None when there is none."""
-    import signal
-
     path = place(environ)
-    pid = None if path is None else _holder(path)
+    pid = None if path is None else holder(path)
     if pid is None:
         return None
     try:
@@ -139,7 +174,7 @@ class WarmProcess:
         path = place(environ)
         if stop_it:
             return cls(stop(environ), path, True, enabled)
-        return cls(None if path is None else _holder(path), path, False, enabled)
+        return cls(None if path is None else holder(path), path, False, enabled)
 
     @property
     def log(self) -> Path | None:

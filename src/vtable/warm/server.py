@@ -1,14 +1,21 @@
-"""The warm process (`vtable.warm`): ``python -m vtable.warm.server SOCKET``.
+"""The warm process (`vtable.warm`), started by a caller (`vtable.warm.client`) with its
+module search path, its socket and vtable's folder (`main`).
 
 It takes the lock next to its socket (one warm process per socket: a second one started
 meanwhile ends at once), imports what a diagnosis needs, then listens. Each connection
-brings one command: a header (its length in 4 bytes, then JSON: argv, cwd, env) with the
-caller's standard streams attached (SCM_RIGHTS). The process answers ``pid N`` after forking
-the command's child and ``exit N`` when the child ends (128 + the signal, a shell's
-convention, if a signal ended it), or ``stale`` when a module it loaded has changed on disk
-since (then it stops taking commands, lets its children finish and ends). It is
-single-threaded (a fork copies only the forking thread): one `select` on the socket and on
-the wake-up pipe SIGCHLD writes to.
+brings one command: a header (its length in 4 bytes, then JSON: argv, cwd, env, umask,
+unbuffered, the signals its caller ignores) with the caller's standard streams attached
+(SCM_RIGHTS). The process answers ``pid N`` after forking the command's child (its own
+process group: the caller signals the group), then ``exit N``, or ``signal N`` if a signal
+ended it; or ``stale`` when a module it loaded has changed on disk since (then it stops
+taking commands, lets its children finish and ends). It is single-threaded (a fork copies
+only the forking thread): one `select` on the socket and on the wake-up pipe SIGCHLD and
+SIGTERM write to. SIGINT stays blocked here and in a child until its command runs
+(`_child`), so an early Ctrl-C waits for the command instead of being lost.
+
+After each diagnosis it builds, between commands, every model the diagnosis built
+(`_lessons`), loading their compiled kernels here: the next command's child and the Dask
+workers it forks start with them.
 """
 
 from __future__ import annotations
@@ -30,7 +37,14 @@ import time
 import traceback
 from pathlib import Path
 
-from vtable.warm import IDLE_S
+import vtable
+import vtable.cli
+from vtable import verbs
+from vtable.__main__ import _collect, _end, start
+from vtable.errors import on_sigint
+from vtable.models.reduced import ReducedModel
+from vtable.runs.lab import run_table
+from vtable.warm import IDLE_S, VERBS
 
 #: the longest header a command may bring (its environment included)
 _HEADER_MAX = 1 << 20
@@ -41,7 +55,7 @@ _BUILT_MAX = 500
 
 class _Modules:
     """The files of the modules this process has loaded, with their sizes and times:
-    `changed` tells whether any is no longer as it was."""
+    `changed` names one that is no longer as it was."""
 
     def __init__(self) -> None:
         self.files = {f: self._stamp(f) for f in self._paths()}
@@ -64,34 +78,27 @@ class _Modules:
         return next((f for f, s in self.files.items() if self._stamp(f) != s), None)
 
 
-def _load() -> None:
-    """What a diagnosis imports, imported once here (as `vtable.__main__.run` would), then
-    out of the garbage collector's sight."""
-    gc.disable()
-    import vtable.cli  # noqa: F401
-    from vtable import verbs
-
-    for verb in ("diagnose",):
-        getattr(verbs, verb)
-    gc.freeze()
-    gc.enable()
-
-
 def _receive(conn: socket.socket) -> tuple[dict, list[int]]:
-    """A command's header and the caller's three stream descriptors."""
+    """A command's header and the caller's three stream descriptors (closed here if the
+    header is not whole)."""
     data, fds, _, _ = socket.recv_fds(conn, 65536, 3)
-    if len(fds) != 3 or len(data) < 4:
-        raise ValueError("no header or no streams")
-    n = struct.unpack("!I", data[:4])[0]
-    if n > _HEADER_MAX:
-        raise ValueError("header too long")
-    data = data[4:]
-    while len(data) < n:
-        more = conn.recv(n - len(data))
-        if not more:
-            raise ValueError("header cut short")
-        data += more
-    return json.loads(data), fds
+    try:
+        if len(fds) != 3 or len(data) < 4:
+            raise ValueError("no header or no streams")
+        n = struct.unpack("!I", data[:4])[0]
+        if n > _HEADER_MAX:
+            raise ValueError("header too long")
+        data = data[4:]
+        while len(data) < n:
+            more = conn.recv(n - len(data))
+            if not more:
+                raise ValueError("header cut short")
+            data += more
+        return json.loads(data), fds
+    except (OSError, ValueError):
+        for fd in fds:
+            os.close(fd)
+        raise
 
 
 def _peer_uid(conn: socket.socket) -> int | None:
@@ -103,29 +110,29 @@ def _peer_uid(conn: socket.socket) -> int | None:
     return struct.unpack("3i", creds)[1]
 
 
-def _streams() -> None:
-    """sys.stdin, stdout, stderr anew on descriptors 0-2 (now the caller's): line-buffered
-    where the caller's are terminals, as Python makes them at start-up."""
+def _streams(unbuffered: bool) -> None:
+    """sys.stdin, stdout, stderr anew on descriptors 0-2 (now the caller's), as Python
+    makes them at start-up: stdout line-buffered on a terminal, stderr by lines, both
+    written through under ``-u`` or ``PYTHONUNBUFFERED``."""
     for name, fd, mode in (("stdin", 0, "rb"), ("stdout", 1, "wb"), ("stderr", 2, "wb")):
         old = getattr(sys, name)
-        raw = open(fd, mode, closefd=False)
+        raw = open(fd, mode, buffering=0 if unbuffered and fd else -1, closefd=False)
         stream = io.TextIOWrapper(raw, encoding=old.encoding, errors=old.errors,
-                                  line_buffering=fd == 2 or (fd == 1 and os.isatty(fd)))
+                                  line_buffering=fd == 2 or (fd == 1 and os.isatty(fd)),
+                                  write_through=unbuffered and fd > 0)
         setattr(sys, name, stream)
         setattr(sys, f"__{name}__", stream)
 
 
 def _lessons(result) -> list[tuple]:
-    """What a diagnosis built, for the warm process to build too (`_Server.learn`): each
-    model it went through or tried, once per set of effects, with the runs' table and a
-    few samples of the first run. Its compiled kernels are then loaded in the warm process,
-    and the next command's child and its workers start with them (fork), not loading
-    them each (~0.45 s of a README diagnosis's 4.9 s)."""
+    """What a diagnosis built, for the warm process to build too (`_Server.build_one`):
+    each model it went through or tried, once per set of effects, with the runs' table and
+    a few samples of the first run. Their compiled kernels are then loaded in the warm
+    process, and the next command's child and its workers start with them (fork), not
+    loading them each (~0.45 s of a README diagnosis's 4.9 s)."""
     rounds, runs = getattr(result, "rounds", None), getattr(result, "runs", None)
     if not rounds or not runs:
         return []
-    from vtable.runs.lab import run_table
-
     models = {}
     for ph in [s.physics for s in result.stages] + [c.physics for r in rounds
                                                      for c in r.ranking]:
@@ -138,20 +145,16 @@ def _lessons(result) -> list[tuple]:
     return [(ph, table, run.time[:4].copy(), x) for ph in models.values()]
 
 
-def _child(conn: socket.socket, head: dict, fds: list[int]) -> None:
+def _child(conn: socket.socket, head: dict, fds: list[int], loaded_env: dict) -> None:
     """Run the command in this forked child, as `vtable.__main__.run` would, and end."""
-    from vtable.__main__ import _collect, _end, start
-    from vtable.cli import main
-
+    os.setpgid(0, 0)  # its own group: the caller's signals reach it and its workers
     for i, fd in enumerate(fds):
         os.dup2(fd, i)
         os.close(fd)
     os.environ.clear()
-    os.environ.update(head["env"])
+    os.environ.update({**head["env"], **loaded_env})
     os.umask(head["umask"])
-    with contextlib.suppress(OSError):  # a caller nicer than the warm process
-        os.setpriority(os.PRIO_PROCESS, 0, head["nice"])
-    _streams()
+    _streams(bool(head["unbuffered"] or os.environ.get("PYTHONUNBUFFERED")))
     try:
         os.chdir(head["cwd"])
     except OSError as e:
@@ -159,6 +162,8 @@ def _child(conn: socket.socket, head: dict, fds: list[int]) -> None:
         _end(2)
     sys.argv = ["vtable", *head["argv"]]
     start()
+    for s in head["ignored"]:  # as the caller has them (`nohup`, a background job)
+        signal.signal(s, signal.SIG_IGN)
 
     def watch() -> None:  # the caller gone (killed outright): the command stops
         with contextlib.suppress(OSError):
@@ -168,6 +173,10 @@ def _child(conn: socket.socket, head: dict, fds: list[int]) -> None:
 
     threading.Thread(target=watch, daemon=True, name="vtable-warm-caller").start()
     lessons: list = []
+
+    def loaded() -> None:  # the command runs: an interrupt is its own from now on
+        _collect()
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
     def finish(code: int) -> None:
         """The caller's streams let go (a pipe it reads ends now), its exit code told, and
@@ -184,8 +193,8 @@ def _child(conn: socket.socket, head: dict, fds: list[int]) -> None:
                 tmp.rename(head["lessons"])
 
     try:
-        code = main(head["argv"], loaded=_collect,
-                    done=lambda result: lessons.extend(_lessons(result)))
+        code = vtable.cli.main(head["argv"], loaded=loaded,
+                               done=lambda result: lessons.extend(_lessons(result)))
     except SystemExit as e:  # argparse's --help and its errors
         if isinstance(e.code, str):
             print(e.code, file=sys.stderr)
@@ -197,10 +206,10 @@ def _child(conn: socket.socket, head: dict, fds: list[int]) -> None:
 
 
 class _Server:
-    """The listening socket, its lock, the wake-up pipe and the running children."""
+    """The listening socket, its lock and log, the wake-up pipe and the running children."""
 
-    def __init__(self, path: Path, lock) -> None:
-        self.path, self.lock = path, lock
+    def __init__(self, path: Path, lock, loaded_env: dict) -> None:
+        self.path, self.lock, self.loaded_env = path, lock, loaded_env
         with contextlib.suppress(FileNotFoundError):
             path.unlink()
         self.listener: socket.socket | None = socket.socket(socket.AF_UNIX,
@@ -208,10 +217,9 @@ class _Server:
         self.listener.bind(str(path))
         self.listener.listen(16)
         self.inode = os.stat(path).st_ino
-        self.wake_r, wake_w = os.pipe()
-        os.set_blocking(wake_w, False)
-        self.wake_w = wake_w
-        signal.set_wakeup_fd(wake_w)
+        self.wake_r, self.wake_w = os.pipe()
+        os.set_blocking(self.wake_w, False)
+        signal.set_wakeup_fd(self.wake_w)
         signal.signal(signal.SIGCHLD, lambda *_: None)
         self.stopped = False  # SIGTERM (`vtable.warm.stop`): no more commands
         signal.signal(signal.SIGTERM, self._stop)
@@ -226,6 +234,9 @@ class _Server:
         start-up errors go too): what it ran, what it learnt, why it ended."""
         with contextlib.suppress(OSError):
             self.log.write(f"{time.strftime('%H:%M:%S')} [{os.getpid()}] {line}\n")
+
+    def _stop(self, signum, frame) -> None:
+        self.stopped = True
 
     def learn(self, pid: int) -> None:
         """Queue what the ended child `pid` left (`_lessons`)."""
@@ -243,8 +254,6 @@ class _Server:
         """Build one queued model and simulate its few samples, its kernels loaded (or
         compiled) here, if no model built before had them; a model that cannot be built
         here (a user's effect) is passed over."""
-        from vtable.models.reduced import ReducedModel
-
         ph, table, t, x = self.todo.pop(0)
         try:
             m = ReducedModel(ph, table)
@@ -258,14 +267,18 @@ class _Server:
             self.say(f"{len(self.built)} kernel sets loaded")
             gc.freeze()  # what was built is the children's: out of the collector's sight
 
-    def _stop(self, signum, frame) -> None:
-        self.stopped = True
+    def orphaned(self) -> bool:
+        """Whether its socket's path is gone or another's (a cleaner emptied the folder)."""
+        try:
+            return os.stat(self.path).st_ino != self.inode
+        except OSError:
+            return True
 
     def run(self, modules: _Modules) -> None:
         last = time.monotonic()
         while self.listener is not None or self.children:
-            if self.stopped and self.listener is not None:
-                self.say("asked to stop")
+            if self.listener is not None and (self.stopped or self.orphaned()):
+                self.say("asked to stop" if self.stopped else "its socket is gone")
                 self.close()
                 continue
             waiting = [self.wake_r] + ([self.listener] if self.listener is not None else [])
@@ -313,38 +326,41 @@ class _Server:
                 self.lock.close()
                 self.log.close()
                 signal.set_wakeup_fd(-1)
-                signal.signal(signal.SIGCHLD, signal.SIG_DFL)
-                signal.signal(signal.SIGTERM, signal.SIG_DFL)
+                for s in (signal.SIGCHLD, signal.SIGTERM):
+                    signal.signal(s, signal.SIG_DFL)
                 os.close(self.wake_r)
                 os.close(self.wake_w)
-                _child(conn, {**head, "lessons": str(self.lessons(os.getpid()))}, fds)
+                _child(conn, {**head, "lessons": str(self.lessons(os.getpid()))}, fds,
+                       self.loaded_env)
             finally:
                 os._exit(1)
         for fd in fds:
             os.close(fd)
+        with contextlib.suppress(OSError):
+            os.setpgid(pid, pid)  # as the child does: the caller may signal it at once
         _say(conn, f"pid {pid}")
         self.children[pid] = conn
         self.say(f"pid {pid}: vtable {' '.join(head['argv'])} (in {head['cwd']})")
 
     def reap(self) -> None:
-        """Tell each caller whose child has ended its exit code (128 + the signal that
-        ended it, if one did)."""
+        """Tell each caller whose child has ended how it ended (its exit code, told by the
+        child already, or the signal that ended it)."""
         for pid in list(self.children):
             done, status = os.waitpid(pid, os.WNOHANG)
             if done:
-                code = (os.WEXITSTATUS(status) if os.WIFEXITED(status)
-                        else 128 + os.WTERMSIG(status))
+                how = (f"exit {os.WEXITSTATUS(status)}" if os.WIFEXITED(status)
+                       else f"signal {os.WTERMSIG(status)}")
                 conn = self.children.pop(pid)
-                _say(conn, f"exit {code}")  # told already, unless a signal ended it
+                _say(conn, how)
                 conn.close()
-                self.say(f"pid {pid}: exit {code}")
+                self.say(f"pid {pid}: {how}")
                 self.learn(pid)
 
     def close(self) -> None:
         """Stop taking commands: the socket removed (if still this process's) and the lock
         released, so that a new warm process may start while the children finish."""
-        with contextlib.suppress(OSError):
-            if os.stat(self.path).st_ino == self.inode:
+        if not self.orphaned():
+            with contextlib.suppress(OSError):
                 self.path.unlink()
         self.listener.close()
         self.listener = None
@@ -356,23 +372,34 @@ def _say(conn: socket.socket, line: str) -> None:
         conn.sendall(f"{line}\n".encode())
 
 
-def serve(path: Path) -> None:
-    """Take `path`'s lock, load, listen on `path` and answer commands until `IDLE_S`
-    seconds pass with no command and no child, or a loaded module changes."""
+def main(socket_path: str, vtable_folder: str, given: dict[str, str]) -> None:
+    """The warm process on `socket_path`, started by `vtable.warm.client` with the
+    collector off and its caller's module search path, for the vtable in `vtable_folder`,
+    with the environment `given`: take the lock, load, listen, and answer commands until
+    `IDLE_S` seconds pass with no command and no child, a loaded module changes, or
+    SIGTERM. What loading set in the environment (numba's cache folder,
+    `vtable._numba`), each command's environment gets too."""
+    path = Path(socket_path)
     lock = open(f"{path}.lock", "a+")  # held for the process's life
     try:
         fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
         return  # another warm process has this socket
+    if str(Path(vtable.__file__).resolve().parent) != vtable_folder:
+        print(f"vtable at {vtable.__file__} here, the caller's at {vtable_folder}: no warm "
+              "process", file=sys.stderr)
+        sys.exit(3)
     lock.truncate(0)
     lock.write(f"{os.getpid()}\n")
     lock.flush()
-    _load()
-    server = _Server(path, lock)
+    for verb in VERBS:
+        getattr(verbs, verb)  # its modules imported (`vtable.verbs`)
+    loaded_env = {k: v for k, v in os.environ.items() if given.get(k) != v}
+    gc.freeze()
+    gc.enable()
+    # SIGINT: the CLI's handler, blocked until a child's command runs (module docstring)
+    signal.signal(signal.SIGINT, on_sigint)
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    server = _Server(path, lock, loaded_env)
     server.run(_Modules())
     server.say("ended")
-
-
-if __name__ == "__main__":
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the children set their own
-    serve(Path(sys.argv[1]))
