@@ -227,11 +227,13 @@ def campaign_readme(folder: Path, repeat: int = 5, bytecode: bool = True) -> Non
         paths.append(str(stem.with_suffix(".toml")))
     import os
 
-    from vtable import warm
+    def stop_warm(env: dict) -> None:  # the warm process the commands of `env` use
+        subprocess.run([*exe, "warm", "--stop"], env=env, check=True,
+                       stdout=subprocess.DEVNULL)
+        time.sleep(1.0)
 
     report = ["--report", str(folder / "d.html")]  # the README's command draws its report
-    warm.stop()  # the first command below starts this environment's warm process
-    time.sleep(1.0)
+    stop_warm(dict(os.environ))  # the first command below starts this environment's
     for label, cache, extra, times, alone in (
             ("the environment's first command (it starts the warm process)", None, [], 1,
              False),
@@ -257,7 +259,7 @@ def campaign_readme(folder: Path, repeat: int = 5, bytecode: bool = True) -> Non
         import json
 
         if cache is not None:
-            warm.stop(env)  # the cold run's warm process, of an environment now gone
+            stop_warm(env)  # the cold run's warm process, of an environment now gone
         if out.returncode != 0:
             print(f"  {label}: vtable diagnose failed: {out.stderr.strip()[-300:]}")
             continue

@@ -265,3 +265,21 @@ def test_the_command_has_the_environment_its_libraries_set_on_loading(warm, tmp_
     assert said[1] == said[0] and said[2] == said[0]
     assert f"cache: {tmp_path / 'cache'}" in said[0][1]
     assert len(_servers(tmp)) == 1
+
+
+def test_a_new_environment_s_warm_process_ends_the_longest_idle(warm):
+    """At most `MAX_PROCESSES` warm processes: a fourth environment's first command ends
+    the one whose last command is oldest, and gets one of its own."""
+    from vtable.warm import MAX_PROCESSES
+
+    env, tmp = warm
+    pids: list[int] = []  # each environment's warm process, in the order started
+    for k in range(MAX_PROCESSES + 1):
+        r = subprocess.run([*DIAGNOSE, "--help"], env={**env, "VTABLE_TEST_ENV": str(k)},
+                           capture_output=True, timeout=120)
+        assert r.returncode == 0
+        pids += [int(p) for p in _servers(tmp) if int(p) not in pids]
+        time.sleep(0.05)  # the logs' times apart
+    assert len(pids) == MAX_PROCESSES + 1
+    assert _gone(pids[0], 10) and _logged(tmp, f"[{pids[0]}] asked to stop")
+    assert not any(_gone(p, 0.5) for p in pids[1:])

@@ -16,7 +16,8 @@ One warm process per environment (`place`: the interpreter and its prefix, vtabl
 location, the module search path, the process's priority, CPU affinity and resource
 limits, and every environment variable but the shell's own bookkeeping, hashed), so a
 command never runs with another environment's settings (``NUMBA_CACHE_DIR``, Dask's
-configuration, thread counts, ``nice``); at most `MAX_PROCESSES` live at once. It answers
+configuration, thread counts, ``nice``); at most `MAX_PROCESSES` live at once (starting
+another ends the one whose last command is oldest). It answers
 a command only while no module it has loaded has changed on disk (vtable upgraded or
 edited, a library upgraded): otherwise it hands the command back, stops, and a new one
 starts. It ends after `IDLE_S` seconds without a command.
@@ -28,6 +29,7 @@ the verb a lab runs again and again as it adds effects and refits.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -136,10 +138,18 @@ def holder(path: Path) -> int | None:
         return None
 
 
-def alive(folder: Path) -> int:
-    """How many warm processes of this user live in `folder`."""
-    return sum(holder(Path(str(p)[:-len(".lock")])) is not None
-               for p in folder.glob("*.sock.lock"))
+def make_room(folder: Path) -> None:
+    """At most `MAX_PROCESSES` - 1 warm processes of this user left in `folder`: those
+    whose last command is oldest (their log's time) asked to end (`stop`)."""
+    live = []
+    for lock in folder.glob("*.sock.lock"):
+        path = Path(str(lock)[:-len(".lock")])
+        if (pid := holder(path)) is not None:
+            with contextlib.suppress(OSError):
+                live.append((Path(f"{path}.log").stat().st_mtime, pid))
+    for _, pid in sorted(live)[:max(0, len(live) - MAX_PROCESSES + 1)]:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.kill(pid, signal.SIGTERM)
 
 
 def stop(environ: dict[str, str] | os._Environ = os.environ) -> int | None:

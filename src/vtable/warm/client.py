@@ -17,7 +17,7 @@ import sys
 import time
 from pathlib import Path
 
-from vtable.warm import MAX_PROCESSES, WarmSettingError, alive, here, place, search_path, wanted
+from vtable.warm import WarmSettingError, here, make_room, place, search_path, wanted
 
 #: seconds a caller waits for a warm process it started to listen (its imports, on a busy
 #: machine) before running the command itself
@@ -79,12 +79,11 @@ def _connect(path: Path) -> socket.socket | None:
 
 
 def _started(path: Path) -> socket.socket | None:
-    """Start a warm process on `path` and connect once it listens; None if there are
-    `MAX_PROCESSES` already, or it ended without listening (another one took the socket
-    meanwhile, and does not listen within a few seconds either), or it did not listen
-    within `START_S`."""
-    if alive(path.parent) >= MAX_PROCESSES:
-        return None
+    """Start a warm process on `path` (room made for it: `make_room`) and connect once it
+    listens; None if it ended without listening (another one took the socket meanwhile,
+    and does not listen within a few seconds either), or did not listen within
+    `START_S`."""
+    make_room(path.parent)
     log = Path(f"{path}.log")
     with contextlib.suppress(OSError):
         if log.stat().st_size > _LOG_MAX:
