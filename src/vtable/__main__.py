@@ -12,6 +12,10 @@ an import makes lives as long as the process, and the collections that walked it
 grew cost a diagnosis's start 0.17 s (1.31 → 1.14 s, `vtable diagnose` of a missing file);
 then it is frozen out of the collector's sight (`gc.freeze`) and the collector runs.
 
+`vtable diagnose` is first offered to the warm process (`vtable.warm`): where one answers,
+this process only waits for its command's end and ends as it did; else (or with
+``VTABLE_WARM=0``) the command runs here.
+
 A command that returns ends as Python would end it (other threads joined, exit handlers
 run: the diagnosis's workers stopped, OpenSees quieted; the streams flushed), without the
 interpreter's teardown, which frees every object one by one: 0.3 s after a diagnosis, for
