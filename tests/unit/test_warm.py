@@ -19,6 +19,8 @@ from pathlib import Path
 import pytest
 from conftest import run_cli
 
+from vtable.warm import holder
+
 DIAGNOSE = [sys.executable, "-m", "vtable", "diagnose"]
 
 
@@ -31,9 +33,11 @@ def warm(request):
     env = {**os.environ, "VTABLE_WARM": "1", "TMPDIR": str(tmp)}
     env.pop("PYTEST_CURRENT_TEST", None)  # changes between a test's phases
     yield env, tmp
-    for lock in tmp.glob("vtable-*/*.lock"):
-        with contextlib.suppress(ValueError, ProcessLookupError):
-            os.kill(int(lock.read_text() or "x"), signal.SIGTERM)
+    for lock in tmp.glob("vtable-*/*.sock.lock"):
+        pid = holder(Path(str(lock)[:-len(".lock")]))  # a live one only: no pid reused
+        with contextlib.suppress(ProcessLookupError):
+            if pid is not None:
+                os.kill(pid, signal.SIGTERM)
     shutil.rmtree(tmp, ignore_errors=True)
 
 
@@ -237,15 +241,37 @@ def test_a_signal_that_ends_the_command_ends_its_caller(warm, campaign):
     assert _gone(child, 10) and _logged(tmp, f"pid {child}: signal {int(signal.SIGTERM)}")
 
 
+def _help(env: dict, ignore: tuple = ()) -> None:
+    """`vtable diagnose --help` from a caller ignoring the signals `ignore`."""
+    r = subprocess.run([*DIAGNOSE, "--help"], env=env, capture_output=True, timeout=120,
+                       preexec_fn=lambda: [signal.signal(s, signal.SIG_IGN) for s in ignore])
+    assert r.returncode == 0
+
+
 def test_a_signal_the_caller_ignores_its_command_ignores(warm, campaign):
-    """`nohup vtable diagnose ...`: the hangup ignored by the caller is ignored by its
-    command, which runs to its end."""
-    env, _ = warm
+    """`nohup vtable diagnose ...` (the warm process started by another caller): the
+    hangup ignored by the caller is ignored by its command, sent to the command's own
+    process group, and the command runs to its end."""
+    env, tmp = warm
+    _help(env)
     p, _ = _started(env, campaign[1], ignore=(signal.SIGHUP,))
-    p.send_signal(signal.SIGHUP)
+    os.killpg(_children(tmp)[-1], signal.SIGHUP)
     out, err = p.communicate(timeout=300)
     assert p.returncode == 0, err[-2000:]
     assert "error history" in out
+
+
+def test_a_signal_a_caller_heeds_ends_its_command_though_nohup_started_the_process(warm,
+                                                                                   campaign):
+    """The warm process started by a `nohup` caller: a later caller's hangup still ends its
+    command, and the caller ends by it."""
+    env, tmp = warm
+    _help(env, ignore=(signal.SIGHUP,))
+    p, _ = _started(env, campaign[1])
+    p.send_signal(signal.SIGHUP)
+    p.communicate(timeout=60)
+    assert p.returncode == -signal.SIGHUP
+    assert _logged(tmp, f"pid {_children(tmp)[-1]}: signal {int(signal.SIGHUP)}")
 
 
 def test_the_command_has_the_environment_its_libraries_set_on_loading(warm, tmp_path):

@@ -59,9 +59,9 @@ VERBS = ("diagnose",)
 #: (`vtable.__main__`): part of every command's environment, so of its key (`place`)
 CLI_DEFAULTS = {"MUJOCO_GL": "disable"}
 
-#: environment variables that differ between two shells of one environment, left out of
-#: its key (`place`)
-_SHELL_VARS = ("PWD", "OLDPWD", "_", "SHLVL")
+#: environment variables that differ between two shells of one environment, or that
+#: only say whether to use it, left out of its key (`place`)
+_SHELL_VARS = ("PWD", "OLDPWD", "_", "SHLVL", "VTABLE_WARM")
 
 #: the longest socket path AF_UNIX takes (108 bytes on Linux, less elsewhere)
 _SOCKET_PATH_MAX = 100
@@ -139,12 +139,13 @@ def holder(path: Path) -> int | None:
 
 
 def make_room(folder: Path) -> None:
-    """At most `MAX_PROCESSES` - 1 warm processes of this user left in `folder`: those
-    whose last command is oldest (their log's time) asked to end (`stop`)."""
+    """At most `MAX_PROCESSES` warm processes of this user left in `folder`, this one
+    among them: the others whose last command is oldest (their log's time) asked to end
+    (`stop`)."""
     live = []
     for lock in folder.glob("*.sock.lock"):
         path = Path(str(lock)[:-len(".lock")])
-        if (pid := holder(path)) is not None:
+        if (pid := holder(path)) not in (None, os.getpid()):
             with contextlib.suppress(OSError):
                 live.append((Path(f"{path}.log").stat().st_mtime, pid))
     for _, pid in sorted(live)[:max(0, len(live) - MAX_PROCESSES + 1)]:
@@ -207,3 +208,4 @@ class WarmProcess:
         return (f"warm process pid {self.pid} answers vtable diagnose in this environment"
                 f"{off}; it ends after {IDLE_S / 60:.0f} min without a command (vtable warm "
                 f"--stop ends it now)\n  socket {self.socket}\n  log    {self.log}")
+

@@ -17,7 +17,7 @@ import sys
 import time
 from pathlib import Path
 
-from vtable.warm import WarmSettingError, here, make_room, place, search_path, wanted
+from vtable.warm import WarmSettingError, here, place, search_path, wanted
 
 #: seconds a caller waits for a warm process it started to listen (its imports, on a busy
 #: machine) before running the command itself
@@ -31,12 +31,14 @@ _LOG_MAX = 1 << 20
 _PASSED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGTSTP)
 
 #: how the warm process is started: the collector off while it loads, the caller's module
-#: search path, the `vtable` command's settings (`vtable.__main__`), the environment as
+#: search path, the `vtable` command's settings (`vtable.__main__`), the signals a `nohup`
+#: caller ignored at their defaults (each command sets its caller's), the environment as
 #: given (what loading adds to it, each command gets: `vtable.warm.server.main`)
-_BOOT = ("import gc, json, os, sys; gc.disable(); env = dict(os.environ); "
+_BOOT = ("import gc, json, os, signal, sys; gc.disable(); env = dict(os.environ); "
          "sys.path[:] = json.loads(sys.argv[1]); from vtable.warm import CLI_DEFAULTS; "
          "[os.environ.setdefault(k, v) for k, v in CLI_DEFAULTS.items()]; "
-         "from vtable.warm.server import main; main(sys.argv[2], sys.argv[3], env)")
+         "[signal.signal(s, signal.SIG_DFL) for s in (signal.SIGHUP, signal.SIGTSTP)]; "
+         "from vtable.warm.boot import boot; boot(sys.argv[2], sys.argv[3], env)")
 
 
 def served(argv: list[str]) -> int | None:
@@ -79,11 +81,9 @@ def _connect(path: Path) -> socket.socket | None:
 
 
 def _started(path: Path) -> socket.socket | None:
-    """Start a warm process on `path` (room made for it: `make_room`) and connect once it
-    listens; None if it ended without listening (another one took the socket meanwhile,
-    and does not listen within a few seconds either), or did not listen within
-    `START_S`."""
-    make_room(path.parent)
+    """Start a warm process on `path` (`vtable.warm.boot.boot`) and connect once it listens;
+    None if it ended without listening (another one took the socket meanwhile, and does
+    not listen within a few seconds either), or did not listen within `START_S`."""
     log = Path(f"{path}.log")
     with contextlib.suppress(OSError):
         if log.stat().st_size > _LOG_MAX:
@@ -123,14 +123,14 @@ def _through(conn: socket.socket, argv: list[str]) -> int | None:
     except OSError:  # a stream closed here, or the warm process gone
         return None
     child: list[int] = []
+    pending: list[int] = []  # signals that came before the command's pid
     before = {s: signal.getsignal(s) for s in passed}
 
     def pass_on(signum, frame) -> None:
-        if not child:  # not begun: this process ends here, and with it the command
-            if signum == signal.SIGINT:
-                raise KeyboardInterrupt
-            if signum != signal.SIGTSTP:
-                _die(signum)
+        if not child:  # passed on as soon as its pid comes (`_outcome`); a second Ctrl-C
+            if signum == signal.SIGINT and signum in pending:  # meanwhile ends this
+                raise KeyboardInterrupt  # process, and so the command
+            pending.append(signum)
             return
         with contextlib.suppress(ProcessLookupError):
             os.killpg(child[0], signum)
@@ -144,14 +144,20 @@ def _through(conn: socket.socket, argv: list[str]) -> int | None:
     for s in passed:
         signal.signal(s, pass_on)
     try:
-        return _outcome(conn, child)
+        code = _outcome(conn, child, lambda: [pass_on(s, None) for s in pending])
+        if code is None and pending:  # it never began: the signal is this process's
+            if signal.SIGINT in pending:
+                raise KeyboardInterrupt
+            _die(pending[0])
+        return code
     finally:
         for s, handler in before.items():
             signal.signal(s, handler)
 
 
-def _outcome(conn: socket.socket, child: list[int]) -> int | None:
-    """Read the warm process's lines: the command's pid, then how it ended."""
+def _outcome(conn: socket.socket, child: list[int], begun) -> int | None:
+    """Read the warm process's lines: the command's pid (then `begun()`), then how it
+    ended."""
     try:
         for line in conn.makefile("r", encoding="ascii"):
             word, _, value = line.strip().partition(" ")
@@ -159,6 +165,7 @@ def _outcome(conn: socket.socket, child: list[int]) -> int | None:
                 return None
             if word == "pid":
                 child.append(int(value))
+                begun()
             elif word == "exit":
                 return int(value)
             elif word == "signal":
@@ -176,7 +183,8 @@ def _outcome(conn: socket.socket, child: list[int]) -> int | None:
 def _die(signum: int) -> None:
     """End this process by `signum`, as its command was (a caller reads -N, a shell says
     why)."""
-    signal.signal(signum, signal.SIG_DFL)
+    with contextlib.suppress(OSError, ValueError):  # SIGKILL's cannot be set
+        signal.signal(signum, signal.SIG_DFL)
     with contextlib.suppress(OSError, ValueError):
         sys.stderr.flush()
     os.kill(os.getpid(), signum)

@@ -1,8 +1,7 @@
 """The warm process (`vtable.warm`), started by a caller (`vtable.warm.client`) with its
-module search path, its socket and vtable's folder (`main`).
-
-It takes the lock next to its socket (one warm process per socket: a second one started
-meanwhile ends at once), imports what a diagnosis needs, then listens. Each connection
+module search path; `vtable.warm.boot.boot` has taken the lock next to its socket (one warm
+process per socket) before this module's imports. It imports what a diagnosis needs,
+then listens. Each connection
 brings one command: a header (its length in 4 bytes, then JSON: argv, cwd, env, umask,
 unbuffered, the signals its caller ignores) with the caller's standard streams attached
 (SCM_RIGHTS). The process answers ``pid N`` after forking the command's child (its own
@@ -37,7 +36,6 @@ import time
 import traceback
 from pathlib import Path
 
-import vtable
 import vtable.cli
 from vtable import verbs
 from vtable.__main__ import _collect, _end, start
@@ -162,8 +160,10 @@ def _child(conn: socket.socket, head: dict, fds: list[int], loaded_env: dict) ->
         _end(2)
     sys.argv = ["vtable", *head["argv"]]
     start()
-    for s in head["ignored"]:  # as the caller has them (`nohup`, a background job)
-        signal.signal(s, signal.SIG_IGN)
+    for s in (signal.SIGHUP, signal.SIGTERM, signal.SIGTSTP):  # as the caller has them
+        signal.signal(s, signal.SIG_IGN if s in head["ignored"] else signal.SIG_DFL)
+    if signal.SIGINT in head["ignored"]:  # (`nohup`, a shell's background job)
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
     def watch() -> None:  # the caller gone (killed outright): the command stops
         with contextlib.suppress(OSError):
@@ -372,26 +372,12 @@ def _say(conn: socket.socket, line: str) -> None:
         conn.sendall(f"{line}\n".encode())
 
 
-def main(socket_path: str, vtable_folder: str, given: dict[str, str]) -> None:
-    """The warm process on `socket_path`, started by `vtable.warm.client` with the
-    collector off and its caller's module search path, for the vtable in `vtable_folder`,
-    with the environment `given`: take the lock, load, listen, and answer commands until
-    `IDLE_S` seconds pass with no command and no child, a loaded module changes, or
-    SIGTERM. What loading set in the environment (numba's cache folder,
-    `vtable._numba`), each command's environment gets too."""
-    path = Path(socket_path)
-    lock = open(f"{path}.lock", "a+")  # held for the process's life
-    try:
-        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        return  # another warm process has this socket
-    if str(Path(vtable.__file__).resolve().parent) != vtable_folder:
-        print(f"vtable at {vtable.__file__} here, the caller's at {vtable_folder}: no warm "
-              "process", file=sys.stderr)
-        sys.exit(3)
-    lock.truncate(0)
-    lock.write(f"{os.getpid()}\n")
-    lock.flush()
+def main(path: Path, lock, given: dict[str, str]) -> None:
+    """The warm process on `path`, its lock held (`vtable.warm.boot.boot`), started with the
+    environment `given`: load, listen, and answer commands until `IDLE_S` seconds pass
+    with no command and no child, a loaded module changes, or SIGTERM. What loading set
+    in the environment (numba's cache folder, `vtable._numba`), each command's
+    environment gets too."""
     for verb in VERBS:
         getattr(verbs, verb)  # its modules imported (`vtable.verbs`)
     loaded_env = {k: v for k, v in os.environ.items() if given.get(k) != v}
