@@ -137,10 +137,9 @@ def _started(env: dict, files: list[str], ignore: tuple = ()
              ) -> tuple[subprocess.Popen, list[str]]:
     """A warm diagnosis once its first round has begun, and what it has said so far; its
     caller ignores the signals `ignore` (as `nohup` does SIGHUP)."""
-    def dispositions() -> None:
-        signal.signal(signal.SIGINT, signal.SIG_DFL)
-        for s in ignore:
-            signal.signal(s, signal.SIG_IGN)
+    def dispositions() -> None:  # whatever the test run's own (CI under nohup, a shell's
+        for s in (signal.SIGINT, signal.SIGHUP, signal.SIGTERM):  # background job)
+            signal.signal(s, signal.SIG_IGN if s in ignore else signal.SIG_DFL)
 
     p = subprocess.Popen([*DIAGNOSE, *files], env=env, stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, text=True, preexec_fn=dispositions)
@@ -244,7 +243,9 @@ def test_a_signal_that_ends_the_command_ends_its_caller(warm, campaign):
 def _help(env: dict, ignore: tuple = ()) -> None:
     """`vtable diagnose --help` from a caller ignoring the signals `ignore`."""
     r = subprocess.run([*DIAGNOSE, "--help"], env=env, capture_output=True, timeout=120,
-                       preexec_fn=lambda: [signal.signal(s, signal.SIG_IGN) for s in ignore])
+                       preexec_fn=lambda: [signal.signal(s, signal.SIG_IGN if s in ignore
+                                                         else signal.SIG_DFL)
+                                           for s in (signal.SIGHUP, signal.SIGTERM)])
     assert r.returncode == 0
 
 
