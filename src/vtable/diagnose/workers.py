@@ -174,11 +174,23 @@ def _warm(campaign: Campaign, physics: Any, files: tuple[tuple[str, str, str], .
     _load_files(files)
     r = campaign.runs[0]
     try:
-        ReducedModel(physics.in_state(campaign.state(r)), campaign.table).simulate(
-            r.time[:4], r.channel("h_span")[:4])
+        load_kernels(ReducedModel(physics.in_state(campaign.state(r)), campaign.table),
+                     r.time, r.channel("h_span"))
     except VtableError:
         return False
     return True
+
+
+#: the samples a model is stepped over to load its kernels (`load_kernels`)
+WARM_SAMPLES = 4
+
+
+def load_kernels(model: ReducedModel, t: np.ndarray, x: np.ndarray) -> None:
+    """Compile (or load from numba's cache) `model`'s kernels in this process: its first
+    `WARM_SAMPLES` samples of the command `x` at times `t` simulated (a diagnosis's
+    workers before their fits, `_warm`; the warm process for its next commands,
+    `vtable.warm.server`)."""
+    model.simulate(t[:WARM_SAMPLES], x[:WARM_SAMPLES])
 
 
 class CandidateFit(NamedTuple):

@@ -39,6 +39,7 @@ from pathlib import Path
 import vtable.cli
 from vtable import verbs
 from vtable.__main__ import _collect, _end, start
+from vtable.diagnose.workers import WARM_SAMPLES, load_kernels
 from vtable.errors import on_sigint
 from vtable.models.reduced import ReducedModel
 from vtable.runs.lab import run_table
@@ -137,10 +138,10 @@ def _lessons(result) -> list[tuple]:
         models.setdefault(tuple(sorted(ph.effects)), ph)
     run = runs[0]
     try:
-        table, x = run_table(run), run.channel("h_span")[:4].copy()
+        table, x = run_table(run), run.channel("h_span")[:WARM_SAMPLES].copy()
     except Exception:  # nothing to learn from a run the table cannot read
         return []
-    return [(ph, table, run.time[:4].copy(), x) for ph in models.values()]
+    return [(ph, table, run.time[:WARM_SAMPLES].copy(), x) for ph in models.values()]
 
 
 def _child(conn: socket.socket, head: dict, fds: list[int], loaded_env: dict) -> None:
@@ -260,7 +261,7 @@ class _Server:
             key = (m.element.key, m.M.shape, m.Aw.shape, m.elem is None)
             if key not in self.built and len(self.built) < _BUILT_MAX:
                 self.built.add(key)
-                m.simulate(t, x)
+                load_kernels(m, t, x)
         except Exception:  # the child reported what it could not do
             pass
         if not self.todo:
