@@ -310,3 +310,36 @@ def test_a_new_environment_s_warm_process_ends_the_longest_idle(warm):
     assert len(pids) == MAX_PROCESSES + 1
     assert _gone(pids[0], 10) and _logged(tmp, f"[{pids[0]}] asked to stop")
     assert not any(_gone(p, 0.5) for p in pids[1:])
+
+
+def test_what_is_not_a_command_is_dropped_and_a_deleted_socket_ends_the_warm_process(warm):
+    """Bytes on the socket that are not a command (no streams passed, a header too long or
+    cut short) are dropped, the warm process serving the next command as before; its
+    socket deleted (a cleaner emptied the folder), it ends, and the next command starts a
+    new one."""
+    import socket
+    import struct
+
+    env, tmp = warm
+
+    def diagnose_help() -> None:
+        r = subprocess.run([*DIAGNOSE, "--help"], env=env, capture_output=True, text=True,
+                           timeout=120)
+        assert r.returncode == 0 and "usage: vtable diagnose" in r.stdout, r.stderr
+
+    diagnose_help()
+    (sock,) = tmp.glob("vtable-*/*.sock")
+    pid = int(_servers(tmp)[0])
+    for junk, fds in ((b"not a command", []), (struct.pack("!I", 1 << 30) + b"{}", [0, 1, 2]),
+                      (struct.pack("!I", 100) + b'{"argv": ', [0, 1, 2])):
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
+            s.connect(str(sock))
+            socket.send_fds(s, [junk], fds)
+            s.shutdown(socket.SHUT_WR)
+            assert s.recv(100) == b""  # closed without a word
+    diagnose_help()
+    assert _servers(tmp) == [str(pid)] and _logged(tmp, ": exit 0", 2)
+    sock.unlink()
+    assert _gone(pid, 10) and _logged(tmp, "its socket is gone")
+    diagnose_help()
+    assert len(_servers(tmp)) == 2
