@@ -138,7 +138,8 @@ def _started(env: dict, files: list[str], ignore: tuple = ()
     """A warm diagnosis once its first round has begun, and what it has said so far; its
     caller ignores the signals `ignore` (as `nohup` does SIGHUP)."""
     def dispositions() -> None:  # whatever the test run's own (CI under nohup, a shell's
-        for s in (signal.SIGINT, signal.SIGHUP, signal.SIGTERM):  # background job)
+        for s in (signal.SIGINT, signal.SIGHUP, signal.SIGTERM, signal.SIGTSTP):  # background
+            # job)
             signal.signal(s, signal.SIG_IGN if s in ignore else signal.SIG_DFL)
 
     p = subprocess.Popen([*DIAGNOSE, *files], env=env, stdout=subprocess.PIPE,
@@ -161,6 +162,47 @@ def test_ctrl_c_in_the_caller_interrupts_the_command(warm, campaign):
     assert lines[-1].startswith("vtable: interrupted") and "Traceback" not in err
     child = _children(tmp)[-1]
     assert _gone(child, 10) and _logged(tmp, f"pid {child}: exit 130")
+
+
+def _state(pid: int, state: str, within: float = 10.0) -> bool:
+    """Whether process `pid` is in `state` ("T": stopped) within `within` seconds."""
+    end = time.monotonic() + within
+    while time.monotonic() < end:
+        with contextlib.suppress(OSError):
+            if Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == state:
+                return True
+        time.sleep(0.02)
+    return False
+
+
+def _group(pgid: int) -> list[int]:
+    """The processes of process group `pgid`."""
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        with contextlib.suppress(OSError, IndexError, ValueError):
+            if int(stat.read_text().rsplit(")", 1)[1].split()[2]) == pgid:
+                out.append(int(stat.parent.name))
+    return out
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")
+def test_ctrl_z_stops_the_command_with_its_caller_and_continued_both_go_on(warm, campaign):
+    """Ctrl-Z (SIGTSTP to the caller) stops the command's process group, its workers
+    included, and the caller, as the terminal stops a process of its own; continued (a
+    shell's fg: SIGCONT to the caller), both go on and the command ends as it would."""
+    env, tmp = warm
+    p, _ = _started(env, campaign[1])
+    child = _children(tmp)[-1]
+    p.send_signal(signal.SIGTSTP)
+    assert _state(p.pid, "T") and _state(child, "T")
+    time.sleep(0.3)
+    group = _group(child)
+    assert len(group) >= 3  # the command and its two workers
+    assert all(_state(pid, "T", 0.1) for pid in group)  # and stay so
+    p.send_signal(signal.SIGCONT)
+    out, err = p.communicate(timeout=300)
+    assert p.returncode == 0, err[-2000:]
+    assert "error history" in out and _logged(tmp, f"pid {child}: exit 0")
 
 
 def test_a_caller_killed_outright_stops_its_command(warm, campaign):
