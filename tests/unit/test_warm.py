@@ -185,26 +185,6 @@ def _group(pgid: int) -> list[int]:
     return out
 
 
-@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")
-def test_ctrl_z_stops_the_command_with_its_caller_and_continued_both_go_on(warm, campaign):
-    """Ctrl-Z (SIGTSTP to the caller) stops the command's process group, its workers
-    included, and the caller, as the terminal stops a process of its own; continued (a
-    shell's fg: SIGCONT to the caller), both go on and the command ends as it would."""
-    env, tmp = warm
-    p, _ = _started(env, campaign[1])
-    child = _children(tmp)[-1]
-    p.send_signal(signal.SIGTSTP)
-    assert _state(p.pid, "T") and _state(child, "T")
-    time.sleep(0.3)
-    group = _group(child)
-    assert len(group) >= 3  # the command and its two workers
-    assert all(_state(pid, "T", 0.1) for pid in group)  # and stay so
-    p.send_signal(signal.SIGCONT)
-    out, err = p.communicate(timeout=300)
-    assert p.returncode == 0, err[-2000:]
-    assert "error history" in out and _logged(tmp, f"pid {child}: exit 0")
-
-
 def test_a_caller_killed_outright_stops_its_command(warm, campaign):
     env, tmp = warm
     p, _ = _started(env, campaign[1])
@@ -291,17 +271,30 @@ def _help(env: dict, ignore: tuple = ()) -> None:
     assert r.returncode == 0
 
 
-def test_a_signal_the_caller_ignores_its_command_ignores(warm, campaign):
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")
+def test_a_signal_the_caller_ignores_its_command_ignores_and_ctrl_z_stops_both(warm,
+                                                                             campaign):
     """`nohup vtable diagnose ...` (the warm process started by another caller): the
     hangup ignored by the caller is ignored by its command, sent to the command's own
-    process group, and the command runs to its end."""
+    process group, and the command runs to its end. On the way, Ctrl-Z (SIGTSTP to the
+    caller) stops the command's process group, its workers included, and the caller, as
+    the terminal stops a process of its own; continued (a shell's fg: SIGCONT to the
+    caller), both go on."""
     env, tmp = warm
     _help(env)
     p, _ = _started(env, campaign[1], ignore=(signal.SIGHUP,))
-    os.killpg(_children(tmp)[-1], signal.SIGHUP)
+    child = _children(tmp)[-1]
+    os.killpg(child, signal.SIGHUP)
+    p.send_signal(signal.SIGTSTP)
+    assert _state(p.pid, "T") and _state(child, "T")
+    time.sleep(0.3)
+    group = _group(child)
+    assert len(group) >= 3  # the command and its two workers
+    assert all(_state(pid, "T", 0.1) for pid in group)  # and stay so
+    p.send_signal(signal.SIGCONT)
     out, err = p.communicate(timeout=300)
     assert p.returncode == 0, err[-2000:]
-    assert "error history" in out
+    assert "error history" in out and _logged(tmp, f"pid {child}: exit 0")
 
 
 def test_a_signal_a_caller_heeds_ends_its_command_though_nohup_started_the_process(warm,
