@@ -102,10 +102,10 @@ class Fits:
         (`Physics`: the first round's candidates) while this process fits the starting
         model: a first run's compiling uses every core from the start (`Tasks.warm`).
         Nothing without Dask workers. Started here, with the runs read and the `Diagnoser`
-        made, not sooner: the README campaign measured 8 % slower with its workers forked
-        before the runs were read (their CPU outside the fits +1.2 s), and not measurably
-        faster through the warm process with them started in a thread beside the starting
-        fit (which needs numba's compiler lock held across the fork)."""
+        made, not sooner: forking the workers before the runs were read made the README
+        campaign's diagnosis 8 % slower (+1.2 s of worker CPU outside the fits); starting
+        them in a thread beside the starting fit (which would need numba's compiler lock
+        held across the fork) was not measurably faster through the warm process."""
         tasks = self.start()
         if tasks is not None:
             tasks.warm(models)
