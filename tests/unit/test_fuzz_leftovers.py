@@ -3,6 +3,8 @@ attribute nobody reads, a note): a run whose time step is 1e-9 s, a rigid specim
 negative count or size, a command of 1e-300 in, a CSV given where its run file is wanted,
 an HDF5 run with an attribute the format does not have; and a rigid specimen on a run that
 measured a structure (its structure channels are not scored, said so, not a traceback).
+A later trial's find: a model whose rocking stiffness is 1e-300 lb·in/rad has its margins
+said without a NumPy warning.
 The base run comes from the independent truth simulator (tests/truth)."""
 
 from __future__ import annotations
@@ -271,3 +273,40 @@ def test_ctrl_c_while_numba_compiles_a_force_law_is_not_taken_for_a_typing_error
         ReducedModel(ph)
     monkeypatch.setattr(ServoLaw, "composition", real)
     assert not ReducedModel(ph).python  # without the interrupt, the law compiles
+
+
+#: a three-storey building on the hybrid table (the fuzz trial's "mdof" model), its rocking
+#: stiffness nearly zero
+NEARLY_NO_ROCKING = (
+    'model = "mdof_hybrid"\n[building]\nweights_kip = [20.0, 20.0, 20.0]\n'
+    'heights_in = [80.0, 150.0, 219.0]\ndamping = 0.02\nfrequencies_hz = [2.0, 6.0, 9.5]\n'
+    '[open_loop]\nf_o_hz = 9.6\nxi_o = 0.606\nk_o_per_s = 29.5\n[rocking]\n'
+    'k_theta_lb_in_per_rad = 1e-300\nc_theta_lb_in_s_per_rad = 3.7e8\n')
+
+
+def test_a_nearly_zero_rocking_stiffness_has_its_margins_said_without_a_warning(tmp_path):
+    """SciPy's balancing (`vtable.analytic.hold.balance`) casts every scale factor to an
+    integer; one beyond an integer's range (the pitch row nearly zero) warned on the
+    user's terminal, about a value it never uses. The margins are said, and the balancing
+    is SciPy's own."""
+    import warnings
+
+    import numpy as np
+    import scipy.linalg
+
+    from vtable.analytic.hold import balance
+
+    p = tmp_path / "m.toml"
+    p.write_text(NEARLY_NO_ROCKING)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a warning would end the command
+        code, out, err = run_cli(["margins", str(p)])
+    assert (code, err) == (0, ""), err
+    assert re.search(r"gain margin +2\.557 +at 9\.954 Hz", out), out
+    A = np.array([[-1.0, 1e-300], [1e300, -2.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Ab, (scale, _) = balance(A, separate=True)
+    with np.errstate(invalid="ignore"):
+        want = scipy.linalg.matrix_balance(A, permute=False, separate=True)
+    assert np.array_equal(Ab, want[0]) and np.array_equal(scale, want[1][0])

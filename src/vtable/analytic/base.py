@@ -11,9 +11,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 import scipy.signal
 
+from vtable.analytic.hold import balance
 from vtable.analytic.margins import Margins, loop_margins, open_loop_from_closed
 from vtable.analytic.stability import RouthResult, characteristic_polynomial, routh_hurwitz
 from vtable.errors import UnstableError, VtableError
@@ -153,7 +153,7 @@ class LinearModel:
         key = self.A.tobytes()
         cached = getattr(self, "_modal_cache", None)
         if cached is None or cached[0] != key:
-            Ab, T = scipy.linalg.matrix_balance(self.A, permute=False)
+            Ab, T = balance(self.A)
             lam, V = np.linalg.eig(Ab)
             cond = float(np.linalg.cond(V))
             data = (lam, V, np.linalg.inv(V), cond, np.diag(T).copy()) if cond < 1e8 else None

@@ -8,14 +8,24 @@ For ẋ = A x + B u with u(t) = u_k + (u_{k+1} − u_k) (t − t_k)/h on [t_k, t
 
 Φ = e^{Ah}, Γ = ∫₀ʰ e^{Aτ} dτ B, Λ = (1/h) ∫₀ʰ e^{Aτ} (h − τ) dτ B, read off one matrix
 exponential (Van Loan 1978): exp([[A, B, 0], [0, 0, I], [0, 0, 0]] h) holds Φ, Γ and h Λ
-in its first block row. The augmented matrix is balanced first (`scipy.linalg.
-matrix_balance`): a state in pascals beside one in metres would otherwise set the
-exponential's norm, and its squarings, by the units."""
+in its first block row. The augmented matrix is balanced first (`balance`): a state in
+pascals beside one in metres would otherwise set the exponential's norm, and its
+squarings, by the units."""
 
 from __future__ import annotations
 
 import numpy as np
 import scipy.linalg
+
+
+def balance(A: np.ndarray, separate: bool = False):
+    """`scipy.linalg.matrix_balance(A, permute=False, separate=separate)`: LAPACK's
+    diagonal scaling alone. SciPy casts every factor to an integer to read the
+    permutations it does not make here; a factor beyond an integer's range (a state whose
+    row is nearly zero: a rocking stiffness of 1e-300 lb·in/rad in a model file) made that
+    cast warn on the user's terminal about a value never used."""
+    with np.errstate(invalid="ignore"):
+        return scipy.linalg.matrix_balance(A, permute=False, separate=separate)
 
 
 def first_order_hold(A: np.ndarray, B: np.ndarray, h: float
@@ -44,7 +54,7 @@ def first_order_hold(A: np.ndarray, B: np.ndarray, h: float
     M = np.zeros((n + 2 * m, n + 2 * m))
     M[:n, :n], M[:n, n:n + m] = A * h, B * h
     M[n:n + m, n + m:] = np.eye(m)  # u grows by (u_{k+1} - u_k) over the step
-    Mb, (scale, _) = scipy.linalg.matrix_balance(M, permute=False, separate=True)
+    Mb, (scale, _) = balance(M, separate=True)
     E = scipy.linalg.expm(Mb) * scale[:, None] / scale[None, :]
     phi, gam, lam = E[:n, :n], E[:n, n:n + m], E[:n, n + m:]
     if one:

@@ -18,9 +18,9 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-import scipy.linalg
 
 from vtable._numba import first_compile
+from vtable.analytic.hold import balance
 from vtable.interpolate import upsampled
 from vtable.models.reduced_kernel import simulate_modal
 
@@ -122,7 +122,7 @@ class ModalOutputs:
             A = self._linear[0]
             self._modal_ = None
             try:  # pressures (Pa) beside displacements (m): balanced first
-                _, (s, _) = scipy.linalg.matrix_balance(A, permute=False, separate=True)
+                _, (s, _) = balance(A, separate=True)
                 lam, Vb = np.linalg.eig(A * (s[None, :] / s[:, None]))
                 if np.all(np.isfinite(lam)) and lam.real.max() < 0 and \
                         np.linalg.cond(Vb) < 1e8:
