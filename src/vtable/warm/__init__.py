@@ -34,6 +34,7 @@ import hashlib
 import json
 import os
 import signal
+import socket
 import sys
 import tempfile
 from dataclasses import dataclass, field
@@ -82,7 +83,7 @@ def wanted(argv: list[str], environ: dict[str, str] | os._Environ = os.environ) 
     if setting not in ("0", "1"):
         raise WarmSettingError(f"VTABLE_WARM must be 0 or 1, not {setting!r}")
     return (setting == "1" and fcntl is not None and hasattr(os, "fork")
-            and hasattr(__import__("socket"), "send_fds"))
+            and hasattr(socket, "send_fds"))
 
 
 def here() -> str:
