@@ -13,8 +13,11 @@ array slices): 170 ns a step with the numbers as a tuple, and a quarter less wit
 array (a tuple is passed by value: its ~50 numbers were copied into each of the four calls
 of `_rates` a step; a README friction model's 2,647-sample run, 5,294 steps, measured on
 one host: 516 → 386 µs, 97 → 73 ns a step, and 481 µs with the numbers unpacked from the
-array at the top of `_rates`). The histories are bit-identical (the same operations in
-the same order; `tests/models/test_unrolled.py` compares them).
+array at the top of `_rates`). Another day on this project's machine, 5,294 steps of
+that model (its nominal values, the El Centro run) took 900 µs, 170 ns a step, both at the
+commit that measured 386 µs and at a later one: the host's speed for this loop varies
+twofold, so compare only figures taken together. The histories are bit-identical (the
+same operations in the same order; `tests/models/test_unrolled.py` compares them).
 
 A model with force elements, or whose element needs numba's reference counting, is
 stepped by `reduced_kernel._steps` (a law run as Python never reaches either:
