@@ -171,12 +171,18 @@ def test_ctrl_c_in_the_caller_interrupts_the_command(warm, campaign):
     assert _gone(child, 10) and _logged(tmp, f"pid {child}: exit 130")
 
 
+def _stat(path: Path) -> list[str]:
+    """The fields of a /proc/<pid>/stat after the command's name: its state first, then
+    its parent, its process group, ..."""
+    return path.read_text().rsplit(")", 1)[1].split()
+
+
 def _state(pid: int, state: str, within: float = 10.0) -> bool:
     """Whether process `pid` is in `state` ("T": stopped) within `within` seconds."""
     end = time.monotonic() + within
     while time.monotonic() < end:
         with contextlib.suppress(OSError):
-            if Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == state:
+            if _stat(Path(f"/proc/{pid}/stat"))[0] == state:
                 return True
         time.sleep(0.02)
     return False
@@ -187,7 +193,7 @@ def _group(pgid: int) -> list[int]:
     out = []
     for stat in Path("/proc").glob("[0-9]*/stat"):
         with contextlib.suppress(OSError, IndexError, ValueError):
-            if int(stat.read_text().rsplit(")", 1)[1].split()[2]) == pgid:
+            if int(_stat(stat)[2]) == pgid:
                 out.append(int(stat.parent.name))
     return out
 
