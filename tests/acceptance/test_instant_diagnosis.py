@@ -5,7 +5,7 @@ truth simulator's campaigns (tests/truth: declared specimen perturbed, 1 % noise
 - a linear model's outputs stepped in its modal coordinates equal the integrator's;
 - the secant Jacobian is the forward-difference one where it is taken, exact for a linear
   map after Broyden's updates, and a fit with it reaches the forward-difference fit's
-  minimum;
+  minimum; the fit handed n + 1 rows instead of all takes the same steps;
 - the amplitude screen reads no amplitude dependence where the missing effect is linear and
   plenty where it is friction, and keeps the nonlinear candidates out only in the first;
 - the diagnosis ends where a plain fit of the right model ends (the same final error), and
@@ -29,7 +29,7 @@ from vtable.diagnose.campaign import Campaign
 from vtable.diagnose.engine import Diagnoser
 from vtable.diagnose.model import TableModel
 from vtable.diagnose.screen import Z_SCREEN, linear_explains, nonlinearity_evidence
-from vtable.diagnose.secant import Families, Secant
+from vtable.diagnose.secant import Families, Secant, compact
 from vtable.effects.registry import BUILT_IN
 from vtable.errors import VtableError
 from vtable.models.physics import Physics, nominal_open_loop
@@ -125,6 +125,50 @@ def test_secant_jacobian():
     assert s.evals == n
     s.at_end(sol.x + 0.1)  # elsewhere: taken there
     assert s.evals == n + 3
+
+
+def test_the_compacted_fit_takes_the_same_steps():
+    """`compact`: n + 1 rows keeping JᵀJ and Jᵀf (with the residual (‖f‖, 0, …)), from the
+    Gram matrix's Cholesky factor, and from a QR where that would lose digits (columns
+    nearly dependent) or does not exist (a zero column, f = 0). `Secant.solve`: on a
+    damped sine's 400 residuals, the same steps as `least_squares` on every row (the same
+    evaluations, the same end), with the whole residual and Jacobian returned."""
+    rng = np.random.default_rng(7)
+    J, f = rng.normal(size=(400, 6)) * np.logspace(-3, 3, 6), rng.normal(size=400)
+    near = J.copy()
+    near[:, 5] = near[:, 4] * 2 + 1e-9 * rng.normal(size=400)  # independent part 1e-12
+    zero = J.copy()
+    zero[:, 2] = 0.0
+    for A, r in ((J, f), (near, f), (zero, f), (J, np.zeros(400))):
+        C = compact(r, A)
+        assert C.shape == (7, 6)
+        e = np.zeros(7)
+        e[0] = np.sqrt(r @ r)
+        scale = np.outer(np.linalg.norm(A, axis=0), np.linalg.norm(A, axis=0)) + 1e-300
+        np.testing.assert_allclose((C.T @ C) / scale, (A.T @ A) / scale, atol=1e-12)
+        np.testing.assert_allclose(C.T @ e, A.T @ r, rtol=1e-10,
+                                   atol=1e-12 * np.linalg.norm(A) * np.linalg.norm(r))
+
+    t = np.linspace(0.0, 4.0, 400)
+    y = 1.3 * np.exp(-0.7 * t) * np.sin(5.0 * t + 0.4) + 0.01 * rng.normal(size=400)
+
+    def sine(x):
+        return x[0] * np.exp(-x[1] * t) * np.sin(x[2] * t + x[3]) - y
+
+    lo, hi = np.array([0.1, 0.0, 3.0, -1.0]), np.array([5.0, 3.0, 7.0, 2.0])
+    for refresh in (1, 4):
+        full, small = Secant(sine, lo, hi, refresh=refresh), Secant(sine, lo, hi,
+                                                                     refresh=refresh)
+        kw = dict(bounds=(lo, hi), xtol=1e-10, ftol=1e-10, max_nfev=40)
+        ref = scipy.optimize.least_squares(full.fun, [1.0, 0.5, 4.6, 0.0], jac=full.jac,
+                                           **kw)
+        sol = small.solve(np.array([1.0, 0.5, 4.6, 0.0]), **kw)
+        assert small.evals == full.evals and sol.nfev == ref.nfev and sol.njev == ref.njev
+        np.testing.assert_allclose(sol.x, ref.x, rtol=1e-9)
+        np.testing.assert_allclose(sol.x[:3], [1.3, 0.7, 5.0], rtol=0.05)
+        np.testing.assert_array_equal(sol.fun, sine(sol.x))  # the whole residual ...
+        assert sol.jac.shape == (400, 4)  # ... and Jacobian where it ended
+        np.testing.assert_allclose(sol.jac, ref.jac, rtol=1e-6, atol=1e-9)
 
 
 def test_rivals_share_their_family_jacobian():

@@ -322,9 +322,7 @@ class TableModel(Residuals):
                             refresh=refresh)
             if families is not None:  # a rival: its loop's family's Jacobian
                 families.seed(secant, x, as_declared)
-            sol = scipy.optimize.least_squares(secant.fun, x, jac=secant.jac,
-                                               bounds=(lo, hi), xtol=1e-6, ftol=ftol,
-                                               max_nfev=nfev)
+            sol = secant.solve(x, bounds=(lo, hi), xtol=1e-6, ftol=ftol, max_nfev=nfev)
             sol.secant = secant
             return sol
 

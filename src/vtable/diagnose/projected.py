@@ -112,8 +112,7 @@ class Frame:
         # the screening share: its parameters take `BASE_STEPS` there first (Broyden's
         # updates from J), so that no candidate is credited with what they gain alone
         secant.seed(z, J)
-        sol = scipy.optimize.least_squares(secant.fun, z, jac=secant.jac, bounds=(lo, hi),
-                                           xtol=1e-6, ftol=1e-8, max_nfev=BASE_STEPS)
+        sol = secant.solve(z, bounds=(lo, hi), xtol=1e-6, ftol=1e-8, max_nfev=BASE_STEPS)
         J = J[:campaign.n_target]
         Q, R = scipy.linalg.qr(J, mode="economic")
         return cls(tuple(p.key for p in lay), sol.x, Q, R, float(sol.fun @ sol.fun), J,
@@ -238,8 +237,7 @@ def projected_start(model, full, start, lay, x0: np.ndarray, frame: Frame,
             J[:n, ci] = base_J[:, fi]
             J[n:, ci] = prior_J
             secant.seed(z, J)
-        sol = scipy.optimize.least_squares(secant.fun, z, jac=secant.jac, bounds=(lo, hi),
-                                           xtol=1e-6, ftol=1e-8, max_nfev=SCREEN_STEPS)
+        sol = secant.solve(z, bounds=(lo, hi), xtol=1e-6, ftol=1e-8, max_nfev=SCREEN_STEPS)
         if float(sol.fun @ sol.fun) < frame.cost * (1 - screen):
             return np.clip(sol.x, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
         if best is None or float(sol.fun @ sol.fun) < float(best.fun @ best.fun):
