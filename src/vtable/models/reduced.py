@@ -36,7 +36,7 @@ from vtable.hydraulics.table_stages import table_stages
 from vtable.interpolate import upsampled
 from vtable.models import physics as phys
 from vtable.models import reduced_unrolled as unrolled
-from vtable.models.modal import ModalOutputs
+from vtable.models.modal import ModalOutputs, filtered
 from vtable.models.reduced_kernel import (
     KERNELS,
     law_where,
@@ -428,15 +428,7 @@ class ReducedModel(ModalOutputs):
         """The run's channels (`Channels`, SI) on the uniform time grid `t` of a command x_c
         sampled on it (the integration: `histories`)."""
         h, up, _xc, Q, Qd, Qdd, F, PL = self.histories(t, x_c)
-        out = self._channels(Q, Qd, Qdd, F, PL)
-        for fn, only in self.assembly.filters:  # each distinct signal once (zeros stay
-            done: dict[int, np.ndarray] = {}   # zeros), on its channels
-            for k, v in out.items():
-                if only is not None and k not in only:
-                    continue
-                if id(v) not in done:
-                    done[id(v)] = fn(v, 1.0 / h) if np.any(v) else v
-                out[k] = done[id(v)]
+        out = filtered(self.assembly.filters, self._channels(Q, Qd, Qdd, F, PL), 1.0 / h)
         return Channels(self._aliased({k: v[::up] for k, v in out.items()}),
                         np.asarray(t, dtype=float), h)
 
