@@ -87,6 +87,60 @@ def test_modal_outputs_equal_the_integrator(effects):
         assert m._modal() is not None  # the stable, well-conditioned modal path was taken
 
 
+def test_a_filtered_nonlinear_model_steps_its_dynamics_once(monkeypatch):
+    """A nonlinear model behind an output filter (friction and the anti-aliasing filter):
+    `outputs` gives `simulate`'s channels to the bit, filtering only those asked; a model
+    with the same dynamics and another cut-off reads the histories kept
+    (`kept_histories`: no integration), one with other friction integrates again; the
+    kept arrays are read-only, and a filter that changes its input in place is handed a
+    copy."""
+    from vtable.models.modal import filtered
+    from vtable.models.reduced_parts import kept_histories
+
+    runs = truth_campaign(*PITCH)
+    c = Campaign.of(runs)
+    r = c.runs[2]
+    t, x = r.time[:1500], r.channel("h_span")[:1500]
+    names = ["avg_hdisp", "avg_hacc", "h1_force", "h2_force", "acc_n_ne", "pot_n_sw"]
+    calls = [0]
+    integrate = ReducedModel.histories
+
+    def counted(self, *a):
+        calls[0] += 1
+        return integrate(self, *a)
+
+    monkeypatch.setattr(ReducedModel, "histories", counted)
+
+    def model(friction, cutoff):
+        return ReducedModel(Physics(nominal_open_loop(c.table), c.specimen, {
+            "actuator_friction": {"friction": friction}, "sensor_filter": {"cutoff_hz": cutoff}}),
+            c.table)
+
+    for friction, cutoff, integrated in ((2.0, 60.0, 1), (2.0, 35.0, 0), (2.5, 35.0, 1)):
+        m = model(friction, cutoff)
+        assert not m.linear and m.assembly.filters
+        calls[0] = 0
+        fast = m.outputs(t, x, names, step=2)
+        assert calls[0] == integrated, (friction, cutoff)
+        full = m.simulate(t, x)
+        for k in names:
+            np.testing.assert_array_equal(fast[k], full[k][::2])
+        assert fast["h1_force"] is fast["h2_force"]
+    assert not kept_histories(model(2.0, 35.0), t, x).q.flags.writeable
+
+    ro = np.arange(6.0)
+    ro.flags.writeable = False
+
+    def in_place(v, fs):
+        v *= 2.0
+        return v
+
+    out = filtered([(in_place, None)], {"a": ro, "b": ro}, 200.0)
+    np.testing.assert_array_equal(out["a"], 2 * np.arange(6.0))
+    assert out["a"] is out["b"]  # one signal, filtered once
+    np.testing.assert_array_equal(ro, np.arange(6.0))
+
+
 def test_secant_jacobian():
     rng = np.random.default_rng(3)
     A = rng.normal(size=(40, 5))

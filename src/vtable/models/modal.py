@@ -23,20 +23,23 @@ from vtable._numba import first_compile
 from vtable.analytic.hold import balance
 from vtable.interpolate import upsampled
 from vtable.models.reduced_kernel import simulate_modal
+from vtable.models.reduced_parts import kept_histories
 
 
 def filtered(filters: Sequence[tuple[Callable, frozenset | None]],
              out: dict[str, np.ndarray], fs: float) -> dict[str, np.ndarray]:
     """The channels `out` (sampled at `fs`) through the model's output filters, each
     (fn(x, fs), the channels it applies to or None: all) in turn, in place: each distinct
-    signal once, zeros left as they are."""
+    signal once, zeros left as they are; a read-only one (kept histories') handed to a
+    filter as a copy, which the filter may change in place."""
     for fn, only in filters:
         done: dict[int, np.ndarray] = {}
         for k, v in out.items():
             if only is not None and k not in only:
                 continue
             if id(v) not in done:
-                done[id(v)] = fn(v, fs) if np.any(v) else v
+                done[id(v)] = fn(v if v.flags.writeable else v.copy(), fs) if np.any(v) \
+                    else v
             out[k] = done[id(v)]
     return out
 
@@ -88,8 +91,10 @@ class ModalOutputs:
                           step: int) -> dict[str, np.ndarray]:
         """`outputs` of a model stepped whole with output filters: `simulate`'s channels
         `names` (the same values), only the histories' channels they read filtered (a
-        fit's targets read 7 of the 10 a friction model's filter would run on)."""
-        h, up, _xc, Q, Qd, Qdd, F, PL = self.histories(t, x_c)
+        fit's targets read 7 of the 10 a friction model's filter would run on), the
+        histories kept by the model's dynamics (`reduced_parts.kept_histories`: a fit that
+        moves only the filters' parameters steps them once)."""
+        h, up, _xc, Q, Qd, Qdd, F, PL = kept_histories(self, t, x_c)
         raw = self._channels(Q, Qd, Qdd, F, PL)
         source = self._aliased({k: k for k in raw})  # each channel -> the one it reads
         keys = {source[c] for c in names if c in source}

@@ -12,7 +12,11 @@ the parts are the same as last time.
   (`ServoLaw.dof_loop`, the pitch effect's `set_rocking`);
 - `lumped_law`: the horizontal actuators lumped into one (`ServoLaw.lumped`), by that
   table, those constants and the stages with their values;
-- `table_view`: what the effects read of that table (`effects.table.TableView`).
+- `table_view`: what the effects read of that table (`effects.table.TableView`);
+- `kept_histories`: a model's integrated histories on a command, by its dynamics: a model
+  with output filters is stepped again with the same dynamics when a fit moves only the
+  filters' parameters (a sensor filter's grid, its least-squares steps in its own
+  parameters, their Jacobian's columns).
 
 Every key holds the objects it names by identity (kept with the result, so that an id
 stays theirs) and the values by value; nothing kept is changed in place: frozen
@@ -25,6 +29,8 @@ from __future__ import annotations
 import contextlib
 from collections.abc import Callable, Sequence
 from typing import Any
+
+import numpy as np
 
 from vtable.effects.table import TableView
 from vtable.hydraulics import group_law
@@ -40,6 +46,7 @@ _SERVOS: dict = {}
 _PITCH: dict = {}
 _LAWS: dict = {}
 _VIEWS: dict = {}
+_HISTORIES: dict = {}
 
 
 def _kept(cache: dict, key: tuple, held: tuple, make: Callable[[], Any]) -> Any:
@@ -108,3 +115,26 @@ def table_view(vt, piston_area: float):
     """`TableView.of(vt, piston_area)`, kept by table and area."""
     return _kept(_VIEWS, (id(vt), piston_area), (vt,),
                  lambda: TableView.of(vt, piston_area=piston_area))
+
+
+def kept_histories(model, t, x_c):
+    """`model.histories(t, x_c)` (a `ReducedModel`'s), kept by what the integration reads:
+    its matrices, its stages' and force elements' values (`sp`, `pe`), its step, its
+    compiled element, and the command arrays themselves (held: a fit drives every point by
+    the same arrays). The arrays kept are read-only (`filtered` hands a filter a copy of
+    any it would read)."""
+    parts = (model.Minv, model.K, model.C, model.c2, model.bF, model.ax, model.sp, model.T,
+             model.Tp, model.g, model.kp, model.kv, model.Aw, model.Wq, model.Wv, model.Fw,
+             model.pe, getattr(model, "ia", ()), getattr(model, "ib", ()))
+    arrays = [np.asarray(a) for a in parts]
+    key = (id(t), id(x_c), id(model.element.module), id(model.elem), model.python,
+           model.linear, model.ne, model.max_step, tuple(a.shape for a in arrays),
+           b"".join(a.tobytes() for a in arrays))
+
+    def make():
+        h = model.histories(t, x_c)
+        for a in h[3:]:  # (not the command: with no upsampling it is the caller's)
+            a.flags.writeable = False
+        return h
+
+    return _kept(_HISTORIES, key, (t, x_c, model.element.module, model.elem), make)
