@@ -1094,3 +1094,45 @@ def test_the_toml_is_parsed_once_into_typed_fields(tmp_path, monkeypatch):
     h5 = read_hdf5(write_hdf5(r, tmp_path / "decl.h5"))
     assert h5.declared.units == {"h_span": "mm"} and h5.declared.meta is h5.meta
     assert h5.declared.table == d.table and h5.declared.command.band == (0.5, 25.0)
+
+
+def test_a_warm_process_keeps_a_run_file_parsed_while_its_bytes_are_the_same(tmp_path,
+                                                                              monkeypatch):
+    """`vtable.runs.parsed`: a file parsed here is noted (a warm process's child reports
+    it); kept (`keep`, the warm process between commands), `read_csv` gives the same
+    header, samples and notes as a parse, in copies, without parsing; a file rewritten
+    with other bytes of the same size and time is parsed again, as is a .gz that a plain
+    file now shadows."""
+    import gzip
+    import os
+
+    from vtable.runs import csvfile, parsed
+
+    monkeypatch.setattr(parsed, "_KEPT", {})
+    monkeypatch.setattr(parsed, "_PARSED", [])
+    f = tmp_path / "r.csv"
+    f.write_text("time,h_span\n0.0,1.5\n0.005,2.5\n0.01,nan\n")
+    ref = csvfile.parse_csv(f)
+    assert csvfile.read_csv(f)[0] == ref[0] and parsed.parsed_here() == [str(f)]
+    parsed.keep(str(f))
+    g = tmp_path / "z.csv"
+    with gzip.open(tmp_path / "z.csv.gz", "wt") as fh:
+        fh.write("time,h_span\n0.0,1.0\n0.005,2.0\n")
+    parsed.keep(str(g))
+    calls = []
+    monkeypatch.setattr(csvfile, "parse_csv", lambda p: calls.append(p) or ref)
+    header, data, notes = csvfile.read_csv(f)
+    assert calls == [] and header == ref[0] and notes == ref[2]
+    np.testing.assert_array_equal(data, ref[1])
+    data[1, 0] = 99.0  # a copy: the kept one stays as parsed
+    np.testing.assert_array_equal(csvfile.read_csv(f)[1], ref[1])
+    st = f.stat()
+    f.write_text("time,h_span\n0.0,1.5\n0.005,2.6\n0.01,nan\n")  # same size, same times
+    os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns))
+    assert f.stat().st_size == st.st_size
+    csvfile.read_csv(f)
+    assert calls == [f]  # parsed again
+    assert "read compressed" in csvfile.read_csv(g)[2][0] and calls == [f]
+    g.write_text("time,h_span\n0.0,7.0\n0.005,8.0\n")  # a plain file beside it now
+    csvfile.read_csv(g)
+    assert calls == [f, g]

@@ -21,6 +21,7 @@ from typing import IO
 import numpy as np
 
 from vtable.errors import VtableError
+from vtable.runs import parsed
 
 BLOCK = 1 << 20  # bytes read at a time (the reader needs about 10 blocks beyond the samples)
 HEADER_MAX = 1 << 20
@@ -174,6 +175,17 @@ def _count_lines(fh: IO[bytes]) -> int:
 
 
 def read_csv(path: Path) -> tuple[list[str], np.ndarray, list[str]]:
+    """`parse_csv(path)`, or in a warm process's child the parse its warm process kept of
+    the same bytes (`vtable.runs.parsed`)."""
+    hit = parsed.kept(path)
+    if hit is not None:
+        return hit
+    out = parse_csv(path)
+    parsed.note(path)
+    return out
+
+
+def parse_csv(path: Path) -> tuple[list[str], np.ndarray, list[str]]:
     """Header and values of RUN.csv as a (columns x rows) array, NaN for missing samples,
     and notes (a last line without a line end).
 

@@ -42,6 +42,7 @@ from vtable.__main__ import _collect, _end, start
 from vtable.diagnose.workers import WARM_SAMPLES, load_kernels
 from vtable.errors import on_sigint
 from vtable.models.reduced import ReducedModel
+from vtable.runs import parsed
 from vtable.runs.lab import run_table
 from vtable.warm import IDLE_S, VERBS
 
@@ -187,6 +188,7 @@ def _child(conn: socket.socket, head: dict, fds: list[int], loaded_env: dict) ->
         for fd in (0, 1, 2):
             os.dup2(null, fd)
         _say(conn, f"exit {code}")
+        lessons.extend(("csv", p) for p in parsed.parsed_here())
         if lessons:
             tmp = Path(f"{head['lessons']}.tmp")
             with contextlib.suppress(OSError, pickle.PicklingError, TypeError):
@@ -254,14 +256,19 @@ class _Server:
     def build_one(self) -> None:
         """Build one queued model and simulate its few samples, its kernels loaded (or
         compiled) here, if no model built before had them; a model that cannot be built
-        here (a user's effect) is passed over."""
-        ph, table, t, x = self.todo.pop(0)
+        here (a user's effect) is passed over. Or parse a run file a command read, for the
+        next (`vtable.runs.parsed`)."""
+        lesson = self.todo.pop(0)
         try:
-            m = ReducedModel(ph, table)
-            key = (m.element.key, m.M.shape, m.Aw.shape, m.elem is None)
-            if key not in self.built and len(self.built) < _BUILT_MAX:
-                self.built.add(key)
-                load_kernels(m, t, x)
+            if isinstance(lesson[0], str):  # ("csv", its absolute path)
+                parsed.keep(lesson[1])
+            else:
+                ph, table, t, x = lesson
+                m = ReducedModel(ph, table)
+                key = (m.element.key, m.M.shape, m.Aw.shape, m.elem is None)
+                if key not in self.built and len(self.built) < _BUILT_MAX:
+                    self.built.add(key)
+                    load_kernels(m, t, x)
         except Exception:  # the child reported what it could not do
             pass
         if not self.todo:
