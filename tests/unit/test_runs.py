@@ -1126,6 +1126,8 @@ def test_a_warm_process_keeps_a_run_file_parsed_while_its_bytes_are_the_same(tmp
     np.testing.assert_array_equal(data, ref[1])
     data[1, 0] = 99.0  # a copy: the kept one stays as parsed
     np.testing.assert_array_equal(csvfile.read_csv(f)[1], ref[1])
+    monkeypatch.chdir(tmp_path)  # named relative to the working folder: the same file
+    np.testing.assert_array_equal(csvfile.read_csv(Path("r.csv"))[1], ref[1])
     st = f.stat()
     f.write_text("time,h_span\n0.0,1.5\n0.005,2.6\n0.01,nan\n")  # same size, same times
     os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns))

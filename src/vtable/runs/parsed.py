@@ -39,11 +39,12 @@ def _digest(path: Path) -> bytes | None:
 def kept(path: Path) -> tuple[list[str], np.ndarray, list[str]] | None:
     """`csvfile.parse_csv(path)` as kept (copies), when the file read then still holds the
     same bytes; else None."""
-    entry = _KEPT.get(os.path.abspath(path))
+    key = os.path.abspath(path)
+    entry = _KEPT.get(key)
     if entry is None:
         return None
     read, digest, header, data, notes = entry
-    if source(path) != read or _digest(read) != digest:
+    if source(Path(key)) != read or _digest(read) != digest:
         return None
     return list(header), data.copy(), list(notes)
 
@@ -58,9 +59,10 @@ def parsed_here() -> list[str]:
     return list(dict.fromkeys(_PARSED))
 
 
-def keep(path: str) -> None:
-    """Parse `path` and keep it (a warm process, between commands); nothing kept when the
-    file changed while it was parsed or cannot be parsed (the command said why)."""
+def keep(path: str) -> bool:
+    """Parse `path` and keep it (a warm process, between commands); nothing kept (False)
+    when the file changed while it was parsed or cannot be parsed (the command said
+    why)."""
     from vtable.runs.csvfile import parse_csv
 
     read = source(Path(path))
@@ -68,11 +70,12 @@ def keep(path: str) -> None:
     try:
         header, data, notes = parse_csv(Path(path))
     except Exception:  # (the command that read it reported it)
-        return
+        return False
     if digest is None or _digest(read) != digest:
-        return
+        return False
     data.flags.writeable = False
     _KEPT.pop(path, None)
     _KEPT[path] = (read, digest, header, data, notes)
     while sum(e[3].nbytes for e in _KEPT.values()) > MAX_BYTES and len(_KEPT) > 1:
         _KEPT.pop(next(iter(_KEPT)))
+    return True

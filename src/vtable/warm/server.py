@@ -261,7 +261,7 @@ class _Server:
         lesson = self.todo.pop(0)
         try:
             if isinstance(lesson[0], str):  # ("csv", its absolute path)
-                parsed.keep(lesson[1])
+                self.say(f"{lesson[1]}: {'parsed' if parsed.keep(lesson[1]) else 'not kept'}")
             else:
                 ph, table, t, x = lesson
                 m = ReducedModel(ph, table)
