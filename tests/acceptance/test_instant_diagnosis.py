@@ -193,7 +193,12 @@ def test_the_compacted_fit_takes_the_same_steps():
     near[:, 5] = near[:, 4] * 2 + 1e-9 * rng.normal(size=400)  # independent part 1e-12
     zero = J.copy()
     zero[:, 2] = 0.0
-    for A, r in ((J, f), (near, f), (zero, f), (J, np.zeros(400))):
+    close = J.copy()  # independent part 1e-7: the Gram matrix's factor exists, inexact
+    close[:, 5] = close[:, 4] * 2 + 1e-7 * np.linalg.norm(J[:, 4]) * rng.normal(size=400) / 20
+    s_close = np.linalg.svd(compact(f, close), compute_uv=False)
+    np.testing.assert_allclose(s_close[-1], np.linalg.svd(close, compute_uv=False)[-1],
+                               rtol=1e-6)  # (from the QR: 5e-2 off from the Gram's factor)
+    for A, r in ((J, f), (near, f), (zero, f), (close, f), (J, np.zeros(400))):
         C = compact(r, A)
         assert C.shape == (7, 6)
         e = np.zeros(7)
@@ -223,6 +228,23 @@ def test_the_compacted_fit_takes_the_same_steps():
         np.testing.assert_array_equal(sol.fun, sine(sol.x))  # the whole residual ...
         assert sol.jac.shape == (400, 4)  # ... and Jacobian where it ended
         np.testing.assert_allclose(sol.jac, ref.jac, rtol=1e-6, atol=1e-9)
+
+    # ten parameters: a Jacobian's differences push the point out of those `Secant` keeps,
+    # and its residual there is not evaluated again
+    B = rng.normal(size=(400, 10))
+    z = B @ np.linspace(0.5, 1.5, 10)
+
+    def wavy(x):
+        return B @ x + 0.3 * np.sin(B @ x) - z - 0.3 * np.sin(z)
+
+    lo10, hi10 = np.full(10, -3.0), np.full(10, 3.0)
+    full, small = Secant(wavy, lo10, hi10, refresh=1), Secant(wavy, lo10, hi10, refresh=1)
+    kw = dict(bounds=(lo10, hi10), xtol=1e-12, ftol=1e-12, max_nfev=20)
+    ref = scipy.optimize.least_squares(full.fun, np.zeros(10), jac=full.jac, **kw)
+    sol = small.solve(np.zeros(10), **kw)
+    assert small.evals == full.evals and sol.nfev == ref.nfev
+    np.testing.assert_allclose(sol.x, ref.x, rtol=1e-8, atol=1e-10)
+    assert sol.cost == pytest.approx(ref.cost, rel=1e-12)
 
 
 def test_rivals_share_their_family_jacobian():

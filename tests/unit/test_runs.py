@@ -1098,11 +1098,12 @@ def test_the_toml_is_parsed_once_into_typed_fields(tmp_path, monkeypatch):
 
 def test_a_warm_process_keeps_a_run_file_parsed_while_its_bytes_are_the_same(tmp_path,
                                                                               monkeypatch):
-    """`vtable.runs.parsed`: a file parsed here is noted (a warm process's child reports
-    it); kept (`keep`, the warm process between commands), `read_csv` gives the same
-    header, samples and notes as a parse, in copies, without parsing; a file rewritten
-    with other bytes of the same size and time is parsed again, as is a .gz that a plain
-    file now shadows."""
+    """`vtable.runs.parsed`: a file parsed in a warm process's child is noted, by its real
+    path; kept (`keep`, the warm process between commands), `read_csv` gives the same
+    header and samples as a parse, in copies, without parsing, whatever path names it; a
+    file rewritten with other bytes of the same size and times is parsed again; a
+    compressed file, or one with a note, is neither noted nor kept; a path through a link
+    and `..` is the file it opens, not the one its text names."""
     import gzip
     import os
 
@@ -1110,31 +1111,41 @@ def test_a_warm_process_keeps_a_run_file_parsed_while_its_bytes_are_the_same(tmp
 
     monkeypatch.setattr(parsed, "_KEPT", {})
     monkeypatch.setattr(parsed, "_PARSED", [])
+    monkeypatch.setattr(parsed, "_NOTING", [False])
     f = tmp_path / "r.csv"
     f.write_text("time,h_span\n0.0,1.5\n0.005,2.5\n0.01,nan\n")
+    csvfile.read_csv(f)
+    assert parsed.parsed_here() == []  # not a warm process's child
+    parsed.noting()
     ref = csvfile.parse_csv(f)
     assert csvfile.read_csv(f)[0] == ref[0] and parsed.parsed_here() == [str(f)]
-    parsed.keep(str(f))
-    g = tmp_path / "z.csv"
     with gzip.open(tmp_path / "z.csv.gz", "wt") as fh:
         fh.write("time,h_span\n0.0,1.0\n0.005,2.0\n")
-    parsed.keep(str(g))
+    (tmp_path / "cut.csv").write_text("time,h_span\n0.0,1.0\n0.005,2.0")  # no line end
+    for name in ("z.csv", "cut.csv"):
+        assert csvfile.read_csv(tmp_path / name)[2]  # a note: not noted, not kept
+        assert not parsed.keep(str(tmp_path / name), csvfile.parse_csv)
+    assert parsed.parsed_here() == [str(f)]
+    assert parsed.keep(str(f), csvfile.parse_csv)
     calls = []
-    monkeypatch.setattr(csvfile, "parse_csv", lambda p: calls.append(p) or ref)
+    parse = csvfile.parse_csv
+    monkeypatch.setattr(csvfile, "parse_csv", lambda p: calls.append(p) or parse(p))
     header, data, notes = csvfile.read_csv(f)
-    assert calls == [] and header == ref[0] and notes == ref[2]
+    assert calls == [] and header == ref[0] and notes == []
     np.testing.assert_array_equal(data, ref[1])
     data[1, 0] = 99.0  # a copy: the kept one stays as parsed
     np.testing.assert_array_equal(csvfile.read_csv(f)[1], ref[1])
     monkeypatch.chdir(tmp_path)  # named relative to the working folder: the same file
     np.testing.assert_array_equal(csvfile.read_csv(Path("r.csv"))[1], ref[1])
+    other = tmp_path / "elsewhere" / "sub"
+    other.mkdir(parents=True)
+    (tmp_path / "elsewhere" / "r.csv").write_text("time,h_span\n0.0,9.0\n0.005,9.0\n")
+    (tmp_path / "link").symlink_to(other)
+    via = tmp_path / "link" / ".." / "r.csv"  # the OS opens elsewhere/r.csv
+    np.testing.assert_array_equal(csvfile.read_csv(via)[1][1], [9.0, 9.0])
+    assert calls == [via] and csvfile.read_csv(tmp_path / "z.csv")[2]
     st = f.stat()
     f.write_text("time,h_span\n0.0,1.5\n0.005,2.6\n0.01,nan\n")  # same size, same times
     os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns))
     assert f.stat().st_size == st.st_size
-    csvfile.read_csv(f)
-    assert calls == [f]  # parsed again
-    assert "read compressed" in csvfile.read_csv(g)[2][0] and calls == [f]
-    g.write_text("time,h_span\n0.0,7.0\n0.005,8.0\n")  # a plain file beside it now
-    csvfile.read_csv(g)
-    assert calls == [f, g]
+    assert csvfile.read_csv(f)[1][1, 1] == 2.6 and calls[-1] == f  # parsed again

@@ -117,7 +117,8 @@ def test_a_command_is_answered_by_one_warm_process_as_it_would_be_alone(warm, tm
 
 def test_a_diagnosis_through_the_warm_process_is_the_same(warm, campaign):
     """Byte for byte the JSON of one in a process of its own, the first time and after the
-    warm process has loaded the kernels the first one built."""
+    warm process has loaded the kernels the first one built and parsed the run files it
+    read (once each: the next command took that parse, and had none to report)."""
     env, tmp = warm
     folder, files = campaign
     out = {}
@@ -134,6 +135,10 @@ def test_a_diagnosis_through_the_warm_process_is_the_same(warm, campaign):
     assert len(_servers(tmp)) == 1 and len(_children(tmp)) == 2
     n = int(re.search(r"(\d+) kernel sets loaded", _log(tmp)).group(1))
     assert n >= 3  # the start, pitch and friction at least
+    assert _logged(tmp, "kernel sets loaded", times=2, within=60)  # the second's lessons
+    for f in files:
+        csv = str(Path(f).with_suffix(".csv").resolve())
+        assert _log(tmp).count(f"{csv}: parsed") == 1, _log(tmp)[-2000:]
 
 
 def _started(env: dict, files: list[str], ignore: tuple = ()

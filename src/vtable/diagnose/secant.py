@@ -18,9 +18,11 @@ max(1, |x_i|), turned back where they would leave the bounds.
 [f J] = B R (B orthonormal, m × (n + 1); R upper triangular), the residual Bᵀf =
 (‖f‖, 0, …, 0) and the Jacobian BᵀJ = R[:, 1:] give the same cost ½‖f‖², gradient Jᵀf and
 Gauss-Newton matrix JᵀJ as f and J, so every step of 'trf' (its trust region solved by the
-SVD of the Jacobian) is the same to rounding, at the cost of an (n + 1)-column Gram matrix
-instead of an SVD of all m rows at every iteration (9,000-18,000 on the README campaign:
-those SVDs and the products with them were a tenth of its diagnosis's CPU).
+SVD of the Jacobian) is the same: to rounding, and to ~1e-8 relative in a direction the
+columns nearly share (`GRAM_LIMIT`). It costs an (n + 1)-column Gram matrix instead of an
+SVD of all m rows at every iteration (the README campaign's fits have 9,000-18,500
+residual rows: in a sampling profile of its diagnosis, 9 % of the time went to those SVDs
+and 2 % to the products with the whole Jacobian).
 """
 
 from __future__ import annotations
@@ -35,9 +37,9 @@ import scipy.optimize
 #: iterations between two forward-difference Jacobians (the first is one)
 REFRESH = 4
 #: `compact` takes R from the Cholesky factor of [f J]'s Gram matrix unless a column's part
-#: independent of the columns before it is below this share of its norm (the Gram matrix
-#: would have lost the digits that part needs: ~1e-16 / share² of it), then from a QR
-GRAM_LIMIT = 1e-5
+#: independent of the columns before it is below this share of its norm (the factor's
+#: relative error there is ~1e-16 / share²: 1e-8 at the limit), then from a QR
+GRAM_LIMIT = 1e-4
 
 
 def compact(f: np.ndarray, J: np.ndarray) -> np.ndarray:
@@ -58,7 +60,10 @@ def compact(f: np.ndarray, J: np.ndarray) -> np.ndarray:
     except np.linalg.LinAlgError:
         pass
     R = scipy.linalg.qr(np.column_stack([f, J]), mode="r", check_finite=False)[0][:n + 1]
-    return (R * np.where(np.diag(R) < 0, -1.0, 1.0)[:, None])[:, 1:]
+    R = R * np.where(np.diag(R) < 0, -1.0, 1.0)[:, None]
+    if len(R) < n + 1:  # fewer rows than columns: the rest zero
+        R = np.vstack([R, np.zeros((n + 1 - len(R), n + 1))])
+    return R[:, 1:]
 
 
 class Secant:
@@ -116,8 +121,10 @@ class Secant:
     def solve(self, x0: np.ndarray, **kw) -> scipy.optimize.OptimizeResult:
         """`scipy.optimize.least_squares` ('trf') from `x0` with this `jac`, on the problem
         compacted to n + 1 rows (`compact`: the same steps, without an SVD of every row at
-        each); `kw` its options (bounds, tolerances, max_nfev). The result's `fun` and `jac`
-        are the whole residual and Jacobian at its `x`."""
+        each); `kw` its options (bounds, tolerances, max_nfev; the linear loss only). The
+        result's `fun`, `jac` and `cost` are the whole residual's, at its `x`."""
+        if kw.get("method", "trf") != "trf" or kw.get("loss", "linear") != "linear":
+            raise ValueError("Secant.solve takes method='trf' with the linear loss only")
         x0 = np.asarray(x0, dtype=float)
         n = len(x0)
         last: list = [None]  # the last point `jac` was asked at: (x, f, J) in full
@@ -129,17 +136,16 @@ class Secant:
             return out
 
         def jac(x: np.ndarray) -> np.ndarray:
-            J = self.jac(x)
-            f = self._value(x)
+            J = self.jac(x)  # (its residual at x: `_f`; its differences may have pushed
+            f = self._f      # x out of those `_value` keeps)
             last[0] = (np.asarray(x, dtype=float).copy(), f, J)
             return compact(f, J)
 
         sol = scipy.optimize.least_squares(fun, x0, jac=jac, **kw)
         x, f, J = last[0]
-        if np.array_equal(x, sol.x):  # 'trf' ends where it last took the Jacobian
-            sol.fun, sol.jac = f, J
-        else:  # (another method might not)
-            sol.fun, sol.jac = self._value(sol.x), self.at(sol.x)
+        if not np.array_equal(x, sol.x):  # scipy's 'trf' ends where it last took the
+            f, J = self._value(sol.x), self.at(sol.x)  # Jacobian; were it not to
+        sol.fun, sol.jac, sol.cost = f, J, 0.5 * float(f @ f)
         return sol
 
     def seed(self, x: np.ndarray, J: np.ndarray) -> None:

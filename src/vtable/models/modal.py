@@ -47,7 +47,9 @@ def filtered(filters: Sequence[tuple[Callable, frozenset | None]],
 class ModalOutputs:
     """`ReducedModel`'s fast outputs (the module docstring); it provides `simulate`,
     `histories`, `linear`, `_linear` (A, B, f_y, f_u), `element` (None: structure only,
-    `simulate` says so), `M`, `max_step`, `assembly`, `_channels`, `_aliased`."""
+    `simulate` says so), `M`, `max_step`, `assembly`, `_channels`, `_aliased`, and what
+    `reduced_parts.kept_histories` reads (its matrices, `sp`, `pe`, `elem`, `python`,
+    `ne`)."""
 
     def outputs(self, t: np.ndarray, x_c: np.ndarray, names: Sequence[str],
                 step: int = 1) -> dict[str, np.ndarray]:
@@ -81,10 +83,7 @@ class ModalOutputs:
             Y = simulate_modal(xc, phi, g0, g1, Cm, D, every)
         out = {c: Y[i] for i, c in enumerate(names)}
         if filters:
-            for fn, only in filters:
-                out = {c: fn(v, 1.0 / h) if np.any(v) and (only is None or c in only) else v
-                       for c, v in out.items()}
-            out = {c: v[::up * step] for c, v in out.items()}
+            out = {c: v[::up * step] for c, v in filtered(filters, out, 1.0 / h).items()}
         return {c: out[a] for c, a in alias.items()}
 
     def _filtered_outputs(self, t: np.ndarray, x_c: np.ndarray, names: Sequence[str],

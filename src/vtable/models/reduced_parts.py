@@ -39,6 +39,8 @@ from vtable.models.linear_table import mechanics
 
 #: entries kept by each cache
 KEPT = 16
+#: the integrated histories kept at most (bytes: `kept_histories`)
+HISTORIES_MAX = 64 << 20
 
 _TABLES: dict = {}
 _MECHANICS: dict = {}
@@ -121,8 +123,8 @@ def kept_histories(model, t, x_c):
     """`model.histories(t, x_c)` (a `ReducedModel`'s), kept by what the integration reads:
     its matrices, its stages' and force elements' values (`sp`, `pe`), its step, its
     compiled element, and the command arrays themselves (held: a fit drives every point by
-    the same arrays). The arrays kept are read-only (`filtered` hands a filter a copy of
-    any it would read)."""
+    the same arrays). At most `KEPT` of them and `HISTORIES_MAX` bytes; those kept are
+    read-only (`modal.filtered` hands a filter a copy of any it would read)."""
     parts = (model.Minv, model.K, model.C, model.c2, model.bF, model.ax, model.sp, model.T,
              model.Tp, model.g, model.kp, model.kv, model.Aw, model.Wq, model.Wv, model.Fw,
              model.pe, getattr(model, "ia", ()), getattr(model, "ib", ()))
@@ -130,11 +132,17 @@ def kept_histories(model, t, x_c):
     key = (id(t), id(x_c), id(model.element.module), id(model.elem), model.python,
            model.linear, model.ne, model.max_step, tuple(a.shape for a in arrays),
            b"".join(a.tobytes() for a in arrays))
-
-    def make():
-        h = model.histories(t, x_c)
+    held = (t, x_c, model.element.module, model.elem)
+    hit = _HISTORIES.get(key)
+    if hit is not None and all(a is b for a, b in zip(hit[0], held, strict=True)):
+        return hit[1]
+    h = model.histories(t, x_c)
+    if sum(a.nbytes for a in h[3:]) <= HISTORIES_MAX // 4:
         for a in h[3:]:  # (not the command: with no upsampling it is the caller's)
             a.flags.writeable = False
-        return h
-
-    return _kept(_HISTORIES, key, (t, x_c, model.element.module, model.elem), make)
+        _keep(_HISTORIES, key, (held, h))
+        while sum(sum(a.nbytes for a in e[1][3:]) for e in _HISTORIES.values()) > \
+                HISTORIES_MAX:
+            with contextlib.suppress(RuntimeError, KeyError, StopIteration):
+                _HISTORIES.pop(next(iter(_HISTORIES)))
+    return h

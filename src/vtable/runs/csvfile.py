@@ -181,7 +181,7 @@ def read_csv(path: Path) -> tuple[list[str], np.ndarray, list[str]]:
     if hit is not None:
         return hit
     out = parse_csv(path)
-    parsed.note(path)
+    parsed.note(path, out[2])
     return out
 
 

@@ -43,6 +43,7 @@ from vtable.diagnose.workers import WARM_SAMPLES, load_kernels
 from vtable.errors import on_sigint
 from vtable.models.reduced import ReducedModel
 from vtable.runs import parsed
+from vtable.runs.csvfile import parse_csv
 from vtable.runs.lab import run_table
 from vtable.warm import IDLE_S, VERBS
 
@@ -175,6 +176,7 @@ def _child(conn: socket.socket, head: dict, fds: list[int], loaded_env: dict) ->
 
     threading.Thread(target=watch, daemon=True, name="vtable-warm-caller").start()
     lessons: list = []
+    parsed.noting()  # the run files it parses: for this process to parse for the next
 
     def loaded() -> None:  # the command runs: an interrupt is its own from now on
         _collect()
@@ -261,7 +263,8 @@ class _Server:
         lesson = self.todo.pop(0)
         try:
             if isinstance(lesson[0], str):  # ("csv", its absolute path)
-                self.say(f"{lesson[1]}: {'parsed' if parsed.keep(lesson[1]) else 'not kept'}")
+                self.say(f"{lesson[1]}: "
+                         f"{'parsed' if parsed.keep(lesson[1], parse_csv) else 'not kept'}")
             else:
                 ph, table, t, x = lesson
                 m = ReducedModel(ph, table)
