@@ -51,15 +51,22 @@ _VIEWS: dict = {}
 _HISTORIES: dict = {}
 
 
-def _kept(cache: dict, key: tuple, held: tuple, make: Callable[[], Any]) -> Any:
-    """`cache`'s value for `key` whose held objects are `held` (by identity), else
-    `make()` kept there (the oldest entry dropped beyond `KEPT`)."""
+def _hit(cache: dict, key: tuple, held: tuple) -> Any:
+    """`cache`'s value for `key` whose held objects are `held` (by identity), or None."""
     hit = cache.get(key)
     if hit is not None and len(hit[0]) == len(held) and \
             all(a is b for a, b in zip(hit[0], held, strict=True)):
         return hit[1]
-    value = make()
-    _keep(cache, key, (held, value))
+    return None
+
+
+def _kept(cache: dict, key: tuple, held: tuple, make: Callable[[], Any]) -> Any:
+    """`cache`'s value for `key` whose held objects are `held` (`_hit`), else `make()`
+    kept there (the oldest entry dropped beyond `KEPT`)."""
+    value = _hit(cache, key, held)
+    if value is None:
+        value = make()
+        _keep(cache, key, (held, value))
     return value
 
 
@@ -133,16 +140,16 @@ def kept_histories(model, t, x_c):
            model.linear, model.ne, model.max_step, tuple(a.shape for a in arrays),
            b"".join(a.tobytes() for a in arrays))
     held = (t, x_c, model.element.module, model.elem)
-    hit = _HISTORIES.get(key)
-    if hit is not None and all(a is b for a, b in zip(hit[0], held, strict=True)):
-        return hit[1]
+    h = _hit(_HISTORIES, key, held)
+    if h is not None:
+        return h
     h = model.histories(t, x_c)
-    if sum(a.nbytes for a in h[3:]) <= HISTORIES_MAX // 4:
-        for a in h[3:]:  # (not the command: with no upsampling it is the caller's)
+    kept = h[3:]  # (not the command: with no upsampling it is the caller's)
+    if sum(a.nbytes for a in kept) <= HISTORIES_MAX // 4:
+        for a in kept:
             a.flags.writeable = False
         _keep(_HISTORIES, key, (held, h))
-        while sum(sum(a.nbytes for a in e[1][3:]) for e in _HISTORIES.values()) > \
-                HISTORIES_MAX:
+        while sum(a.nbytes for _, e in _HISTORIES.values() for a in e[3:]) > HISTORIES_MAX:
             with contextlib.suppress(RuntimeError, KeyError, StopIteration):
                 _HISTORIES.pop(next(iter(_HISTORIES)))
     return h
