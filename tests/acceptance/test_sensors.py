@@ -78,3 +78,18 @@ def test_lnecs_measured_run_is_flagged(tmp_path):
     f_m, z_m, f_c = c.mount
     assert 15.0 < f_m < 19.0 and z_m < 0.3 and 20.0 < f_c < 45.0
     assert c.text() in Campaign.of([run]).notes
+
+
+def test_the_mount_fits_jacobian_is_its_laws_derivative():
+    """`mount_log_derivatives` (the sensor check's Jacobian) against central differences
+    of ln `mount_response`: a wrong sign or factor of 2π in any column is off by ≥ 50 %."""
+    from vtable.effects.sensor import mount_log_derivatives, mount_response
+    w = 2 * math.pi * np.linspace(0.5, 80.0, 400)
+    p = np.array([14.0, 0.06, 35.0])
+    J = mount_log_derivatives(w, *p)
+    for i in range(3):
+        h = np.zeros(3)
+        h[i] = 1e-6 * p[i]
+        fd = (np.log(mount_response(w, *(p + h))) - np.log(mount_response(w, *(p - h))))
+        fd /= 2 * h[i]
+        assert np.max(np.abs(J[:, i] - fd)) < 1e-6 * np.max(np.abs(fd))

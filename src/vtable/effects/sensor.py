@@ -65,6 +65,25 @@ def mount_response(w: np.ndarray, f_m: float, z_m: float, f_c: float) -> np.ndar
     return r
 
 
+def mount_log_derivatives(w: np.ndarray, f_m: float, z_m: float, f_c: float) -> np.ndarray:
+    """∂ ln R(jω) / ∂(f_m, ζ_m, f_c) at the angular frequencies `w` (`mount_response`),
+    one column each: with D_m = s² + 2ζ_mω_m s + ω_m² and D_c = s² + √2ω_c s + ω_c²,
+    ln R = 2 ln ω_m − ln D_m + 2 ln ω_c − ln D_c, so
+
+        ∂/∂f_m = 2π (2/ω_m − (2ζ_m s + 2ω_m)/D_m),   ∂/∂ζ_m = −2ω_m s/D_m,
+        ∂/∂f_c = 2π (2/ω_c − (√2 s + 2ω_c)/D_c).
+
+    A fit of ln R (the sensor check's) takes them as its Jacobian, where forward
+    differences cost it three evaluations a step."""
+    s = 1j * np.asarray(w, dtype=float)
+    wm, wc = 2 * np.pi * f_m, 2 * np.pi * f_c
+    d_m = s * s + 2 * z_m * wm * s + wm * wm
+    d_c = s * s + np.sqrt(2) * wc * s + wc * wc
+    return np.stack([2 * np.pi * (2 / wm - (2 * z_m * s + 2 * wm) / d_m),
+                     -2 * wm * s / d_m,
+                     2 * np.pi * (2 / wc - (np.sqrt(2) * s + 2 * wc) / d_c)], axis=1)
+
+
 def analog_filter(x: np.ndarray, fs: float,
                   ba: tuple[tuple[float, ...], tuple[float, ...]], slowest_hz: float
                   ) -> np.ndarray:
