@@ -134,7 +134,7 @@ def sensor_check(run: Run) -> SensorCheck | None:
 
     wk = 2 * math.pi * fk
 
-    def jacobian(p):  # the law's own derivatives: a third of the evaluations
+    def jacobian(p):  # the law's own derivatives (forward differences: 3 more residuals)
         J = mount_log_derivatives(wk, *p)
         return np.concatenate([J.real, J.imag])
 
