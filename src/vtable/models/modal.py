@@ -48,8 +48,7 @@ class ModalOutputs:
     """`ReducedModel`'s fast outputs (the module docstring); it provides `simulate`,
     `histories`, `linear`, `_linear` (A, B, f_y, f_u), `element` (None: structure only,
     `simulate` says so), `M`, `max_step`, `assembly`, `_channels`, `_aliased`, and what
-    `reduced_parts.kept_histories` reads (its matrices, `sp`, `pe`, `elem`, `python`,
-    `ne`)."""
+    `reduced_parts.kept_histories` reads (`integrated`, `pe`, `elem`, `python`, `ne`)."""
 
     def outputs(self, t: np.ndarray, x_c: np.ndarray, names: Sequence[str],
                 step: int = 1) -> dict[str, np.ndarray]:

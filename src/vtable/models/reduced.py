@@ -381,8 +381,7 @@ class ReducedModel(ModalOutputs):
         h = dt / up
         xc = upsampled(x_c, len(t), up)
         nq = self.M.shape[0]
-        args = (xc, h, nq, self.Minv, self.K, self.C, self.c2, self.bF, self.ax, self.sp,
-                self.T, self.Tp, self.g, self.kp, self.kv, self.Aw, self.Wq, self.Wv, self.Fw)
+        args = (xc, h, nq, *self.integrated)
         if self.linear:
             Phi, G0, G1 = self._hold(h)
             with first_compile(simulate_linear):
@@ -393,6 +392,17 @@ class ReducedModel(ModalOutputs):
         else:
             Q, Qd, Qdd, F, PL = self._integrated(args)
         return Histories(h, up, xc, Q, Qd, Qdd, F, PL)
+
+    @property
+    def integrated(self) -> tuple[np.ndarray, ...]:
+        """The arrays the compiled integrator reads after the command, its step and the
+        coordinates' count, in its argument order: M⁻¹, K, C, c₂, b_F, the actuator's
+        direction, the stage values `sp`, the lumped law's T, T⁺, g, k_p, k_v, and the
+        auxiliary loops' Aw, Wq, Wv, Fw (`reduced_kernel.simulate_reduced`). What is kept
+        by the model's dynamics (`reduced_parts.kept_histories`, the unrolled kernel's
+        constants) is kept by these."""
+        return (self.Minv, self.K, self.C, self.c2, self.bF, self.ax, self.sp, self.T,
+                self.Tp, self.g, self.kp, self.kv, self.Aw, self.Wq, self.Wv, self.Fw)
 
     def _integrated(self, args: tuple):
         """The compiled integrator on `args`: the loop unrolled for the model's shape

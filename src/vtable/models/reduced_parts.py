@@ -128,13 +128,11 @@ def table_view(vt, piston_area: float):
 
 def kept_histories(model, t, x_c):
     """`model.histories(t, x_c)` (a `ReducedModel`'s), kept by what the integration reads:
-    its matrices, its stages' and force elements' values (`sp`, `pe`), its step, its
+    its arrays (`ReducedModel.integrated`), its force elements' values `pe`, its step, its
     compiled element, and the command arrays themselves (held: a fit drives every point by
     the same arrays). At most `KEPT` of them and `HISTORIES_MAX` bytes; those kept are
     read-only (`modal.filtered` hands a filter a copy of any it would read)."""
-    parts = (model.Minv, model.K, model.C, model.c2, model.bF, model.ax, model.sp, model.T,
-             model.Tp, model.g, model.kp, model.kv, model.Aw, model.Wq, model.Wv, model.Fw,
-             model.pe, getattr(model, "ia", ()), getattr(model, "ib", ()))
+    parts = (*model.integrated, model.pe, getattr(model, "ia", ()), getattr(model, "ib", ()))
     arrays = [np.asarray(a) for a in parts]
     key = (id(t), id(x_c), id(model.element.module), id(model.elem), model.python,
            model.linear, model.ne, model.max_step, tuple(a.shape for a in arrays),

@@ -211,8 +211,7 @@ def simulate(steps: Callable, model, xc: np.ndarray, dt: float) -> tuple[np.ndar
     """`steps` (the model's `kernel`) from rest over the upsampled command `xc` at step
     `dt`: q, q̇, q̈ (n_t x coordinates), the actuator force and its load pressure P_L, as
     `reduced_kernel.simulate_reduced` returns them."""
-    arrays = (model.ax, model.Tp, model.T, model.g, model.kp, model.kv, model.bF, model.K,
-              model.C, model.Fw, model.c2, model.Minv, model.Aw, model.Wq, model.Wv)
+    arrays = model.integrated
     kept = model.__dict__.get("_unrolled_constants")  # by these arrays: a model whose K
     if kept is None or any(a is not b for a, b in zip(kept[0], arrays, strict=True)):  # is
         kept = model.__dict__["_unrolled_constants"] = (arrays, constants(model))  # replaced
